@@ -1,0 +1,250 @@
+// The `scallop` command: run, batch, validate, nodes, dot.
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "engine/runner.h"
+#include "nodes/all_nodes.h"
+
+namespace fs = std::filesystem;
+using namespace scallop;
+
+namespace {
+
+struct CommonOptions {
+  std::vector<std::string> sets;
+  std::string cache_dir;
+  bool no_cache = false;
+  bool explain = false;
+  bool quiet = false;
+  std::string events_path;
+};
+
+void add_common(CLI::App* cmd, CommonOptions& o) {
+  cmd->add_option("--set", o.sets, "NAME=VALUE: a graph parameter (tool_radius=4) or node parameter (knn.k=16)")
+      ->take_all();
+  cmd->add_option("--cache", o.cache_dir, "disk cache folder (default: $XDG_CACHE_HOME/scallop)");
+  cmd->add_flag("--no-cache", o.no_cache, "do not read or write the disk cache");
+  cmd->add_flag("--explain", o.explain, "say for each node why the cache hit or missed");
+  cmd->add_option("--events", o.events_path, "write progress events as JSON lines to FILE");
+  cmd->add_flag("-q,--quiet", o.quiet, "no per-node progress on stderr");
+}
+
+// Loads a graph or prints its errors; returns false on failure.
+bool load(const std::string& path, Graph& graph) {
+  try {
+    graph = load_graph(path);
+    return true;
+  } catch (const ValidationError& e) {
+    for (const auto& m : e.errors) std::cerr << "error: " << m << "\n";
+    return false;
+  }
+}
+
+struct Sinks {
+  std::unique_ptr<DiskCache> cache;
+  std::unique_ptr<JsonLinesSink> json;
+  std::unique_ptr<TerminalReporter> terminal;
+  EventFanout fanout;
+};
+
+void open_sinks(const CommonOptions& o, Sinks& s, int total_nodes) {
+  if (!o.no_cache) s.cache = std::make_unique<DiskCache>(o.cache_dir.empty() ? DiskCache::default_dir() : o.cache_dir);
+  if (!o.events_path.empty()) s.json = std::make_unique<JsonLinesSink>(o.events_path);
+  s.terminal = std::make_unique<TerminalReporter>(stderr, o.explain, o.quiet);
+  s.terminal->set_total(total_nodes);
+  s.fanout.add(s.json.get());
+  s.fanout.add(s.terminal.get());
+}
+
+int cmd_run(const std::string& graph_path, const std::vector<std::string>& input_args, const std::string& out_dir,
+            const CommonOptions& o) {
+  Graph graph;
+  if (!load(graph_path, graph)) return 2;
+  PartRequest req;
+  for (const auto& a : input_args) {
+    auto eq = a.find('=');
+    if (eq == std::string::npos) {
+      std::cerr << "error: --input " << a << ": expected NAME=PATH\n";
+      return 2;
+    }
+    req.inputs[a.substr(0, eq)] = a.substr(eq + 1);
+  }
+  req.sets = o.sets;
+  req.out_dir = out_dir;
+  Sinks sinks;
+  open_sinks(o, sinks, static_cast<int>(graph.nodes.size()));
+  req.cache = sinks.cache.get();
+  req.events = &sinks.fanout;
+  PartResult r = run_part(graph, builtin_registry(), req);
+  if (r.run.nodes.empty() && !r.ok) {  // never started: validation or input errors
+    for (const auto& m : r.errors) std::cerr << "error: " << m << "\n";
+    return 2;
+  }
+  std::fprintf(stderr, "%s in %.3f s (%d nodes ran, %d from cache)\n", r.ok ? "done" : "FAILED", r.seconds,
+               r.run.executed(), static_cast<int>(std::count_if(r.run.nodes.begin(), r.run.nodes.end(),
+                                                                [](const NodeRun& n) { return n.status == "cached"; })));
+  for (const auto& w : r.written) std::cout << "wrote " << w << "\n";
+  for (const auto& m : r.errors) std::cerr << "error: " << m << "\n";
+  return r.ok ? 0 : 1;
+}
+
+int cmd_batch(const std::string& graph_path, const std::vector<std::string>& parts, int jobs,
+              const std::string& input_name_arg, const std::string& out_dir, const CommonOptions& o) {
+  Graph graph;
+  if (!load(graph_path, graph)) return 2;
+  std::string input_name = input_name_arg;
+  if (input_name.empty()) {
+    if (graph.inputs.size() != 1) {
+      std::cerr << "error: the graph has " << graph.inputs.size()
+                << " inputs; say which one the parts bind to with --part-input NAME\n";
+      return 2;
+    }
+    input_name = graph.inputs.begin()->first;
+  }
+  PartRequest common;
+  common.sets = o.sets;
+  common.out_dir = out_dir;
+  Sinks sinks;
+  open_sinks(o, sinks, static_cast<int>(graph.nodes.size() * parts.size()));
+  common.cache = sinks.cache.get();
+  common.events = &sinks.fanout;
+  auto results = run_batch(graph, builtin_registry(), input_name, parts, jobs, common);
+
+  nlohmann::json summary = nlohmann::json::array();
+  std::vector<std::string> failed;
+  std::printf("\n%-32s %-6s %10s  %s\n", "part", "status", "seconds", "outputs / first error");
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const auto& r = results[i];
+    std::printf("%-32s %-6s %10.3f  %s\n", r.part.c_str(), r.ok ? "ok" : "FAILED", r.seconds,
+                r.ok ? std::to_string(r.written.size()).c_str() : r.errors.front().c_str());
+    if (!r.ok) failed.push_back(r.part);
+    summary.push_back({{"part", r.part}, {"input", parts[i]}, {"ok", r.ok}, {"seconds", r.seconds},
+                       {"errors", r.errors}, {"outputs", r.written}});
+  }
+  fs::create_directories(out_dir);
+  std::ofstream(fs::path(out_dir) / "summary.json") << nlohmann::json{{"graph", graph_path}, {"parts", summary}}.dump(2)
+                                                    << "\n";
+  std::printf("%zu of %zu parts ok; summary in %s\n", results.size() - failed.size(), results.size(),
+              (fs::path(out_dir) / "summary.json").string().c_str());
+  if (!failed.empty()) {
+    std::string names;
+    for (const auto& f : failed) names += (names.empty() ? "" : ", ") + f;
+    std::fprintf(stderr, "error: %zu part(s) failed: %s\n", failed.size(), names.c_str());
+    return 1;
+  }
+  return 0;
+}
+
+int cmd_validate(const std::string& graph_path, const std::vector<std::string>& sets) {
+  Graph graph;
+  if (!load(graph_path, graph)) return 2;
+  try {
+    CompileOptions opt;
+    opt.sets = sets;
+    opt.require_inputs = false;
+    compile(graph, builtin_registry(), opt);
+  } catch (const ValidationError& e) {
+    for (const auto& m : e.errors) std::cerr << "error: " << m << "\n";
+    std::cerr << e.errors.size() << " error(s) in " << graph_path << "\n";
+    return 2;
+  }
+  std::cout << graph_path << ": ok (" << graph.nodes.size() << " nodes)\n";
+  return 0;
+}
+
+int cmd_nodes(const std::string& type, bool as_json, bool markdown) {
+  const auto& reg = builtin_registry();
+  if (!type.empty() && !reg.find(type)) {
+    std::cerr << "error: unknown node type '" << type << "'\n";
+    return 2;
+  }
+  if (as_json) {
+    nlohmann::json j = nlohmann::json::array();
+    for (const auto& [t, d] : reg.nodes())
+      if (type.empty() || t == type) j.push_back(to_json(d));
+    std::cout << (type.empty() ? j : j[0]).dump(2) << "\n";
+    return 0;
+  }
+  if (type.empty() && !markdown) {
+    for (const auto& [t, d] : reg.nodes()) std::printf("%-24s v%-3d %s\n", t.c_str(), d.version, d.description.c_str());
+    return 0;
+  }
+  for (const auto& [t, d] : reg.nodes())
+    if (type.empty() || t == type) std::cout << to_markdown(d);
+  return 0;
+}
+
+int cmd_dot(const std::string& graph_path) {
+  Graph graph;
+  if (!load(graph_path, graph)) return 2;
+  try {
+    CompileOptions opt;
+    opt.require_inputs = false;
+    std::cout << to_dot(compile(graph, builtin_registry(), opt));
+  } catch (const ValidationError& e) {
+    for (const auto& m : e.errors) std::cerr << "error: " << m << "\n";
+    return 2;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"scallop: certified ball-end finishing tool paths straight from point clouds"};
+  app.require_subcommand(1);
+
+  CommonOptions run_opts;
+  std::string run_graph, run_out = "scallop-out";
+  std::vector<std::string> run_inputs;
+  auto* run = app.add_subcommand("run", "run a graph on one part");
+  run->add_option("graph", run_graph, "graph JSON file")->required();
+  run->add_option("--input", run_inputs, "NAME=PATH: a graph input file")->take_all();
+  run->add_option("-o,--out", run_out, "output folder (default scallop-out)");
+  add_common(run, run_opts);
+
+  CommonOptions batch_opts;
+  std::string batch_graph, batch_out, batch_input;
+  std::vector<std::string> batch_parts;
+  int batch_jobs = 2;
+  auto* batch = app.add_subcommand("batch", "run a graph on many parts, outputs in DIR/<part stem>/");
+  batch->add_option("graph", batch_graph, "graph JSON file")->required();
+  batch->add_option("parts", batch_parts, "part files")->required();
+  batch->add_option("-j,--jobs", batch_jobs, "parts in flight at once")->check(CLI::Range(1, 256));
+  batch->add_option("--part-input", batch_input, "graph input the parts bind to (default: the only one)");
+  batch->add_option("-o,--out", batch_out, "output folder")->required();
+  add_common(batch, batch_opts);
+
+  std::string val_graph;
+  std::vector<std::string> val_sets;
+  auto* validate = app.add_subcommand("validate", "check a graph; print every error (exit 2) or ok");
+  validate->add_option("graph", val_graph, "graph JSON file")->required();
+  validate->add_option("--set", val_sets, "NAME=VALUE overrides to check too")->take_all();
+
+  std::string nodes_type;
+  bool nodes_json = false, nodes_md = false;
+  auto* nodes = app.add_subcommand("nodes", "node reference, generated from the declarations");
+  nodes->add_option("type", nodes_type, "one node type");
+  nodes->add_flag("--json", nodes_json, "as JSON");
+  nodes->add_flag("--markdown", nodes_md, "as Markdown (the README reference)");
+
+  std::string dot_graph;
+  auto* dot = app.add_subcommand("dot", "the graph in Graphviz dot");
+  dot->add_option("graph", dot_graph, "graph JSON file")->required();
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (*run) return cmd_run(run_graph, run_inputs, run_out, run_opts);
+    if (*batch) return cmd_batch(batch_graph, batch_parts, batch_jobs, batch_input, batch_out, batch_opts);
+    if (*validate) return cmd_validate(val_graph, val_sets);
+    if (*nodes) return cmd_nodes(nodes_type, nodes_json, nodes_md);
+    if (*dot) return cmd_dot(dot_graph);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
+  }
+  return 0;
+}

@@ -1,0 +1,47 @@
+// Disk tier of the node-output cache: a content-addressed folder.
+//
+// An entry holds every output of one node run under its key (a Merkle chain: hash of node type,
+// node version, canonical parameters and the keys of the inputs). Entries are written to a temp
+// file and renamed into place, and carry a checksum of their body, so a killed or crashed writer
+// never leaves an entry that reads back wrong.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "engine/value.h"
+
+namespace scallop {
+
+class DiskCache {
+ public:
+  explicit DiskCache(std::string dir);
+  // $XDG_CACHE_HOME/scallop, or ~/.cache/scallop.
+  static std::string default_dir();
+
+  struct Lookup {
+    bool hit = false;
+    std::map<std::string, ValuePtr> outputs;
+    std::string why;  // for a miss: "no entry", "unreadable entry (...)"
+  };
+  Lookup load(const std::string& key, const ValueTypes& types) const;
+  void store(const std::string& key, const std::map<std::string, ValuePtr>& outputs) const;
+
+  // What the last run of a node (by graph and node id) was keyed on, for --explain.
+  std::optional<nlohmann::json> last_manifest(const std::string& identity) const;
+  void write_manifest(const std::string& identity, const nlohmann::json& manifest) const;
+
+  std::string entry_path(const std::string& key) const;
+  const std::string& dir() const { return dir_; }
+
+  // Test hook: called with the temp file after half of an entry is written (kill tests).
+  std::function<void(const std::string& temp_path)> after_partial_write;
+
+ private:
+  std::string dir_;
+};
+
+}  // namespace scallop

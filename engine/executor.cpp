@@ -1,0 +1,193 @@
+#include "engine/executor.h"
+
+#include <tbb/task_group.h>
+
+#include <atomic>
+#include <mutex>
+
+#include "engine/hash.h"
+
+namespace scallop {
+
+int RunResult::executed() const {
+  int n = 0;
+  for (const auto& r : nodes) n += (r.status == "ok" || r.status == "failed");
+  return n;
+}
+
+const NodeRun* RunResult::find(const std::string& id) const {
+  for (const auto& r : nodes)
+    if (r.id == id) return &r;
+  return nullptr;
+}
+
+namespace {
+
+using json = nlohmann::json;
+
+// Says what changed since the last recorded run of this node, for --explain.
+std::string explain_miss(const std::optional<json>& last, const json& now) {
+  if (!last) return "no earlier run recorded";
+  if (last->value("key", "") == now["key"]) return "entry missing";
+  if (last->value("version", 0) != now["version"])
+    return "node version changed (" + std::to_string(last->value("version", 0)) + " -> " +
+           now["version"].dump() + ")";
+  std::string why;
+  const json& lp = (*last)["params"];
+  for (const auto& [k, v] : now["params"].items())
+    if (!lp.contains(k) || lp[k] != v)
+      why += (why.empty() ? "" : ", ") + std::string("parameter ") + k + " changed (" +
+             (lp.contains(k) ? lp[k].dump() : "unset") + " -> " + v.dump() + ")";
+  const json& li = (*last)["inputs"];
+  for (const auto& [k, v] : now["inputs"].items())
+    if (!li.contains(k) || li[k] != v) why += (why.empty() ? "" : ", ") + std::string("input ") + k + " changed";
+  return why.empty() ? "key changed" : why;
+}
+
+}  // namespace
+
+RunResult execute(const Plan& plan, const Registry& registry, const std::map<std::string, ValuePtr>& inputs,
+                  const RunOptions& options) {
+  const int n = static_cast<int>(plan.nodes.size());
+  RunResult result;
+  result.nodes.resize(n);
+  std::vector<std::map<std::string, ValuePtr>> outputs(n);
+  std::vector<std::string> keys(n);
+  std::vector<std::atomic<int>> pending(n), consumers_left(n);
+  std::vector<std::atomic<bool>> good(n);  // produced its outputs
+  std::vector<bool> is_graph_output(n, false);
+  for (const auto& [name, src] : plan.outputs) is_graph_output[src.node] = true;
+  for (int i = 0; i < n; ++i) {
+    pending[i] = static_cast<int>(plan.nodes[i].deps.size());
+    consumers_left[i] = static_cast<int>(plan.nodes[i].dependents.size());
+    good[i] = false;
+  }
+  std::mutex output_mutex, error_mutex;
+  auto emit = [&](json e) {
+    if (!options.events) return;
+    e["t"] = seconds_since_start();
+    e["part"] = options.part;
+    options.events->on_event(e);
+  };
+  std::map<std::string, std::string> input_keys;
+  for (const auto& [name, value] : inputs) input_keys[name] = value ? value->content_key() : "";
+
+  auto run_node = [&](int i) {
+    const PlanNode& pn = plan.nodes[i];
+    NodeRun& rec = result.nodes[i];
+    rec.id = pn.id;
+    rec.type = pn.decl->type;
+    rec.start = seconds_since_start();
+    emit({{"event", "node_start"}, {"node", pn.id}, {"type", rec.type}});
+
+    // Inputs and the cache key (Merkle chain over the inputs' keys).
+    std::map<std::string, ValuePtr> in;
+    json manifest{{"type", rec.type}, {"version", pn.decl->version}, {"params", pn.params},
+                  {"inputs", json::object()}};
+    std::string skipped_because;
+    {
+      std::lock_guard lock(output_mutex);
+      for (const auto& [port, src] : pn.inputs) {
+        if (src.node < 0) {
+          auto it = inputs.find(src.port);
+          in[port] = it == inputs.end() ? nullptr : it->second;
+          manifest["inputs"][port] = input_keys[src.port];
+        } else if (!good[src.node]) {
+          skipped_because = "input from '" + plan.nodes[src.node].id + "' is missing";
+        } else {
+          in[port] = outputs[src.node][src.port];
+          manifest["inputs"][port] = hash_bytes(keys[src.node] + "." + src.port);
+        }
+      }
+    }
+    keys[i] = hash_bytes(manifest.dump());
+    manifest["key"] = keys[i];
+    rec.key = keys[i];
+
+    if (!skipped_because.empty()) {
+      rec.status = "skipped";
+      rec.why = skipped_because;
+    } else {
+      std::map<std::string, ValuePtr> out;
+      bool have = false;
+      std::string identity = plan.graph_path + "#" + plan.graph_name + "#" + pn.id;
+      if (options.cache) {
+        auto hit = options.cache->load(keys[i], registry.values());
+        if (hit.hit) {
+          out = std::move(hit.outputs);
+          have = true;
+          rec.status = "cached";
+          rec.cache = "hit";
+          rec.why = "same type, version, parameters and inputs";
+        } else {
+          rec.cache = "miss";
+          rec.why = hit.why == "no entry" ? explain_miss(options.cache->last_manifest(identity), manifest) : hit.why;
+        }
+      } else {
+        rec.cache = "off";
+      }
+      if (!have) {
+        try {
+          double last_emit = -1;
+          NodeContext ctx(*pn.decl, pn.id, options.part, pn.params, in, [&](double f, const std::string& msg) {
+            if (f - last_emit < 0.01 && f < 1.0) return;
+            last_emit = f;
+            emit({{"event", "node_progress"}, {"node", pn.id}, {"type", rec.type}, {"fraction", f}, {"message", msg}});
+          });
+          pn.decl->run(ctx);
+          out = ctx.take_outputs();
+          for (const auto& od : pn.decl->outputs)
+            if (!out.count(od.name) || !out[od.name])
+              throw std::logic_error("node did not produce its output '" + od.name + "'");
+          rec.status = "ok";
+          if (options.cache && pn.decl->cache_on_disk) {
+            options.cache->store(keys[i], out);
+            options.cache->write_manifest(identity, manifest);
+          }
+        } catch (const std::exception& e) {
+          rec.status = "failed";
+          rec.error = e.what();
+          std::lock_guard lock(error_mutex);
+          result.errors.push_back("node '" + pn.id + "' (" + rec.type + ") failed" +
+                                  (options.part.empty() ? "" : " on part '" + options.part + "'") + ": " + e.what());
+        }
+      }
+      if (rec.status != "failed") {
+        std::lock_guard lock(output_mutex);
+        outputs[i] = std::move(out);
+        good[i] = true;
+      }
+    }
+    rec.finish = seconds_since_start();
+    emit({{"event", "node_finish"}, {"node", pn.id}, {"type", rec.type}, {"status", rec.status},
+          {"seconds", rec.seconds()}, {"cache", rec.cache}, {"why", rec.why}, {"error", rec.error}});
+
+    // Memory tier: free each input's producer once its last consumer is done.
+    std::lock_guard lock(output_mutex);
+    for (int d : pn.deps)
+      if (--consumers_left[d] == 0 && !is_graph_output[d]) outputs[d].clear();
+  };
+
+  tbb::task_group group;
+  std::function<void(int)> launch = [&](int i) {
+    group.run([&, i] {
+      run_node(i);
+      for (int d : plan.nodes[i].dependents)
+        if (--pending[d] == 0) launch(d);
+    });
+  };
+  emit({{"event", "run_start"}, {"nodes", n}});
+  for (int i = 0; i < n; ++i)
+    if (plan.nodes[i].deps.empty()) launch(i);
+  group.wait();
+
+  for (const auto& [name, src] : plan.outputs)
+    if (good[src.node]) {
+      auto it = outputs[src.node].find(src.port);
+      if (it != outputs[src.node].end()) result.outputs[name] = it->second;
+    }
+  emit({{"event", "run_finish"}, {"ok", result.ok()}, {"errors", result.errors}});
+  return result;
+}
+
+}  // namespace scallop

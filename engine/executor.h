@@ -1,0 +1,47 @@
+// Runs a Plan on oneTBB: independent branches run concurrently, nodes use parallel_for inside.
+//
+// A failing node reports node id, type and part; its dependents are skipped; independent
+// branches still finish. Outputs live in memory until their last consumer has run (graph
+// outputs are kept), and in the disk cache when one is given.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "engine/cache.h"
+#include "engine/events.h"
+#include "engine/graph.h"
+
+namespace scallop {
+
+struct RunOptions {
+  std::string part;               // name of the part (input file stem) for messages
+  DiskCache* cache = nullptr;     // null: no disk cache
+  EventSink* events = nullptr;    // null: silent
+};
+
+struct NodeRun {
+  std::string id, type;
+  std::string status;  // ok | cached | failed | skipped
+  std::string cache;   // hit | miss | off
+  std::string why;     // why the cache hit or missed, or why the node was skipped
+  std::string error;
+  std::string key;
+  double start = 0, finish = 0;  // seconds since process start
+  double seconds() const { return finish - start; }
+};
+
+struct RunResult {
+  std::map<std::string, ValuePtr> outputs;  // graph outputs that were produced
+  std::vector<NodeRun> nodes;               // in plan order
+  std::vector<std::string> errors;          // "node 'id' (type) failed on part 'p': message"
+  bool ok() const { return errors.empty(); }
+  int executed() const;                     // nodes that actually ran (not cached, not skipped)
+  const NodeRun* find(const std::string& id) const;
+};
+
+RunResult execute(const Plan& plan, const Registry& registry, const std::map<std::string, ValuePtr>& inputs,
+                  const RunOptions& options = {});
+
+}  // namespace scallop

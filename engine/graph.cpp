@@ -1,0 +1,586 @@
+#include "engine/graph.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+namespace scallop {
+
+ValidationError::ValidationError(std::vector<std::string> errs)
+    : std::runtime_error(errs.empty() ? "invalid graph" : errs.front()), errors(std::move(errs)) {}
+
+namespace {
+
+using json = nlohmann::json;
+
+// Tracks the JSON path while parsing, to report duplicate keys (nlohmann keeps only the last).
+class DuplicateKeyFinder {
+ public:
+  std::vector<std::string> duplicates;  // JSON paths of repeated keys
+
+  bool operator()(int, json::parse_event_t event, json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start:
+      case json::parse_event_t::array_start:
+        frames_.push_back({event == json::parse_event_t::object_start, child_path(), {}, "", 0});
+        break;
+      case json::parse_event_t::key: {
+        auto& f = frames_.back();
+        std::string key = parsed.get<std::string>();
+        if (!f.keys.insert(key).second) duplicates.push_back(join(f.path, key));
+        f.key = key;
+        break;
+      }
+      case json::parse_event_t::value:
+        if (!frames_.empty() && !frames_.back().is_object) ++frames_.back().count;
+        break;
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        frames_.pop_back();
+        if (!frames_.empty() && !frames_.back().is_object) ++frames_.back().count;
+        break;
+    }
+    return true;
+  }
+
+ private:
+  struct Frame {
+    bool is_object;
+    std::string path;
+    std::set<std::string> keys;
+    std::string key;
+    int count;
+  };
+  std::vector<Frame> frames_;
+
+  static std::string join(const std::string& path, const std::string& key) {
+    return path.empty() ? key : path + "." + key;
+  }
+  std::string child_path() const {
+    if (frames_.empty()) return "";
+    const auto& f = frames_.back();
+    return f.is_object ? join(f.path, f.key) : f.path + "[" + std::to_string(f.count) + "]";
+  }
+};
+
+std::string in_quotes(const std::string& s) { return "'" + s + "'"; }
+
+std::string join_names(const std::vector<std::string>& names) {
+  std::string s;
+  for (std::size_t i = 0; i < names.size(); ++i) s += (i ? ", " : "") + names[i];
+  return s.empty() ? "(none)" : s;
+}
+
+template <class Map>
+std::string join_keys(const Map& m) {
+  std::vector<std::string> names;
+  for (const auto& [k, v] : m) names.push_back(k);
+  return join_names(names);
+}
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j)
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+std::string node_prefix(const std::string& path, const std::string& id) {
+  return path + ": node " + in_quotes(id) + ": ";
+}
+
+}  // namespace
+
+Graph parse_graph(const std::string& text, const std::string& path) {
+  Graph g;
+  g.path = path;
+  DuplicateKeyFinder dups;
+  json j;
+  try {
+    j = json::parse(text, std::ref(dups));
+  } catch (const json::parse_error& e) {
+    std::string what = e.what();
+    auto pos = what.find("parse error");
+    throw ValidationError({(path.empty() ? std::string("graph") : path) + ": not valid JSON: " +
+                           (pos == std::string::npos ? what : what.substr(pos))});
+  }
+  auto& errs = g.errors;
+  if (!j.is_object()) {
+    errs.push_back("(root): expected a JSON object");
+    return g;
+  }
+  static const std::set<std::string> top_keys{"scallop_graph", "name", "description", "params",
+                                              "inputs", "nodes", "outputs"};
+  for (const auto& [k, v] : j.items())
+    if (!top_keys.count(k))
+      errs.push_back(k + ": unknown key " + in_quotes(k) + "; expected one of: " +
+                     join_names({top_keys.begin(), top_keys.end()}));
+
+  if (!j.contains("scallop_graph") || !j["scallop_graph"].is_number_integer())
+    errs.push_back("scallop_graph: missing format version; expected \"scallop_graph\": " + std::to_string(kGraphFormat));
+  else if ((g.format = j["scallop_graph"].get<int>()) != kGraphFormat)
+    errs.push_back("scallop_graph: unsupported format version " + std::to_string(g.format) + "; expected " +
+                   std::to_string(kGraphFormat));
+  g.name = j.value("name", std::string());
+  g.description = j.value("description", std::string());
+
+  if (j.contains("params")) {
+    if (!j["params"].is_object()) errs.push_back("params: expected an object of graph parameters");
+    else
+      for (const auto& [k, v] : j["params"].items()) {
+        GraphParam p;
+        if (v.is_object()) {
+          if (!v.contains("value")) errs.push_back("params." + k + ": missing \"value\"");
+          p.value = v.value("value", json());
+          p.unit = v.value("unit", std::string());
+          p.description = v.value("description", std::string());
+        } else {
+          p.value = v;
+        }
+        g.params[k] = p;
+      }
+  }
+  if (j.contains("inputs")) {
+    if (!j["inputs"].is_object()) errs.push_back("inputs: expected an object of graph inputs");
+    else
+      for (const auto& [k, v] : j["inputs"].items()) {
+        GraphInput in;
+        if (v.is_object()) {
+          in.type = v.value("type", std::string("File"));
+          in.description = v.value("description", std::string());
+          in.default_path = v.value("default", std::string());
+        }
+        if (in.type != "File") errs.push_back("inputs." + k + ".type: unsupported graph input type " +
+                                              in_quotes(in.type) + "; expected 'File'");
+        g.inputs[k] = in;
+      }
+  }
+  if (!j.contains("nodes") || !j["nodes"].is_array()) {
+    errs.push_back("nodes: missing; expected an array of nodes");
+  } else {
+    int i = 0;
+    for (const auto& n : j["nodes"]) {
+      std::string at = "nodes[" + std::to_string(i++) + "]";
+      GraphNode node;
+      if (!n.is_object()) {
+        errs.push_back(at + ": expected an object with \"id\", \"type\", \"params\", \"inputs\"");
+        g.nodes.push_back(node);
+        continue;
+      }
+      if (!n.contains("id") || !n["id"].is_string() || n["id"].get<std::string>().empty())
+        errs.push_back(at + ".id: missing node id; expected a non-empty string");
+      else
+        node.id = n["id"].get<std::string>();
+      if (!n.contains("type") || !n["type"].is_string())
+        errs.push_back(node_prefix(at + ".type", node.id) + "missing node type; expected a string such as 'cloud.knn'");
+      else
+        node.type = n["type"].get<std::string>();
+      for (const auto& [k, v] : n.items())
+        if (k != "id" && k != "type" && k != "params" && k != "inputs" && k != "comment")
+          errs.push_back(node_prefix(at + "." + k, node.id) + "unknown key " + in_quotes(k) +
+                         "; expected one of: comment, id, inputs, params, type");
+      if (n.contains("params")) {
+        if (n["params"].is_object()) node.params = n["params"];
+        else errs.push_back(node_prefix(at + ".params", node.id) + "expected an object");
+      }
+      if (n.contains("inputs")) {
+        if (!n["inputs"].is_object()) {
+          errs.push_back(node_prefix(at + ".inputs", node.id) + "expected an object of port: source");
+        } else {
+          for (const auto& [port, src] : n["inputs"].items()) {
+            if (!src.is_string())
+              errs.push_back(node_prefix(at + ".inputs." + port, node.id) +
+                             "expected a source string '<node id>.<output port>' or '@<graph input>'");
+            else
+              node.inputs.emplace_back(port, src.get<std::string>());
+          }
+        }
+      }
+      g.nodes.push_back(node);
+    }
+  }
+  if (j.contains("outputs")) {
+    if (!j["outputs"].is_object()) errs.push_back("outputs: expected an object of name: source");
+    else
+      for (const auto& [k, v] : j["outputs"].items()) {
+        if (!v.is_string()) errs.push_back("outputs." + k + ": expected a source string '<node id>.<output port>'");
+        else g.outputs.emplace_back(k, v.get<std::string>());
+      }
+  }
+  for (const auto& d : dups.duplicates) {
+    // nodes[i].inputs.port repeated: the port is connected twice.
+    std::size_t close = d.find(']');
+    if (d.rfind("nodes[", 0) == 0 && close != std::string::npos) {
+      int idx = std::stoi(d.substr(6, close - 6));
+      std::string rest = d.substr(close + 1);
+      std::string id = idx < static_cast<int>(g.nodes.size()) ? g.nodes[idx].id : "";
+      if (rest.rfind(".inputs.", 0) == 0) {
+        errs.push_back(node_prefix(d, id) + "input port " + in_quotes(rest.substr(8)) +
+                       " is connected twice; expected one source per input");
+        continue;
+      }
+      if (rest.rfind(".params.", 0) == 0) {
+        errs.push_back(node_prefix(d, id) + "parameter " + in_quotes(rest.substr(8)) +
+                       " is given twice; expected it once");
+        continue;
+      }
+    }
+    errs.push_back(d + ": duplicate key; expected each key once");
+  }
+  return g;
+}
+
+Graph load_graph(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ValidationError({path + ": cannot open graph file"});
+  std::stringstream s;
+  s << in.rdbuf();
+  return parse_graph(s.str(), path);
+}
+
+namespace {
+
+// Parses the VALUE of --set NAME=VALUE: JSON when it reads as JSON (4, true, "x"), else a string.
+json parse_set_value(const std::string& text) {
+  try {
+    return json::parse(text);
+  } catch (const json::exception&) {
+    return json(text);
+  }
+}
+
+// Checks one parameter value against its declaration; returns the canonical value or an error.
+std::optional<json> check_param(const ParamDecl& p, const json& v, std::string& error) {
+  auto got = v.dump();
+  switch (p.kind) {
+    case ParamKind::Int:
+      if (!v.is_number_integer() && !(v.is_number_float() && v.get<double>() == std::floor(v.get<double>()))) {
+        error = "parameter " + in_quotes(p.name) + " must be an integer; got " + got;
+        return std::nullopt;
+      }
+      break;
+    case ParamKind::Float:
+      if (!v.is_number()) {
+        error = "parameter " + in_quotes(p.name) + " must be a number; got " + got;
+        return std::nullopt;
+      }
+      if (!std::isfinite(v.get<double>())) {
+        error = "parameter " + in_quotes(p.name) + " must be finite; got " + got;
+        return std::nullopt;
+      }
+      break;
+    case ParamKind::Bool:
+      if (!v.is_boolean()) {
+        error = "parameter " + in_quotes(p.name) + " must be true or false; got " + got;
+        return std::nullopt;
+      }
+      return v;
+    case ParamKind::String:
+      if (!v.is_string()) {
+        error = "parameter " + in_quotes(p.name) + " must be a string; got " + got;
+        return std::nullopt;
+      }
+      return v;
+    case ParamKind::Choice:
+      if (!v.is_string() || std::find(p.choices.begin(), p.choices.end(), v.get<std::string>()) == p.choices.end()) {
+        error = "parameter " + in_quotes(p.name) + " must be one of " + join_names(p.choices) + "; got " + got;
+        return std::nullopt;
+      }
+      return v;
+  }
+  double x = v.get<double>();
+  if ((p.min && x < *p.min) || (p.max && x > *p.max)) {
+    std::ostringstream s;
+    s << "parameter " << in_quotes(p.name) << " = " << got << " is out of range; expected ";
+    if (p.min && p.max) s << *p.min << " .. " << *p.max;
+    else if (p.min) s << "at least " << *p.min;
+    else s << "at most " << *p.max;
+    if (!p.unit.empty()) s << " " << p.unit;
+    error = s.str();
+    return std::nullopt;
+  }
+  if (p.kind == ParamKind::Int) return json(static_cast<long long>(x));
+  return json(x);
+}
+
+}  // namespace
+
+Plan compile(const Graph& graph, const Registry& registry, const CompileOptions& options) {
+  std::vector<std::string> errs = graph.errors;
+  Plan plan;
+  plan.graph_name = graph.name;
+  plan.graph_path = graph.path;
+  plan.inputs = graph.inputs;
+
+  // Graph parameters, then --set overrides (graph-level and node-level).
+  std::map<std::string, json> gparams;
+  for (const auto& [k, p] : graph.params) gparams[k] = p.value;
+  std::map<std::string, std::map<std::string, json>> node_sets;
+  std::map<std::string, int> index_of;
+  for (std::size_t i = 0; i < graph.nodes.size(); ++i) {
+    const auto& n = graph.nodes[i];
+    if (n.id.empty()) continue;
+    if (index_of.count(n.id))
+      errs.push_back(node_prefix("nodes[" + std::to_string(i) + "].id", n.id) + "duplicate node id; expected ids to be unique");
+    else
+      index_of[n.id] = static_cast<int>(i);
+  }
+  for (const auto& item : options.sets) {
+    auto eq = item.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      errs.push_back("--set " + item + ": expected NAME=VALUE");
+      continue;
+    }
+    std::string name = item.substr(0, eq);
+    json value = parse_set_value(item.substr(eq + 1));
+    auto dot = name.find('.');
+    if (dot == std::string::npos) {
+      if (!gparams.count(name))
+        errs.push_back("--set " + name + ": unknown graph parameter " + in_quotes(name) + "; expected one of: " +
+                       join_keys(gparams));
+      else
+        gparams[name] = value;
+    } else {
+      std::string id = name.substr(0, dot), key = name.substr(dot + 1);
+      if (!index_of.count(id))
+        errs.push_back("--set " + name + ": unknown node " + in_quotes(id) + "; expected one of: " + join_keys(index_of));
+      else
+        node_sets[id][key] = value;
+    }
+  }
+  plan.graph_params = json(gparams);
+
+  // Nodes: type, parameters, input ports.
+  plan.nodes.resize(graph.nodes.size());
+  for (std::size_t i = 0; i < graph.nodes.size(); ++i) {
+    const auto& n = graph.nodes[i];
+    auto& pn = plan.nodes[i];
+    pn.id = n.id;
+    std::string at = "nodes[" + std::to_string(i) + "]";
+    if (n.type.empty()) continue;  // reported while parsing
+    pn.decl = registry.find(n.type);
+    if (!pn.decl) {
+      std::string best;
+      std::size_t best_d = 4;
+      for (const auto& [t, d] : registry.nodes())
+        if (auto e = edit_distance(t, n.type); e < best_d) best_d = e, best = t;
+      errs.push_back(node_prefix(at + ".type", n.id) + "unknown node type " + in_quotes(n.type) + "; expected " +
+                     (best.empty() ? std::string("a registered type") : "a registered type such as " + in_quotes(best)) +
+                     " (see 'scallop nodes')");
+      continue;
+    }
+    const NodeDecl& decl = *pn.decl;
+    json given = n.params;
+    std::map<std::string, std::string> origin;  // where each value came from, for messages
+    for (const auto& [k, v] : given.items()) origin[k] = at + ".params." + k;
+    for (const auto& [k, v] : node_sets[n.id]) {
+      given[k] = v;
+      origin[k] = "--set " + n.id + "." + k;
+    }
+    json resolved = json::object();
+    for (const auto& [k, v] : given.items()) {
+      const ParamDecl* p = decl.find_param(k);
+      if (!p) {
+        std::vector<std::string> names;
+        for (const auto& pd : decl.params) names.push_back(pd.name);
+        errs.push_back(node_prefix(origin[k], n.id) + "unknown parameter " + in_quotes(k) + "; expected one of: " +
+                       join_names(names));
+        continue;
+      }
+      json value = v;
+      if (v.is_string() && !v.get<std::string>().empty() && v.get<std::string>()[0] == '$') {
+        std::string ref = v.get<std::string>().substr(1);
+        if (!gparams.count(ref)) {
+          errs.push_back(node_prefix(origin[k], n.id) + "unknown graph parameter " + in_quotes("$" + ref) +
+                         "; expected one of: " + join_keys(gparams));
+          continue;
+        }
+        value = gparams[ref];
+      }
+      std::string error;
+      if (auto ok = check_param(*p, value, error)) resolved[k] = *ok;
+      else errs.push_back(node_prefix(origin[k], n.id) + error);
+    }
+    for (const auto& p : decl.params) {
+      if (resolved.contains(p.name) || given.contains(p.name)) continue;
+      if (p.default_value.is_null())
+        errs.push_back(node_prefix(at + ".params", n.id) + "missing required parameter " + in_quotes(p.name) + " (" +
+                       to_string(p.kind) + (p.unit.empty() ? "" : ", " + p.unit) + ")");
+      else
+        resolved[p.name] = p.default_value;
+    }
+    pn.params = resolved;
+
+    std::set<std::string> connected;
+    for (const auto& [port, src] : n.inputs) {
+      std::string pat = at + ".inputs." + port;
+      const PortDecl* pd = decl.find_input(port);
+      if (!pd) {
+        std::vector<std::string> names;
+        for (const auto& q : decl.inputs) names.push_back(q.name);
+        errs.push_back(node_prefix(pat, n.id) + "unknown input port " + in_quotes(port) + "; expected one of: " +
+                       join_names(names));
+        continue;
+      }
+      connected.insert(port);
+      Source s;
+      std::string src_type;
+      if (!src.empty() && src[0] == '@') {
+        s.port = src.substr(1);
+        auto gi = graph.inputs.find(s.port);
+        if (gi == graph.inputs.end()) {
+          errs.push_back(node_prefix(pat, n.id) + "unknown graph input " + in_quotes(src) + "; expected one of: " +
+                         join_keys(graph.inputs));
+          continue;
+        }
+        src_type = gi->second.type;
+      } else {
+        auto dot = src.find('.');
+        std::string sid = dot == std::string::npos ? src : src.substr(0, dot);
+        if (dot == std::string::npos || !index_of.count(sid)) {
+          errs.push_back(node_prefix(pat, n.id) + "unknown source " + in_quotes(src) +
+                         "; expected '<node id>.<output port>' or '@<graph input>'");
+          continue;
+        }
+        s.node = index_of[sid];
+        s.port = src.substr(dot + 1);
+        const NodeDecl* sd = registry.find(graph.nodes[s.node].type);
+        if (!sd) continue;  // its unknown type is reported already
+        const PortDecl* op = sd->find_output(s.port);
+        if (!op) {
+          std::vector<std::string> names;
+          for (const auto& q : sd->outputs) names.push_back(q.name);
+          errs.push_back(node_prefix(pat, n.id) + "node " + in_quotes(sid) + " has no output " + in_quotes(s.port) +
+                         "; expected one of: " + join_names(names));
+          continue;
+        }
+        src_type = op->type;
+      }
+      if (src_type != pd->type) {
+        errs.push_back(node_prefix(pat, n.id) + "type mismatch: " + in_quotes(src) + " is " + src_type + "; expected " +
+                       pd->type);
+        continue;
+      }
+      pn.inputs.emplace_back(port, s);
+    }
+    for (const auto& pd : decl.inputs)
+      if (pd.required && !connected.count(pd.name))
+        errs.push_back(node_prefix(at + ".inputs", n.id) + "missing required input " + in_quotes(pd.name) + " (" +
+                       pd.type + ")");
+    // Keep inputs in declaration order so cache keys do not depend on JSON key order.
+    std::sort(pn.inputs.begin(), pn.inputs.end(), [&](const auto& a, const auto& b) {
+      auto pos = [&](const std::string& name) {
+        for (std::size_t q = 0; q < decl.inputs.size(); ++q)
+          if (decl.inputs[q].name == name) return q;
+        return decl.inputs.size();
+      };
+      return pos(a.first) < pos(b.first);
+    });
+  }
+
+  // Graph outputs.
+  for (const auto& [name, src] : graph.outputs) {
+    auto dot = src.find('.');
+    std::string sid = dot == std::string::npos ? src : src.substr(0, dot);
+    if (dot == std::string::npos || !index_of.count(sid)) {
+      errs.push_back("outputs." + name + ": unknown source " + in_quotes(src) + "; expected '<node id>.<output port>'");
+      continue;
+    }
+    Source s{index_of[sid], src.substr(dot + 1)};
+    const NodeDecl* sd = plan.nodes[s.node].decl;
+    if (sd && !sd->find_output(s.port)) {
+      std::vector<std::string> names;
+      for (const auto& q : sd->outputs) names.push_back(q.name);
+      errs.push_back("outputs." + name + ": node " + in_quotes(sid) + " has no output " + in_quotes(s.port) +
+                     "; expected one of: " + join_names(names));
+      continue;
+    }
+    plan.outputs.emplace_back(name, s);
+  }
+
+  // Graph inputs the caller must give.
+  if (options.require_inputs)
+    for (const auto& [name, in] : graph.inputs)
+      if (!options.provided_inputs.count(name) && in.default_path.empty())
+        errs.push_back("inputs." + name + ": graph input " + in_quotes(name) + " is not given; expected --input " + name +
+                       "=PATH");
+
+  // Dependencies and a topological order (Kahn); what is left over lies on a cycle.
+  const int n = static_cast<int>(plan.nodes.size());
+  for (int i = 0; i < n; ++i) {
+    std::set<int> deps;
+    for (const auto& [port, s] : plan.nodes[i].inputs)
+      if (s.node >= 0) deps.insert(s.node);
+    plan.nodes[i].deps.assign(deps.begin(), deps.end());
+    for (int d : deps) plan.nodes[d].dependents.push_back(i);
+  }
+  std::vector<int> indeg(n);
+  for (int i = 0; i < n; ++i) indeg[i] = static_cast<int>(plan.nodes[i].deps.size());
+  std::vector<int> ready;
+  for (int i = n - 1; i >= 0; --i)
+    if (indeg[i] == 0) ready.push_back(i);
+  while (!ready.empty()) {
+    int i = ready.back();
+    ready.pop_back();
+    plan.order.push_back(i);
+    for (int d : plan.nodes[i].dependents)
+      if (--indeg[d] == 0) ready.push_back(d);
+  }
+  if (static_cast<int>(plan.order.size()) < n) {
+    // Walk back along unfinished dependencies from a node on the cycle until a node repeats.
+    int start = -1;
+    for (int i = 0; i < n && start < 0; ++i)
+      if (indeg[i] > 0) start = i;
+    std::vector<int> walk;
+    std::vector<int> seen_at(n, -1);
+    int cur = start;
+    while (seen_at[cur] < 0) {
+      seen_at[cur] = static_cast<int>(walk.size());
+      walk.push_back(cur);
+      for (int d : plan.nodes[cur].deps)
+        if (indeg[d] > 0) {
+          cur = d;
+          break;
+        }
+    }
+    std::vector<int> cycle(walk.begin() + seen_at[cur], walk.end());
+    std::reverse(cycle.begin(), cycle.end());  // producer -> consumer order
+    std::rotate(cycle.begin(), std::min_element(cycle.begin(), cycle.end()), cycle.end());  // stable text
+    std::string text;
+    for (int c : cycle) text += plan.nodes[c].id + " -> ";
+    text += plan.nodes[cycle.front()].id;
+    errs.push_back("nodes: cycle " + text + "; expected an acyclic graph");
+  }
+  if (!errs.empty()) throw ValidationError(errs);
+  return plan;
+}
+
+std::string to_dot(const Plan& plan) {
+  std::ostringstream s;
+  s << "digraph \"" << (plan.graph_name.empty() ? "scallop" : plan.graph_name) << "\" {\n  rankdir=LR;\n"
+    << "  node [shape=box, fontname=\"Helvetica\"];\n";
+  for (const auto& [name, in] : plan.inputs) s << "  \"@" << name << "\" [shape=ellipse];\n";
+  for (const auto& n : plan.nodes)
+    s << "  \"" << n.id << "\" [label=\"" << n.id << "\\n" << (n.decl ? n.decl->type : "?") << "\"];\n";
+  for (const auto& n : plan.nodes)
+    for (const auto& [port, src] : n.inputs) {
+      std::string from = src.node < 0 ? "@" + src.port : plan.nodes[src.node].id;
+      s << "  \"" << from << "\" -> \"" << n.id << "\" [label=\"" << (src.node < 0 ? "" : src.port + " → ") << port
+        << "\"];\n";
+    }
+  for (const auto& [name, src] : plan.outputs) {
+    s << "  \"out:" << name << "\" [shape=note, label=\"" << name << "\"];\n";
+    s << "  \"" << plan.nodes[src.node].id << "\" -> \"out:" << name << "\" [label=\"" << src.port << "\"];\n";
+  }
+  s << "}\n";
+  return s.str();
+}
+
+}  // namespace scallop

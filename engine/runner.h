@@ -1,0 +1,42 @@
+// Running a graph on one part (input files in, output files out) and on many parts in a batch.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "engine/executor.h"
+
+namespace scallop {
+
+struct PartRequest {
+  std::map<std::string, std::string> inputs;  // graph input name -> file path
+  std::vector<std::string> sets;              // --set NAME=VALUE
+  std::string out_dir;                        // "" : do not write outputs
+  std::string part;                           // name for messages; default: stem of the first input
+  DiskCache* cache = nullptr;
+  EventSink* events = nullptr;
+};
+
+struct PartResult {
+  std::string part;
+  bool ok = false;
+  std::vector<std::string> errors;   // validation, input and node errors
+  std::vector<std::string> written;  // output files
+  RunResult run;
+  double seconds = 0;
+};
+
+// Validates, opens the inputs, executes and writes each graph output as
+// <out_dir>/<output name>.<extension of its type>. Never throws: every problem lands in errors.
+PartResult run_part(const Graph& graph, const Registry& registry, const PartRequest& request);
+
+// Runs every part file through the graph (bound to graph input `input_name`), at most `jobs`
+// parts in flight, outputs in <out_dir>/<part stem>/. One part's failure never stops the others.
+std::vector<PartResult> run_batch(const Graph& graph, const Registry& registry, const std::string& input_name,
+                                  const std::vector<std::string>& parts, int jobs, const PartRequest& common);
+
+// The path a graph input's default file resolves to (relative to the graph file's folder).
+std::string default_input_path(const Graph& graph, const std::string& name);
+
+}  // namespace scallop

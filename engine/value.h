@@ -1,0 +1,83 @@
+// Immutable typed values passed between nodes.
+//
+// A value is created once by the node that outputs it and then shared (never copied) by every
+// consumer through std::shared_ptr<const Value>. Each value type has a name used in graph files
+// and messages, a file extension for graph outputs, and binary (de)serialisation for the disk cache.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <istream>
+#include <map>
+#include <memory>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace scallop {
+
+class Value {
+ public:
+  virtual ~Value() = default;
+  // Name of the value type, e.g. "Cloud"; must match the ValueType it was registered under.
+  virtual std::string type_name() const = 0;
+  // Binary form for the disk cache.
+  virtual void serialize(std::ostream& out) const = 0;
+  // Writes the value as a user-facing file (a graph output): PLY for clouds, JSON for reports...
+  virtual void write_file(const std::string& path) const;
+  // Identity of the value for cache keys: by default the hash of its binary form.
+  virtual std::string content_key() const;
+};
+
+using ValuePtr = std::shared_ptr<const Value>;
+
+// Describes one value type: its name, the extension of the file a graph output of this type is
+// written to, and how to read its binary cache form back.
+struct ValueType {
+  std::string name;
+  std::string extension;  // without the dot: "ply", "ngc", "json", "png"
+  std::string description;
+  std::function<ValuePtr(std::istream&)> deserialize;
+};
+
+// All known value types by name.
+class ValueTypes {
+ public:
+  void add(ValueType type);
+  const ValueType* find(const std::string& name) const;
+  const std::map<std::string, ValueType>& all() const { return types_; }
+
+ private:
+  std::map<std::string, ValueType> types_;
+};
+
+// Little helpers for the binary cache form: fixed-width little-endian scalars and vectors of PODs.
+// Reading past the end throws std::runtime_error, so a truncated stream is never taken as data.
+namespace bin {
+void write_u64(std::ostream& out, std::uint64_t v);
+std::uint64_t read_u64(std::istream& in);
+void write_f64(std::ostream& out, double v);
+double read_f64(std::istream& in);
+void write_string(std::ostream& out, const std::string& s);
+std::string read_string(std::istream& in);
+void write_bytes(std::ostream& out, const void* data, std::size_t size);
+void read_bytes(std::istream& in, void* data, std::size_t size);
+
+template <class T>
+void write_vector(std::ostream& out, const std::vector<T>& v) {
+  // T is plain data: scalars, or Eigen fixed-size vectors (a packed array of scalars).
+  write_u64(out, v.size());
+  write_bytes(out, v.data(), v.size() * sizeof(T));
+}
+template <class T>
+std::vector<T> read_vector(std::istream& in) {
+  // T is plain data: scalars, or Eigen fixed-size vectors (a packed array of scalars).
+  std::uint64_t n = read_u64(in);
+  if (n > (std::uint64_t(1) << 40) / sizeof(T)) throw std::runtime_error("corrupt vector length");
+  std::vector<T> v(n);
+  read_bytes(in, v.data(), n * sizeof(T));
+  return v;
+}
+}  // namespace bin
+
+}  // namespace scallop

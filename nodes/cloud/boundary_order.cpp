@@ -1,0 +1,283 @@
+#include "nodes/cloud/boundary_order.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <numbers>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+#include "nodes/cloud/knn.h"
+#include "nodes/param/tangent_frame.h"
+
+namespace scallop {
+
+void best_fit_plane(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
+                    Eigen::Vector3d& c, Eigen::Vector3d& n) {
+  c.setZero();
+  for (const auto& p : P) c += p;
+  c /= static_cast<double>(std::max<std::size_t>(P.size(), 1));
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : P) cov += (p - c) * (p - c).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  n = es.eigenvectors().col(0).normalized();
+  Eigen::Vector3d ref = Eigen::Vector3d::UnitZ();
+  if (!N.empty()) {
+    Eigen::Vector3d s = Eigen::Vector3d::Zero();
+    for (const auto& x : N) s += x;
+    if (s.norm() > 0) ref = s;
+  }
+  if (n.dot(ref) < 0) n = -n;
+}
+
+double projected_loop_area(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& loop,
+                           const Eigen::Vector3d& c, const Eigen::Vector3d& n) {
+  Eigen::Vector3d t1, t2;
+  tangent_frame(n, t1, t2);
+  double a = 0;
+  for (std::size_t i = 0; i < loop.size(); ++i) {
+    Eigen::Vector3d p = P[loop[i]] - c, q = P[loop[(i + 1) % loop.size()]] - c;
+    a += p.dot(t1) * q.dot(t2) - q.dot(t1) * p.dot(t2);
+  }
+  return 0.5 * a;
+}
+
+namespace {
+
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  bool unite(int a, int b) {
+    a = find(a), b = find(b);
+    if (a == b) return false;
+    parent[a] = b;
+    return true;
+  }
+};
+
+struct Edge {
+  int a, b;
+  double len;
+};
+
+// Farthest node from `src` in a tree (weighted), with parents for the path back.
+int farthest(const std::vector<std::vector<std::pair<int, double>>>& adj, int src, std::vector<int>& parent) {
+  std::vector<double> dist(adj.size(), -1);
+  parent.assign(adj.size(), -1);
+  std::vector<int> stack{src};
+  dist[src] = 0;
+  int best = src;
+  while (!stack.empty()) {
+    int u = stack.back();
+    stack.pop_back();
+    if (dist[u] > dist[best]) best = u;
+    for (auto [v, w] : adj[u])
+      if (dist[v] < 0) {
+        dist[v] = dist[u] + w;
+        parent[v] = u;
+        stack.push_back(v);
+      }
+  }
+  return best;
+}
+
+// One closed tour through all nodes of a tree (local ids 0..n-1, positions X).
+// max_detour[v]: an off-path node joins the tour only if that lengthens it by at most this much
+// (a few points deep in a noisy boundary band do; spurs towards false boundary points inside the
+// patch, e.g. at sampling voids, do not, and stay off the loop together with their subtrees).
+std::vector<int> tour_of_tree(const std::vector<std::vector<std::pair<int, double>>>& adj,
+                              const std::vector<Eigen::Vector3d>& X, const std::vector<double>& max_detour) {
+  int n = static_cast<int>(adj.size());
+  auto d = [&](int a, int b) { return (X[a] - X[b]).norm(); };
+  std::vector<int> parent;
+  int a = farthest(adj, 0, parent);
+  int b = farthest(adj, a, parent);
+  // The longest path a..b, as a circular doubly linked list closed by b -> a.
+  std::vector<int> next(n, -1), prev(n, -1);
+  std::vector<int> path;
+  for (int v = b; v != -1; v = parent[v]) path.push_back(v);
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    next[path[i]] = path[(i + 1) % path.size()];
+    prev[path[(i + 1) % path.size()]] = path[i];
+  }
+  // Off-path nodes, breadth first from the path, each next to its tree parent on the cheaper side.
+  std::deque<int> queue(path.begin(), path.end());
+  std::vector<char> placed(n, 0);
+  for (int v : path) placed[v] = 1;
+  int count = static_cast<int>(path.size());
+  while (!queue.empty()) {
+    int p = queue.front();
+    queue.pop_front();
+    for (auto [x, w] : adj[p]) {
+      if (placed[x]) continue;
+      placed[x] = 1;
+      int nx = next[p], pv = prev[p];
+      double after = d(p, x) + d(x, nx) - d(p, nx);
+      double before = d(pv, x) + d(x, p) - d(pv, p);
+      if (std::min(after, before) > max_detour[x]) continue;  // a spur: leave it (and its subtree) out
+      ++count;
+      if (after <= before) {
+        next[p] = x, prev[x] = p, next[x] = nx, prev[nx] = x;
+      } else {
+        next[pv] = x, prev[x] = pv, next[x] = p, prev[p] = x;
+      }
+      queue.push_back(x);
+    }
+  }
+  std::vector<int> t;
+  t.reserve(count);
+  int v = path[0];
+  do {
+    t.push_back(v);
+    v = next[v];
+  } while (v != path[0] && static_cast<int>(t.size()) <= count);
+  n = static_cast<int>(t.size());
+
+  // Windowed 2-opt: reverse t[i+1..j] when that shortens the tour (local crossings, zig-zags).
+  const int window = std::min(16, n - 2);
+  for (int pass = 0; pass < 20; ++pass) {
+    bool improved = false;
+    for (int i = 0; i < n; ++i)
+      for (int s = 2; s <= window; ++s) {
+        int j = (i + s) % n;
+        int i1 = (i + 1) % n, j1 = (j + 1) % n;
+        double gain = d(t[i], t[i1]) + d(t[j], t[j1]) - d(t[i], t[j]) - d(t[i1], t[j1]);
+        if (gain > 1e-12) {
+          for (int lo = i1, hi = j, c = 0; c < s / 2; ++c) {  // s elements in i+1..j
+            std::swap(t[lo], t[hi]);
+            lo = (lo + 1) % n;
+            hi = (hi + n - 1) % n;
+          }
+          improved = true;
+        }
+      }
+    if (!improved) break;
+  }
+  return t;
+}
+
+}  // namespace
+
+std::vector<std::vector<int>> order_boundary_loops(const std::vector<Eigen::Vector3d>& P,
+                                                   const std::vector<Eigen::Vector3d>& N,
+                                                   const Neighborhoods& nbrs,
+                                                   const std::vector<std::uint8_t>& is_boundary,
+                                                   int min_loop_points) {
+  const std::size_t np = P.size();
+  if (is_boundary.size() != np)
+    throw std::invalid_argument("the boundary flags are for " + std::to_string(is_boundary.size()) +
+                                " points but the cloud has " + std::to_string(np));
+  if (nbrs.size() != np || nbrs.k < 1)
+    throw std::invalid_argument("the neighbourhoods are for " + std::to_string(nbrs.size()) +
+                                " points but the cloud has " + std::to_string(np));
+  if (!N.empty() && N.size() != np)
+    throw std::invalid_argument("the cloud has " + std::to_string(N.size()) + " normals for " +
+                                std::to_string(np) + " points");
+  std::vector<int> B;
+  for (std::size_t i = 0; i < np; ++i)
+    if (is_boundary[i]) B.push_back(static_cast<int>(i));
+  if (B.empty())
+    throw std::invalid_argument(
+        "no boundary points found: the cloud looks closed (a 3-axis finishing path needs an open patch)");
+  const int nb = static_cast<int>(B.size());
+
+  // Link graph among boundary points.
+  std::vector<Eigen::Vector3d> X(nb);
+  std::vector<double> radius(nb);
+  for (int i = 0; i < nb; ++i) {
+    X[i] = P[B[i]];
+    radius[i] = std::sqrt(nbrs.sq_dist(B[i], nbrs.k - 1));
+  }
+  std::vector<Edge> edges;
+  if (nb > 1) {
+    KnnIndex index(X);
+    std::vector<int> idx;
+    std::vector<double> sq;
+    const int m = std::min(8, nb - 1);
+    for (int i = 0; i < nb; ++i) {
+      index.query(X[i], m, idx, sq, i);
+      for (std::size_t j = 0; j < idx.size(); ++j) {
+        double len = std::sqrt(sq[j]);
+        if (len <= 2 * std::max(radius[i], radius[idx[j]])) edges.push_back({i, idx[j], len});
+      }
+    }
+  }
+  // Minimum spanning forest (Kruskal).
+  std::sort(edges.begin(), edges.end(), [](const Edge& a, const Edge& b) {
+    return a.len != b.len ? a.len < b.len : std::tie(a.a, a.b) < std::tie(b.a, b.b);
+  });
+  UnionFind uf(nb);
+  std::vector<Edge> tree;
+  for (const Edge& e : edges)
+    if (uf.unite(e.a, e.b)) tree.push_back(e);
+
+  // Components, with local ids.
+  std::vector<int> comp_of(nb, -1), local(nb, -1);
+  std::vector<std::vector<int>> comps;
+  for (int i = 0; i < nb; ++i) {
+    int r = uf.find(i);
+    if (comp_of[r] < 0) {
+      comp_of[r] = static_cast<int>(comps.size());
+      comps.emplace_back();
+    }
+    local[i] = static_cast<int>(comps[comp_of[r]].size());
+    comps[comp_of[r]].push_back(i);
+  }
+  std::vector<std::vector<std::vector<std::pair<int, double>>>> adj(comps.size());
+  for (std::size_t c = 0; c < comps.size(); ++c) adj[c].resize(comps[c].size());
+  for (const Edge& e : tree) {
+    int c = comp_of[uf.find(e.a)];
+    adj[c][local[e.a]].push_back({local[e.b], e.len});
+    adj[c][local[e.b]].push_back({local[e.a], e.len});
+  }
+
+  Eigen::Vector3d c0, n0;
+  best_fit_plane(P, N, c0, n0);
+  std::vector<std::vector<int>> loops;
+  std::vector<double> areas, min_area;
+  for (std::size_t c = 0; c < comps.size(); ++c) {
+    if (static_cast<int>(comps[c].size()) < std::max(min_loop_points, 3)) continue;
+    std::vector<Eigen::Vector3d> Xc(comps[c].size());
+    std::vector<double> rc(comps[c].size());
+    for (std::size_t j = 0; j < comps[c].size(); ++j) Xc[j] = X[comps[c][j]], rc[j] = radius[comps[c][j]];
+    std::vector<int> t = tour_of_tree(adj[c], Xc, rc);
+    if (static_cast<int>(t.size()) < std::max(min_loop_points, 3)) continue;
+    std::vector<int> loop(t.size());
+    for (std::size_t j = 0; j < t.size(); ++j) loop[j] = B[comps[c][t[j]]];
+    double a = projected_loop_area(P, loop, c0, n0);
+    if (a < 0) {
+      std::reverse(loop.begin(), loop.end());
+      a = -a;
+    }
+    double mean_radius = 0;
+    for (double r : rc) mean_radius += r;
+    mean_radius /= static_cast<double>(rc.size());
+    loops.push_back(std::move(loop));
+    areas.push_back(a);
+    min_area.push_back(std::numbers::pi * 4 * mean_radius * mean_radius);
+  }
+  if (loops.empty())
+    throw std::invalid_argument("no boundary loop found: the " + std::to_string(nb) +
+                                " boundary points form only pieces of fewer than min_loop_points = " +
+                                std::to_string(min_loop_points) + " points");
+  // Outer loop first (largest enclosed area), then holes by decreasing area, reversed (clockwise).
+  std::vector<std::size_t> order(loops.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return areas[a] > areas[b]; });
+  std::vector<std::vector<int>> out;
+  for (std::size_t j = 0; j < order.size(); ++j) {
+    // A "hole" narrower than two neighbourhood radii is a sampling void, not a feature of the part.
+    if (j > 0 && areas[order[j]] < min_area[order[j]]) continue;
+    out.push_back(std::move(loops[order[j]]));
+    if (j > 0) std::reverse(out.back().begin(), out.back().end());
+  }
+  return out;
+}
+
+}  // namespace scallop

@@ -1,0 +1,36 @@
+// Cleaning of a raw point cloud: non-finite points, exact duplicates, statistical outliers.
+#pragma once
+
+#include <cstddef>
+
+#include "nodes/types/cloud.h"
+
+namespace scallop {
+
+struct CleanOptions {
+  bool remove_outliers = false;
+  int outlier_k = 16;              // neighbours whose mean distance rates a point
+  double outlier_std_ratio = 2.0;  // outlier: mean distance > global mean + ratio * std
+};
+
+// Point counts: input = non_finite + duplicates + outliers + output.
+struct CleanStats {
+  std::size_t input = 0, non_finite = 0, duplicates = 0, outliers = 0, output = 0;
+};
+
+// in  #P points (mm), with or without normals.
+// Returns the points that survive, in their original order, with their normals if `in` has them:
+//  1. points with a NaN or infinite coordinate, or a NaN or infinite normal, are dropped;
+//  2. of points with exactly equal coordinates only the first (lowest index) is kept
+//     (lexicographic sort, O(#P log #P));
+//  3. if opts.remove_outliers, statistical outlier removal as PCL's StatisticalOutlierRemoval
+//     defines it (Rusu et al., "Towards 3D point cloud based object maps for household
+//     environments", 2008): d_i = mean Euclidean distance of point i to its outlier_k nearest
+//     neighbours, mu and sigma the mean and sample standard deviation (n - 1) of all d_i; point i
+//     is an outlier if d_i > mu + outlier_std_ratio * sigma. Run on the points left by 1-2.
+// Throws std::invalid_argument when outlier removal is asked for with outlier_k < 1 or with no
+// more than outlier_k points left.
+PointCloud clean_cloud(const PointCloud& in, const CleanOptions& opts,
+                       CleanStats* stats = nullptr);
+
+}  // namespace scallop

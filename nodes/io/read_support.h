@@ -1,0 +1,55 @@
+// Small helpers shared by the cloud readers: loading a file, walking its lines, parsing numbers
+// and raising CloudReadError with the file name and position.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "nodes/io/read_cloud.h"
+
+namespace scallop::io {
+
+// The whole file as bytes. Throws CloudReadError "<path>: file does not exist",
+// "<path>: is a directory, not a file", "<path>: cannot read file" or "<path>: file is empty".
+std::string read_file_bytes(const std::string& path);
+
+[[noreturn]] void fail(const std::string& path, const std::string& what);
+[[noreturn]] void fail_line(const std::string& path, std::size_t line, const std::string& what);
+[[noreturn]] void fail_byte(const std::string& path, std::size_t offset, const std::string& what);
+
+// Walks the lines of `data` from byte `start`, stripping "\n" or "\r\n".
+class LineReader {
+ public:
+  explicit LineReader(std::string_view data, std::size_t start = 0, std::size_t first_line = 1)
+      : data_(data), pos_(start), next_line_(first_line) {}
+  // The next line; false at the end of the data.
+  bool next(std::string_view& line);
+  // Number of the line last returned (the line the next call would return, before any call).
+  std::size_t line() const { return next_line_ - 1; }
+  // Byte offset just past the end of the last returned line and its terminator.
+  std::size_t offset() const { return pos_; }
+
+ private:
+  std::string_view data_;
+  std::size_t pos_;
+  std::size_t next_line_;
+};
+
+// Splits on blanks (spaces, tabs, '\r') into `out`.
+void split_tokens(std::string_view line, std::vector<std::string_view>& out);
+
+// Whole-token parses. parse_double accepts a leading '+', "nan" and "inf".
+bool parse_double(std::string_view s, double& v);
+bool parse_int(std::string_view s, long long& v);
+bool parse_uint(std::string_view s, std::uint64_t& v);
+
+// A token fit to quote in a message: 'abc', with non-printable bytes as '?' and at most 32 chars.
+std::string quote(std::string_view token);
+
+// The extension of `path` in lower case with its dot (".ply"), or "" when it has none.
+std::string lower_extension(const std::string& path);
+
+}  // namespace scallop::io

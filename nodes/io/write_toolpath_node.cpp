@@ -1,0 +1,36 @@
+#include <stdexcept>
+
+#include "engine/node.h"
+#include "nodes/io/write_toolpath.h"
+#include "nodes/types/document.h"
+#include "nodes/types/toolpath.h"
+
+namespace scallop {
+NodeDecl make_write_toolpath_node() {
+  NodeDecl d;
+  d.type = "io.write_toolpath";
+  d.version = 1;
+  d.description = "writes the passes as JSON or CSV (contact, normal, tool tip per point)";
+  d.cache_on_disk = false;
+  d.input("path", "Toolpath", "the passes")
+      .output("report", "Report", "what was written: file, format, passes, points")
+      .param_string("path", "", "file to write")
+      .param_choice("format", "json", {"json", "csv"}, "json: nested passes; csv: pass,index,cx,cy,cz,nx,ny,nz,tx,ty,tz");
+  d.run = [](NodeContext& ctx) {
+    auto path = ctx.input<Toolpath>("path");
+    std::string file = ctx.text("path"), format = ctx.text("format");
+    if (file.empty()) throw NodeError("parameter 'path' (the file to write) is empty");
+    try {
+      write_toolpath(*path, file, format);
+    } catch (const std::exception& e) {
+      throw NodeError(e.what());
+    }
+    std::size_t points = 0;
+    for (const auto& p : path->passes) points += p.contact.size();
+    Report r;
+    r.data = {{"file", file}, {"format", format}, {"passes", path->passes.size()}, {"points", points}};
+    ctx.set("report", std::move(r));
+  };
+  return d;
+}
+}  // namespace scallop

@@ -1,0 +1,156 @@
+#include "nodes/param/harmonic.h"
+
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCore>
+#include <Eigen/UmfPackSupport>
+#include <cmath>
+#include <stdexcept>
+#include <unsupported/Eigen/IterativeSolvers>
+
+namespace scallop {
+
+HarmonicSolver parse_harmonic_solver(const std::string& name) {
+  if (name == "direct") return HarmonicSolver::Direct;
+  if (name == "bicgstab") return HarmonicSolver::BiCGSTAB;
+  if (name == "gmres") return HarmonicSolver::GMRES;
+  throw std::invalid_argument("unknown solver '" + name + "' (direct, bicgstab, gmres)");
+}
+
+namespace {
+
+constexpr double kMaxResidual = 1e-6;
+const char* kSingular =
+    "the harmonic map system is singular: some points are not connected to the outer boundary "
+    "through their neighbours (separate clusters? run cloud.clean or raise k)";
+
+template <class Solver>
+Eigen::MatrixXd solve_iterative(Solver& s, const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& B,
+                                const Eigen::MatrixXd& X0, const char* name) {
+  s.setTolerance(1e-12);
+  s.setMaxIterations(std::max<Eigen::Index>(1000, 4 * A.rows()));
+  s.compute(A);
+  if (s.info() != Eigen::Success)
+    throw std::runtime_error(std::string(name) + ": the incomplete-LU preconditioner failed; " + kSingular);
+  Eigen::MatrixXd X(B.rows(), B.cols());
+  for (Eigen::Index c = 0; c < B.cols(); ++c) {
+    X.col(c) = s.solveWithGuess(B.col(c), X0.col(c));
+    if (s.info() != Eigen::Success)
+      throw std::runtime_error(std::string(name) + " did not converge in " + std::to_string(s.iterations()) +
+                               " iterations (error " + std::to_string(s.error()) + "); try solver=direct");
+  }
+  return X;
+}
+
+}  // namespace
+
+UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, const UVMap& boundary,
+                     HarmonicSolver solver) {
+  const Eigen::Index n = L.rows();
+  if (L.cols() != n) throw std::invalid_argument("the Laplacian is not square");
+  const auto& outer = boundary.outer_loop;
+  if (outer.size() < 3 || boundary.boundary_uv.size() != outer.size())
+    throw std::invalid_argument("the boundary map has " + std::to_string(outer.size()) + " loop points and " +
+                                std::to_string(boundary.boundary_uv.size()) + " boundary positions");
+  // Unknown index of every point, -1 on the outer loop.
+  std::vector<Eigen::Index> unknown(n, 0);
+  std::vector<Eigen::Vector2d> uv(n, Eigen::Vector2d::Zero());
+  for (std::size_t j = 0; j < outer.size(); ++j) {
+    int i = outer[j];
+    if (i < 0 || i >= n)
+      throw std::invalid_argument("the outer loop has point index " + std::to_string(i) +
+                                  " outside the Laplacian's " + std::to_string(n) + " points");
+    if (unknown[i] < 0) throw std::invalid_argument("the outer loop visits point " + std::to_string(i) + " twice");
+    unknown[i] = -1;
+    uv[i] = boundary.boundary_uv[j];
+  }
+  Eigen::Index m = 0;
+  for (auto& u : unknown)
+    if (u >= 0) u = m++;
+
+  // Every unknown must reach the outer loop through its rows' neighbours; otherwise its cluster's
+  // rows (summing to zero) make the system singular, which rounding can hide from the LU.
+  {
+    std::vector<std::vector<Eigen::Index>> depends_on_me(n);
+    for (Eigen::Index i = 0; i < n; ++i)
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(L, i); it; ++it)
+        if (it.col() != i && it.value() != 0) depends_on_me[it.col()].push_back(i);
+    std::vector<char> reached(n, 0);
+    std::vector<Eigen::Index> stack;
+    for (int i : outer) reached[i] = 1, stack.push_back(i);
+    while (!stack.empty()) {
+      Eigen::Index j = stack.back();
+      stack.pop_back();
+      for (Eigen::Index i : depends_on_me[j])
+        if (!reached[i]) reached[i] = 1, stack.push_back(i);
+    }
+    std::size_t cut = 0;
+    Eigen::Index first = -1;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!reached[i]) {
+        if (first < 0) first = i;
+        ++cut;
+      }
+    if (cut > 0)
+      throw std::runtime_error(std::to_string(cut) + " points (first: point " + std::to_string(first) +
+                               ") are not connected to the outer boundary through their neighbours, so "
+                               "their (u,v) is undefined (separate clusters? run cloud.clean or raise k)");
+  }
+
+  UVMap out = boundary;
+  out.residual = 0;
+  if (m > 0) {
+    // A X = B: the interior rows of L, boundary columns moved to the right-hand side.
+    std::vector<Eigen::Triplet<double>> trip;
+    trip.reserve(static_cast<std::size_t>(L.nonZeros()));
+    Eigen::MatrixXd B = Eigen::MatrixXd::Zero(m, 2);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (unknown[i] < 0) continue;
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(L, i); it; ++it) {
+        Eigen::Index j = it.col();
+        if (unknown[j] >= 0)
+          trip.emplace_back(unknown[i], unknown[j], it.value());
+        else
+          B.row(unknown[i]) -= it.value() * uv[j].transpose();
+      }
+    }
+    Eigen::SparseMatrix<double> A(m, m);
+    A.setFromTriplets(trip.begin(), trip.end());
+    A.makeCompressed();
+
+    Eigen::MatrixXd X;
+    if (solver == HarmonicSolver::Direct) {
+      Eigen::UmfPackLU<Eigen::SparseMatrix<double>> lu;
+      lu.compute(A);
+      if (lu.info() != Eigen::Success) throw std::runtime_error(kSingular);
+      X = lu.solve(B);
+      if (lu.info() != Eigen::Success || !X.allFinite()) throw std::runtime_error(kSingular);
+    } else {
+      // Start from the mean of the boundary positions: the interior values are averages of them.
+      Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+      for (const auto& q : boundary.boundary_uv) mean += q;
+      mean /= static_cast<double>(outer.size());
+      Eigen::MatrixXd X0(m, 2);
+      X0.col(0).setConstant(mean.x());
+      X0.col(1).setConstant(mean.y());
+      if (solver == HarmonicSolver::BiCGSTAB) {
+        Eigen::BiCGSTAB<Eigen::SparseMatrix<double>, Eigen::IncompleteLUT<double>> s;
+        X = solve_iterative(s, A, B, X0, "BiCGSTAB");
+      } else {
+        Eigen::GMRES<Eigen::SparseMatrix<double>, Eigen::IncompleteLUT<double>> s;
+        s.set_restart(50);
+        X = solve_iterative(s, A, B, X0, "GMRES");
+      }
+    }
+    double bnorm = B.norm();
+    out.residual = (A * X - B).norm() / (bnorm > 0 ? bnorm : 1.0);
+    if (!(out.residual <= kMaxResidual))
+      throw std::runtime_error("the harmonic map solve is inaccurate: relative residual " +
+                               std::to_string(out.residual) + " > 1e-6; " + kSingular);
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (unknown[i] >= 0) uv[i] = X.row(unknown[i]).transpose();
+  }
+  out.uv = std::move(uv);
+  return out;
+}
+
+}  // namespace scallop

@@ -1,0 +1,43 @@
+#include <stdexcept>
+
+#include "engine/node.h"
+#include "nodes/param/harmonic.h"
+#include "nodes/types/cloud.h"
+#include "nodes/types/param.h"
+
+namespace scallop {
+
+NodeDecl make_harmonic_node() {
+  NodeDecl d;
+  d.type = "param.harmonic";
+  d.version = 1;
+  d.description = "harmonic (conformal) map: L u = L v = 0 inside, outer loop fixed, holes free";
+  d.input("laplacian", "Laplacian", "the meshless Laplacian of the cloud")
+      .input("map", "UVMap", "the boundary map (param.boundary_map)")
+      .input("loops", "Loops", "the boundary loops the map was made from")
+      .input("cloud", "Cloud", "the points")
+      .output("map", "UVMap", "the map with uv of every point and the solve's relative residual")
+      .param_choice("solver", "direct", {"direct", "bicgstab", "gmres"},
+                    "direct: UMFPACK sparse LU; bicgstab / gmres: Eigen iterative with incomplete LU");
+  d.run = [](NodeContext& ctx) {
+    auto lap = ctx.input<Laplacian>("laplacian");
+    auto bmap = ctx.input<UVMap>("map");
+    auto loops = ctx.input<BoundaryLoops>("loops");
+    auto cloud = ctx.input<PointCloud>("cloud");
+    if (static_cast<std::size_t>(lap->L.rows()) != cloud->size())
+      throw NodeError("the Laplacian has " + std::to_string(lap->L.rows()) + " rows but the cloud has " +
+                      std::to_string(cloud->size()) + " points");
+    if (loops->loops.empty() || loops->loops[0] != bmap->outer_loop)
+      throw NodeError("the boundary map was not made from the outer loop of these loops");
+    try {
+      ctx.set("map", solve_harmonic(lap->L, *bmap, parse_harmonic_solver(ctx.text("solver"))));
+    } catch (const std::invalid_argument& e) {
+      throw NodeError(e.what());
+    } catch (const std::runtime_error& e) {
+      throw NodeError(e.what());
+    }
+  };
+  return d;
+}
+
+}  // namespace scallop

@@ -1,0 +1,656 @@
+#include "nodes/path/isoparametric.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "nodes/path/step_size.h"
+#include "nodes/path/uv_interpolation.h"
+
+namespace scallop {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kTwoPi = 2 * M_PI;
+
+// (s, t) pass coordinates -> uv; see the header.
+struct Coords {
+  bool polar = false;
+  double S = 0;  // side extent: width (zigzag) or radius (contour)
+  double T = 0;  // forward extent: height (zigzag) or 2 pi (contour)
+  double R = 0;  // contour: disk radius
+
+  Eigen::Vector2d uv(double s, double t) const {
+    if (!polar) return {s, t};
+    const double rho = R - s;
+    return {rho * std::cos(t), rho * std::sin(t)};
+  }
+  // The centre of the disk: a pass of one point.
+  bool degenerate(double s) const { return polar && s >= R; }
+};
+
+struct Pass {
+  double s = 0;
+  bool closed = false;  // contour circles: the last vertex is the first one again
+  std::vector<double> t;
+  std::vector<Eigen::Vector3d> p, n, c;  // contact, unit normal, ball centre
+};
+
+// Local geometry at a vertex of a pass, and the side step it allows.
+struct VertexInfo {
+  double ds = kInf;        // parameter side step, formula (3) or (4)
+  double interval = kInf;  // surface side interval l_s (mm)
+  bool formula4 = false;
+  bool unreachable = false;  // smallest normal curvature radius below r (concave)
+  double kappa_min = 0;      // smallest principal curvature (convex positive)
+};
+
+struct Derivs {
+  Eigen::Vector3d p, n, rs, rt, rss, rst, rtt;
+};
+
+struct StripCheck {
+  double scallop_max = 0;
+  Eigen::Vector3d where = Eigen::Vector3d::Zero();
+  double interval_min = kInf, interval_max = 0;  // contact of A to contact polyline of B (mm)
+};
+
+class Planner {
+ public:
+  Planner(const UVInterpolator& f, Coords co, const IsoparametricOptions& o)
+      : f_(f), co_(co), o_(o), r_(o.tool_radius), h_(o.scallop_height * o.safety_factor),
+        // 2 % of e is left for the error of the interpolant itself (verify.py's gouge limit is e)
+        e_over_(0.98 * o.chord_error), e_under_(std::min(0.98 * o.chord_error, 0.1 * h_)),
+        hfd_(2 * f.uv_spacing()), ls0_(std::sqrt(8 * r_ * h_)) {}
+
+  double chord_overcut_max = 0, chord_undercut_max = 0;
+  double forward_min = kInf, forward_max = 0;
+  int forward_floor_hits = 0;
+
+  SurfaceSample at(double s, double t) const { return f_(co_.uv(s, t)); }
+  Eigen::Vector3d centre(const SurfaceSample& x) const { return x.position + r_ * x.normal; }
+
+  // r and its first and second derivatives in (s, t) by central differences through the
+  // interpolant (paper section 3.1). The stencil centre is moved inside the domain by one step
+  // where the point lies on an edge, so no stencil point is clamped.
+  Derivs derivs(double s, double t) const {
+    const double hs = hfd_;
+    double ht = hfd_;
+    double sc = s, tc = t;
+    if (co_.polar) {
+      ht = std::min(0.25, hfd_ / std::max(co_.R - s, 1e-12));
+      sc = std::max(s, hs);  // rho = R - s may cross the centre: the polar map is smooth there
+    } else {
+      sc = std::clamp(s, hs, co_.S - hs);
+      tc = std::clamp(t, ht, co_.T - ht);
+    }
+    auto P = [&](double ds, double dt) { return at(sc + ds, tc + dt).position; };
+    const Eigen::Vector3d p0 = P(0, 0), ps = P(hs, 0), ms = P(-hs, 0), pt = P(0, ht),
+                          mt = P(0, -ht);
+    Derivs d;
+    const SurfaceSample x = at(s, t);
+    d.p = x.position;
+    d.n = x.normal;
+    d.rs = (ps - ms) / (2 * hs);
+    d.rt = (pt - mt) / (2 * ht);
+    d.rss = (ps + ms - 2 * p0) / (hs * hs);
+    d.rtt = (pt + mt - 2 * p0) / (ht * ht);
+    d.rst = (P(hs, ht) - P(hs, -ht) - P(-hs, ht) + P(-hs, -ht)) / (4 * hs * ht);
+    return d;
+  }
+
+  VertexInfo vertex_info(double s, double t) const {
+    const Derivs d = derivs(s, t);
+    const FundamentalForms ff = fundamental_forms(d.rs, d.rt, d.rss, d.rst, d.rtt, d.n);
+    VertexInfo v;
+    const double theta = std::acos(std::clamp(ff.F / std::sqrt(ff.E * ff.G), -1.0, 1.0));
+    v.formula4 = std::abs(theta - M_PI / 2) > o_.conformal_tolerance * M_PI / 180;
+    // Formula (3) takes the side curvature along r_s; formula (4) the one across the pass
+    // (perpendicular to r_t on the surface, parameter direction (1, -F/G)).
+    const double kappa_s = v.formula4 ? normal_curvature(ff, 1, -ff.F / ff.G)
+                                      : normal_curvature(ff, 1, 0);
+    v.interval = side_interval(h_, r_, kappa_s);
+    const double rsn = std::sqrt(ff.E);
+    v.ds = v.formula4 ? side_step_corrected(v.interval, rsn, theta)
+                      : side_step_conformal(v.interval, rsn);
+    v.kappa_min = principal_curvatures(ff)[0];
+    v.unreachable = ball_cannot_reach(r_, v.kappa_min);
+    return v;
+  }
+
+  // Largest ratio of the chord deviation of the ball-centre segment c0-c1 (pass s, t0 to t1)
+  // to its limit, sampled at 1/4, 1/2 and 3/4; records the deviations when `record`.
+  double chord_ratio(double s, double t0, double t1, const Eigen::Vector3d& c0,
+                     const Eigen::Vector3d& c1, bool record) {
+    double ratio = 0;
+    const Eigen::Vector3d seg = c1 - c0;
+    const double L2 = seg.squaredNorm();
+    for (int k = 1; k <= 3; ++k) {
+      const SurfaceSample m = at(s, t0 + (t1 - t0) * k / 4.0);
+      const Eigen::Vector3d cm = centre(m);
+      const double y = L2 > 0 ? std::clamp((cm - c0).dot(seg) / L2, 0.0, 1.0) : 0.0;
+      const double up = (c0 + y * seg - cm).dot(m.normal);  // > 0: chord above (undercut)
+      const double over = std::max(0.0, -up), under = std::max(0.0, up);
+      // Sideways the chord may stray up to e as well (it shifts the pass, not the depth).
+      const double total = (c0 + y * seg - cm).norm();
+      ratio = std::max({ratio, over / e_over_, under / e_under_, total / e_over_});
+      if (record) {
+        chord_overcut_max = std::max(chord_overcut_max, over);
+        chord_undercut_max = std::max(chord_undercut_max, under);
+      }
+    }
+    return ratio;
+  }
+
+  Pass build_pass(double s) {
+    Pass P;
+    P.s = s;
+    P.closed = co_.polar;
+    auto push = [&](double t, const SurfaceSample& x) {
+      P.t.push_back(t);
+      P.p.push_back(x.position);
+      P.n.push_back(x.normal);
+      P.c.push_back(centre(x));
+    };
+    if (co_.degenerate(s)) {
+      P.closed = false;
+      push(0, at(s, 0));
+      return P;
+    }
+    double t = 0;
+    SurfaceSample x = at(s, 0);
+    push(0, x);
+    const double dt_floor = 1e-3 * hfd_ / (co_.polar ? std::max(co_.R - s, hfd_) : 1.0);
+    while (t < co_.T) {
+      // Formula (2) from the pass's own curvature gives the first guess.
+      const double ht = co_.polar ? std::min(0.25, hfd_ / std::max(co_.R - s, 1e-12)) : hfd_;
+      const double tc = co_.polar ? t : std::clamp(t, ht, co_.T - ht);
+      const Eigen::Vector3d p0 = at(s, tc).position, pp = at(s, tc + ht).position,
+                            pm = at(s, tc - ht).position;
+      const Eigen::Vector3d rt = (pp - pm) / (2 * ht), rtt = (pp + pm - 2 * p0) / (ht * ht);
+      const double rtn = std::max(rt.norm(), 1e-12);
+      const double kappa = rt.cross(rtt).norm() / (rtn * rtn * rtn);
+      const bool convex = rtt.dot(x.normal) < 0;  // chord below the curve: overcut
+      // Concave along the pass with a radius below r: the centre curve folds back on itself and
+      // no chord check is meaningful (the place is reported as a concave region).
+      const bool folded = ball_cannot_reach(r_, -rtt.dot(x.normal) / (rtn * rtn));
+      // Formula (2) bounds the chord of the contact curve; the ball centre runs on the offset
+      // curve, whose chords are (1 + r kappa_n) times longer at radius (R + r): its sagitta is
+      // that of a contact curve of curvature kappa (1 + r kappa_n).
+      const double kappa_n = -rtt.dot(x.normal) / (rtn * rtn);
+      const double lf = std::min(
+          forward_interval(convex ? e_over_ : e_under_, kappa * std::abs(1 + r_ * kappa_n)),
+          o_.max_segment);
+      double dt = lf / rtn;
+      if (co_.polar) dt = std::min(dt, M_PI / 8);
+      dt = std::max(dt, dt_floor);
+      bool last = t + dt * (1 + 1e-6) >= co_.T;
+      if (last) dt = co_.T - t;
+      else if (t + 1.5 * dt > co_.T) dt = (co_.T - t) / 2;  // no sliver of a last step
+      SurfaceSample x1;
+      for (int iter = 0;; ++iter) {
+        x1 = at(s, last ? co_.T : t + dt);
+        if (folded) break;
+        const double ratio = chord_ratio(s, t, t + dt, centre(x), centre(x1), false);
+        if (ratio <= 1) break;
+        if (dt <= dt_floor || iter >= 40) {
+          ++forward_floor_hits;
+          break;
+        }
+        dt = std::max(dt_floor, dt * std::clamp(0.99 / std::sqrt(ratio), 0.2, 0.99));
+        last = false;
+      }
+      if (!folded) chord_ratio(s, t, t + dt, centre(x), centre(x1), true);
+      const double len = (x1.position - x.position).norm();
+      forward_min = std::min(forward_min, len);
+      forward_max = std::max(forward_max, len);
+      t = last ? co_.T : t + dt;
+      x = x1;
+      push(t, x);
+    }
+    return P;
+  }
+
+  // Calls fn(a, b) for the segments (or the single point) of polyline V of pass P that may lie
+  // within `reach` of o: the segment containing t, its neighbours, and on outwards while the
+  // segments stay within reach.
+  template <class Fn>
+  void near_segments(const Pass& P, const std::vector<Eigen::Vector3d>& V, double t,
+                     const Eigen::Vector3d& o, double reach, Fn&& fn) const {
+    const int nv = static_cast<int>(V.size());
+    if (nv == 1) {
+      fn(V[0], V[0]);
+      return;
+    }
+    const int nseg = nv - 1;
+    int k = static_cast<int>(std::upper_bound(P.t.begin(), P.t.end(), t) - P.t.begin()) - 1;
+    k = std::clamp(k, 0, nseg - 1);
+    auto seg_dist = [&](int j) {
+      const Eigen::Vector3d ab = V[j + 1] - V[j];
+      const double L2 = ab.squaredNorm();
+      const double y = L2 > 0 ? std::clamp((o - V[j]).dot(ab) / L2, 0.0, 1.0) : 0.0;
+      return (o - V[j] - y * ab).norm();
+    };
+    fn(V[k], V[k + 1]);
+    for (int dir = -1; dir <= 1; dir += 2) {
+      for (int step = 1; step < nseg; ++step) {
+        int j = k + dir * step;
+        if (P.closed) j = ((j % nseg) + nseg) % nseg;
+        else if (j < 0 || j >= nseg) break;
+        if (j == k) break;
+        if (step > 1 && seg_dist(j) > reach) break;
+        fn(V[j], V[j + 1]);
+      }
+    }
+  }
+
+  // Height of material left above the surface point at (s, t) by the balls swept along the
+  // centre polylines of A and B, per pass: the first hit of the normal ray (verify.py's
+  // definition of the scallop); +infinity where the ray misses.
+  Eigen::Vector2d hits_at(const Pass& A, const Pass& B, double s, double t,
+                          Eigen::Vector3d* where) const {
+    const SurfaceSample x = at(s, t);
+    if (where) *where = x.position;
+    Eigen::Vector2d hit(kInf, kInf);
+    const double reach = r_ + 20 * h_;
+    near_segments(A, A.c, t, x.position, reach, [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      hit[0] = std::min(hit[0], ray_capsule_entry(x.position, x.normal, a, b, r_));
+    });
+    near_segments(B, B.c, t, x.position, reach, [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      hit[1] = std::min(hit[1], ray_capsule_entry(x.position, x.normal, a, b, r_));
+    });
+    return hit;
+  }
+
+  // Largest scallop between passes A and B, looked for across the strip at sample positions
+  // along A (four per segment, at most half the nominal interval apart) and at B's vertices.
+  StripCheck check_strip(const Pass& A, const Pass& B) const {
+    std::vector<double> ts;
+    for (std::size_t k = 0; k + 1 < A.t.size(); ++k) {
+      const double len = (A.c[k + 1] - A.c[k]).norm();
+      const int n = std::max(4, static_cast<int>(std::ceil(len / (0.5 * ls0_))));
+      for (int i = 0; i < n; ++i) ts.push_back(A.t[k] + (A.t[k + 1] - A.t[k]) * i / n);
+    }
+    ts.push_back(A.t.back());
+    if (B.t.size() > 1) ts.insert(ts.end(), B.t.begin(), B.t.end());
+
+    std::vector<double> best(ts.size(), 0);
+    std::vector<Eigen::Vector3d> where(ts.size());
+    const double sA = A.s, sB = B.s;
+    constexpr double kUncut = 1e9;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ts.size(), 16),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        const double t = ts[i];
+        auto g = [&](double f, Eigen::Vector3d* w) {
+          return hits_at(A, B, sA + f * (sB - sA), t, w);
+        };
+        // Coarse scan across the strip; the cusp is where the first hit passes from A's balls
+        // to B's, found by bisection on hit_A - hit_B.
+        constexpr int kScan = 8;
+        double gmax = 0, fmax = 0.5;
+        double f_lo = -1, f_hi = -1;
+        double prev_f = 0, prev_d = -kInf;  // at f = 0 the point touches A's ball
+        for (int j = 1; j < kScan; ++j) {
+          const double f = double(j) / kScan;
+          const Eigen::Vector2d h = g(f, nullptr);
+          const double v = std::min(h[0], h[1]);
+          if (!std::isfinite(v)) {
+            gmax = kUncut, fmax = f;
+            break;
+          }
+          if (v > gmax) gmax = v, fmax = f;
+          const double d = h[0] - h[1];
+          if (f_lo < 0 && prev_d <= 0 && d > 0) f_lo = prev_f, f_hi = f;
+          prev_f = f, prev_d = d;
+        }
+        if (gmax < kUncut && f_lo < 0 && prev_d <= 0) f_lo = prev_f, f_hi = 1;  // crossing next to B
+        if (gmax < kUncut && f_lo >= 0) {
+          for (int it = 0; it < 14; ++it) {
+            const double fm = 0.5 * (f_lo + f_hi);
+            const Eigen::Vector2d h = g(fm, nullptr);
+            if (h[0] - h[1] <= 0) f_lo = fm;
+            else f_hi = fm;
+            const double v = std::min(h[0], h[1]);
+            if (!std::isfinite(v)) {
+              gmax = kUncut, fmax = fm;
+              break;
+            }
+            if (v > gmax) gmax = v, fmax = fm;
+          }
+        }
+        Eigen::Vector3d w;
+        g(fmax, &w);
+        best[i] = gmax;
+        where[i] = w;
+      }
+    });
+    StripCheck out;
+    for (std::size_t i = 0; i < ts.size(); ++i)
+      if (best[i] > out.scallop_max) out.scallop_max = best[i], out.where = where[i];
+
+    // Side interval on the surface: each contact of A to the contact polyline of B.
+    for (std::size_t k = 0; k < A.p.size(); ++k) {
+      double d = kInf;
+      near_segments(B, B.p, A.t[k], A.p[k], kInf, [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+        const Eigen::Vector3d ab = b - a;
+        const double L2 = ab.squaredNorm();
+        const double y = L2 > 0 ? std::clamp((A.p[k] - a).dot(ab) / L2, 0.0, 1.0) : 0.0;
+        d = std::min(d, (A.p[k] - a - y * ab).norm());
+      });
+      out.interval_min = std::min(out.interval_min, d);
+      out.interval_max = std::max(out.interval_max, d);
+    }
+    return out;
+  }
+
+  std::vector<VertexInfo> infos(const Pass& P) const {
+    std::vector<VertexInfo> v(P.t.size());
+    if (co_.degenerate(P.s)) return v;  // the centre point: no side step from it
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.t.size(), 4),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t i = range.begin(); i != range.end(); ++i)
+                          v[i] = vertex_info(P.s, P.t[i]);
+                      });
+    return v;
+  }
+
+  double h() const { return h_; }
+  double nominal_interval() const { return ls0_; }
+
+ private:
+  const UVInterpolator& f_;
+  Coords co_;
+  const IsoparametricOptions& o_;
+  double r_, h_, e_over_, e_under_, hfd_, ls0_;
+};
+
+// Concave places the ball cannot reach, grouped into regions: points closer than `link` are
+// in the same region.
+nlohmann::json concave_regions(const std::vector<Eigen::Vector3d>& pts,
+                               const std::vector<double>& radius, double link) {
+  const int n = static_cast<int>(pts.size());
+  std::vector<int> parent(n);
+  for (int i = 0; i < n; ++i) parent[i] = i;
+  auto find = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  auto key = [&](const Eigen::Vector3d& p, int dx, int dy, int dz) {
+    const long long x = static_cast<long long>(std::floor(p.x() / link)) + dx;
+    const long long y = static_cast<long long>(std::floor(p.y() / link)) + dy;
+    const long long z = static_cast<long long>(std::floor(p.z() / link)) + dz;
+    return (x * 73856093LL) ^ (y * 19349663LL) ^ (z * 83492791LL);
+  };
+  std::unordered_map<long long, std::vector<int>> grid;
+  for (int i = 0; i < n; ++i) grid[key(pts[i], 0, 0, 0)].push_back(i);
+  for (int i = 0; i < n; ++i)
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          auto it = grid.find(key(pts[i], dx, dy, dz));
+          if (it == grid.end()) continue;
+          for (int j : it->second)
+            if (j > i && (pts[i] - pts[j]).norm() <= link) parent[find(i)] = find(j);
+        }
+  std::unordered_map<int, int> region_of;
+  struct Region {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero(), lo = Eigen::Vector3d::Constant(kInf),
+                    hi = Eigen::Vector3d::Constant(-kInf);
+    int count = 0;
+    double min_radius = kInf;
+  };
+  std::vector<Region> regions;
+  for (int i = 0; i < n; ++i) {
+    const int root = find(i);
+    auto [it, fresh] = region_of.emplace(root, static_cast<int>(regions.size()));
+    if (fresh) regions.emplace_back();
+    Region& g = regions[it->second];
+    g.sum += pts[i];
+    g.lo = g.lo.cwiseMin(pts[i]);
+    g.hi = g.hi.cwiseMax(pts[i]);
+    ++g.count;
+    g.min_radius = std::min(g.min_radius, radius[i]);
+  }
+  nlohmann::json list = nlohmann::json::array();
+  for (const Region& g : regions) {
+    const Eigen::Vector3d c = g.sum / g.count;
+    list.push_back({{"centre", {c.x(), c.y(), c.z()}},
+                    {"bbox_min", {g.lo.x(), g.lo.y(), g.lo.z()}},
+                    {"bbox_max", {g.hi.x(), g.hi.y(), g.hi.z()}},
+                    {"points", g.count},
+                    {"min_radius", g.min_radius}});
+  }
+  return {{"count", regions.size()}, {"points", n}, {"regions", list}};
+}
+
+std::string fmt(double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+
+void check_options(const IsoparametricOptions& o) {
+  auto positive = [](double v, const char* what) {
+    if (!(v > 0) || !std::isfinite(v))
+      throw std::invalid_argument(std::string(what) + " must be positive (got " + fmt(v) + ")");
+  };
+  positive(o.tool_radius, "tool_radius");
+  positive(o.scallop_height, "scallop_height");
+  positive(o.chord_error, "chord_error");
+  positive(o.max_segment, "max_segment");
+  if (o.scallop_height >= o.tool_radius)
+    throw std::invalid_argument("scallop_height (" + fmt(o.scallop_height) +
+                                " mm) must be smaller than tool_radius (" + fmt(o.tool_radius) +
+                                " mm)");
+  if (!(o.safety_factor > 0 && o.safety_factor <= 1))
+    throw std::invalid_argument("safety_factor must be in (0, 1] (got " + fmt(o.safety_factor) + ")");
+  if (!(o.conformal_tolerance >= 0 && o.conformal_tolerance < 90))
+    throw std::invalid_argument("conformal_tolerance must be in [0, 90) degrees (got " +
+                                fmt(o.conformal_tolerance) + ")");
+}
+
+}  // namespace
+
+IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborhoods& neighbors,
+                                       const UVMap& map, const IsoparametricOptions& o) {
+  // ---- input checks -------------------------------------------------------------------------
+  if (o.pattern != "zigzag" && o.pattern != "contour")
+    throw std::invalid_argument("unknown pattern '" + o.pattern + "' (zigzag or contour)");
+  check_options(o);
+  if (cloud.size() == 0) throw std::invalid_argument("the cloud is empty");
+  if (!cloud.has_normals())
+    throw std::invalid_argument("the cloud has no normals; estimate them first (cloud.normals)");
+  if (neighbors.size() != cloud.size())
+    throw std::invalid_argument("the neighbourhoods are for " + std::to_string(neighbors.size()) +
+                                " points; the cloud has " + std::to_string(cloud.size()));
+  if (map.uv.size() != cloud.size())
+    throw std::invalid_argument("the UV map has " + std::to_string(map.uv.size()) +
+                                " points; the cloud has " + std::to_string(cloud.size()));
+  const std::string want = o.pattern == "zigzag" ? "rectangle" : "disk";
+  if (map.domain != want)
+    throw std::invalid_argument(
+        "pattern '" + o.pattern + "' needs a UV map on a " + want + "; this map's domain is '" +
+        map.domain + "' (" +
+        (o.pattern == "zigzag" ? "use pattern 'contour', or map the boundary to a rectangle"
+                               : "use pattern 'zigzag', or map the boundary to a disk") +
+        ")");
+  UVDomain domain;
+  Coords co;
+  if (want == "rectangle") {
+    if (!(map.width > 0 && map.height > 0 && std::isfinite(map.width) && std::isfinite(map.height)))
+      throw std::invalid_argument("the rectangle map has no area (width " + fmt(map.width) +
+                                  ", height " + fmt(map.height) + ")");
+    domain.kind = UVDomain::Kind::Rectangle;
+    domain.width = map.width;
+    domain.height = map.height;
+    co.S = map.width;
+    co.T = map.height;
+  } else {
+    if (!(map.radius > 0 && std::isfinite(map.radius)))
+      throw std::invalid_argument("the disk map has no area (radius " + fmt(map.radius) + ")");
+    domain.kind = UVDomain::Kind::Disk;
+    domain.radius = map.radius;
+    co.polar = true;
+    co.R = co.S = map.radius;
+    co.T = kTwoPi;
+  }
+
+  const UVInterpolator interp(cloud.points, cloud.normals, map.uv, domain, o.interpolation_k);
+  Planner planner(interp, co, o);
+  std::vector<double> nn;
+  for (std::size_t i = 0; i < neighbors.size(); i += std::max<std::size_t>(1, neighbors.size() / 4096))
+    if (neighbors.k > 0) nn.push_back(std::sqrt(neighbors.sq_dist(i, 0)));
+  std::nth_element(nn.begin(), nn.begin() + nn.size() / 2, nn.end());
+  const double cloud_spacing = nn.empty() ? 0 : nn[nn.size() / 2];
+
+  // ---- passes ---------------------------------------------------------------------------------
+  std::vector<Pass> passes;
+  std::vector<std::vector<VertexInfo>> info;
+  passes.push_back(planner.build_pass(0));
+  double ds_min = kInf, ds_max = 0, interval_min = kInf, interval_max = 0, scallop_max = 0;
+  Eigen::Vector3d scallop_where = Eigen::Vector3d::Zero();
+  int shrunk = 0, formula4 = 0, formula3 = 0, floor_hits = 0;
+  nlohmann::json warnings = nlohmann::json::array();
+  const double hlim = planner.h();
+
+  double s = 0;
+  while (s < co.S) {
+    const Pass& A = passes.back();
+    info.push_back(planner.infos(A));
+    double ds0 = kInf;
+    for (const VertexInfo& v : info.back()) {
+      if (!std::isfinite(v.ds)) continue;  // concave beyond the ball: reported, not planned for
+      ds0 = std::min(ds0, v.ds);
+      (v.formula4 ? formula4 : formula3)++;
+    }
+    if (!std::isfinite(ds0)) ds0 = planner.nominal_interval();  // whole pass unreachable
+    double ds = ds0;
+    bool accepted = false;
+    Pass B;
+    StripCheck chk;
+    for (int iter = 0; iter < 30; ++iter) {
+      const bool last = s + ds >= co.S * (1 - 1e-12);
+      const double s_next = last ? co.S : s + ds;
+      B = planner.build_pass(s_next);
+      chk = planner.check_strip(A, B);
+      ds = s_next - s;
+      if (chk.scallop_max <= hlim) {
+        accepted = true;
+        break;
+      }
+      if (iter == 0) ++shrunk;
+      if (ds <= 1e-3 * ds0) break;
+      // scallop ~ ds^2: aim just under the limit, never shrink by more than a factor 4 at once
+      ds *= std::clamp(0.995 * std::sqrt(hlim / chk.scallop_max), 0.25, 0.995);
+    }
+    if (!accepted) {
+      // No step keeps the limit here (a concave place the ball cannot reach, a kink): take the
+      // formula's step rather than creep on with vanishing ones, and say so.
+      ++floor_hits;
+      const double s_next = s + ds0 >= co.S * (1 - 1e-12) ? co.S : s + ds0;
+      B = planner.build_pass(s_next);
+      chk = planner.check_strip(A, B);
+      warnings.push_back("between the passes at s = " + fmt(s) + " and " + fmt(s_next) +
+                         " no side step keeps the scallop under the limit (" +
+                         fmt(chk.scallop_max) + " mm at the formula's step)");
+    }
+    ds_min = std::min(ds_min, B.s - s);
+    ds_max = std::max(ds_max, B.s - s);
+    interval_min = std::min(interval_min, chk.interval_min);
+    interval_max = std::max(interval_max, chk.interval_max);
+    if (chk.scallop_max > scallop_max) scallop_max = chk.scallop_max, scallop_where = chk.where;
+    s = B.s;
+    passes.push_back(std::move(B));
+    if (o.progress) o.progress(s / co.S, "pass " + std::to_string(passes.size()));
+  }
+  info.push_back(planner.infos(passes.back()));
+
+  // ---- concave places the ball cannot reach -----------------------------------------------------
+  std::vector<Eigen::Vector3d> concave_pts;
+  std::vector<double> concave_r;
+  for (std::size_t i = 0; i < passes.size(); ++i)
+    for (std::size_t k = 0; k < passes[i].p.size(); ++k)
+      if (info[i][k].unreachable) {
+        concave_pts.push_back(passes[i].p[k]);
+        concave_r.push_back(-1.0 / info[i][k].kappa_min);
+      }
+  const double link = 1.01 * std::max(o.max_segment, 2 * std::max(interval_max, planner.nominal_interval()));
+
+  // ---- output ---------------------------------------------------------------------------------
+  IsoparametricResult res;
+  Toolpath& tp = res.toolpath;
+  tp.tool_radius = o.tool_radius;
+  tp.scallop_height = o.scallop_height;
+  tp.chord_error = o.chord_error;
+  tp.pattern = o.pattern;
+  std::size_t points = 0;
+  double length = 0;
+  for (std::size_t i = 0; i < passes.size(); ++i) {
+    const Pass& P = passes[i];
+    ToolpathPass out;
+    for (std::size_t k = 0; k < P.p.size(); ++k) {
+      out.contact.push_back(P.p[k]);
+      out.normal.push_back(P.n[k]);
+      out.uv.push_back(co.uv(P.s, P.t[k]));
+      if (k) length += (P.p[k] - P.p[k - 1]).norm();
+    }
+    if (o.pattern == "zigzag" && i % 2 == 1) {  // alternate directions
+      std::reverse(out.contact.begin(), out.contact.end());
+      std::reverse(out.normal.begin(), out.normal.end());
+      std::reverse(out.uv.begin(), out.uv.end());
+    }
+    points += out.contact.size();
+    tp.passes.push_back(std::move(out));
+  }
+  if (planner.forward_floor_hits > 0)
+    warnings.push_back(std::to_string(planner.forward_floor_hits) +
+                       " forward steps reached the smallest step with the chord still too far "
+                       "off (a kink in the surface or the map?)");
+  if (!concave_pts.empty())
+    warnings.push_back(std::to_string(concave_pts.size()) +
+                       " path points lie where the surface is concave with a radius below the "
+                       "tool radius: the ball cannot reach there without gouging");
+
+  auto vec = [](const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
+  res.report = {
+      {"pattern", o.pattern},
+      {"tool_radius", o.tool_radius},
+      {"scallop_height", o.scallop_height},
+      {"chord_error", o.chord_error},
+      {"planned_scallop_height", hlim},
+      {"passes", passes.size()},
+      {"points", points},
+      {"contact_length", length},
+      {"cloud_spacing", cloud_spacing},
+      {"side_step", {{"min", ds_min}, {"max", ds_max}}},
+      {"side_interval", {{"min", interval_min}, {"max", interval_max},
+                         {"nominal_plane", std::sqrt(8 * o.tool_radius * hlim)}}},
+      {"forward_interval", {{"min", planner.forward_min}, {"max", planner.forward_max}}},
+      {"side_formula", {{"formula3_points", formula3}, {"formula4_points", formula4},
+                        {"conformal_tolerance_deg", o.conformal_tolerance}}},
+      {"steps_shrunk_by_check", shrunk},
+      {"strips_over_limit", floor_hits},
+      {"predicted", {{"scallop_max", scallop_max}, {"scallop_max_at", vec(scallop_where)},
+                     {"chord_overcut_max", planner.chord_overcut_max},
+                     {"chord_undercut_max", planner.chord_undercut_max}}},
+      {"concave_regions", concave_regions(concave_pts, concave_r, link)},
+      {"warnings", warnings},
+  };
+  if (passes.size() == 1 || !std::isfinite(ds_min)) {
+    res.report["side_step"] = {{"min", nullptr}, {"max", nullptr}};
+    res.report["side_interval"]["min"] = nullptr;
+  }
+  return res;
+}
+
+}  // namespace scallop

@@ -1,0 +1,68 @@
+// Iso-parametric finishing passes planned straight from a parameterised point cloud (paper:
+// "Iso-parametric tool-path planning for point clouds", section 4), with the scallop limit
+// checked between every two passes rather than trusted to the step formula.
+//
+// Pass coordinates (s, t): s is the side coordinate (constant along a pass), t the forward one.
+//   zigzag  (rectangle map [0,W] x [0,H]): s = u in [0, W], t = v in [0, H]. Passes are the
+//           iso-u lines u = 0 ... W (the first and last on the boundary), cut forward along v
+//           and in alternate directions (the paper's convention: forward = v, side = u).
+//   contour (disk map of radius R): s = R - rho, t = theta in [0, 2 pi]. Passes are the circles
+//           rho = R (the boundary) inwards, each closed and cut counter-clockwise in uv; the last
+//           "pass" is the single point at the centre.
+//
+// Along a pass, the forward step starts from formula (2) (chord deviation e, the pass's own
+// curvature) and is then checked on the ball-centre polyline: at 1/4, 1/2, 3/4 of each segment
+// the chord may lie at most e below the true centre curve (overcut) and at most min(e, h/10)
+// above it (undercut, which would add to the scallop), and at most e away in any direction; 2 % of
+// e is kept back for the error of the
+// interpolant.
+//
+// Between passes, the side step is the smallest over the points of the current pass of formula
+// (3) (where r_s and r_t are within `conformal_tolerance` of orthogonal) or formula (4)
+// (elsewhere), chosen per point. The next pass is then built and the scallop between the two
+// ball-centre polylines is evaluated exactly (the first hit of the surface normal ray with the
+// swept balls, as ../shared/tools/verify.py defines it) along the strip; where it exceeds
+// h = safety_factor * scallop_height the step is shrunk (secant on sqrt(h), then bisection) and
+// the pass rebuilt.
+#pragma once
+
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "nodes/types/cloud.h"
+#include "nodes/types/param.h"
+#include "nodes/types/toolpath.h"
+
+namespace scallop {
+
+struct IsoparametricOptions {
+  std::string pattern = "zigzag";    // "zigzag" (rectangle map) or "contour" (disk map)
+  double tool_radius = 3;            // r, ball radius (mm), > 0
+  double scallop_height = 0.01;      // h (mm), 0 < h < r
+  double chord_error = 0.005;        // e (mm), > 0
+  double safety_factor = 1.0;        // plan for h * safety_factor, in (0, 1]
+  double conformal_tolerance = 5.0;  // degrees: |angle(r_s, r_t) - 90| above this uses formula (4)
+  double max_segment = 5.0;          // longest forward step (mm), > 0
+  int interpolation_k = 20;          // neighbours per local fit (see uv_interpolation.h)
+  std::function<void(double, const std::string&)> progress;  // optional
+};
+
+struct IsoparametricResult {
+  Toolpath toolpath;
+  nlohmann::json report;
+};
+
+// cloud      #P points (mm) with #P upward unit normals
+// neighbors  the cloud's k nearest neighbours (#P rows; used for the sampling scale)
+// map        uv of every point; domain "rectangle" (zigzag) or "disk" (contour)
+// Returns the passes (contact points, normals, uv; ordered for cutting) and a report: passes,
+// points, side steps and intervals (min/max), forward intervals, where formula (4) was used,
+// the largest scallop and chord deviations found by the checks, concave regions whose normal
+// curvature radius is below r (count, location, size), and warnings.
+// Throws std::invalid_argument with a clear message for bad input (empty cloud, no normals,
+// size mismatch, wrong domain for the pattern, bad options).
+IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborhoods& neighbors,
+                                       const UVMap& map, const IsoparametricOptions& options);
+
+}  // namespace scallop

@@ -1,0 +1,68 @@
+#include <stdexcept>
+
+#include "engine/node.h"
+#include "nodes/path/isoparametric.h"
+#include "nodes/types/cloud.h"
+#include "nodes/types/document.h"
+#include "nodes/types/param.h"
+#include "nodes/types/toolpath.h"
+
+namespace scallop {
+
+NodeDecl make_isoparametric_node() {
+  NodeDecl d;
+  d.type = "path.isoparametric";
+  d.version = 1;
+  d.description =
+      "iso-parametric finishing passes from a UV-mapped cloud: zig-zag on a rectangle map, "
+      "concentric on a disk map; forward step from the chord error, side step from the scallop "
+      "height, checked between every two passes";
+  d.input("cloud", "Cloud", "the points, with upward unit normals")
+      .input("neighbors", "Neighbors", "k nearest neighbours of each point (sampling scale)")
+      .input("map", "UVMap", "uv of every point: rectangle for zigzag, disk for contour")
+      .output("toolpath", "Toolpath", "the passes: contact points, normals, uv, in cutting order")
+      .output("report", "Report",
+              "passes, side and forward intervals, formula (4) use, predicted scallop and chord "
+              "deviation, concave regions tighter than the tool")
+      .param_choice("pattern", "zigzag", {"zigzag", "contour"},
+                    "zigzag: iso-u passes forward along v, alternating (rectangle map); contour: "
+                    "concentric circles from the boundary inwards (disk map)")
+      .param_float("tool_radius", 3.0, 1e-3, 1e3, "mm", "ball-end cutter radius r")
+      .param_float("scallop_height", 0.01, 1e-6, 1e2, "mm", "largest scallop height h allowed")
+      .param_float("chord_error", 0.005, 1e-6, 1e2, "mm", "largest chord deviation e allowed")
+      .param_float("safety_factor", 1.0, 0.05, 1.0, "",
+                   "plan for safety_factor * h (margin for the cloud's own error)")
+      .param_float("conformal_tolerance", 5.0, 0.0, 89.0, "deg",
+                   "where r_u and r_v are further than this from orthogonal, the side step uses "
+                   "the corrected formula (4) instead of (3)")
+      .param_float("max_segment", 5.0, 1e-3, 1e3, "mm", "longest forward step")
+      .param_int("interpolation_k", 20, 6, 64, "", "neighbours per local (u,v) fit");
+  d.run = [](NodeContext& ctx) {
+    auto cloud = ctx.input<PointCloud>("cloud");
+    auto neighbors = ctx.input<Neighborhoods>("neighbors");
+    auto map = ctx.input<UVMap>("map");
+    IsoparametricOptions o;
+    o.pattern = ctx.text("pattern");
+    o.tool_radius = ctx.number("tool_radius");
+    o.scallop_height = ctx.number("scallop_height");
+    o.chord_error = ctx.number("chord_error");
+    o.safety_factor = ctx.number("safety_factor");
+    o.conformal_tolerance = ctx.number("conformal_tolerance");
+    o.max_segment = ctx.number("max_segment");
+    o.interpolation_k = static_cast<int>(ctx.integer("interpolation_k"));
+    o.progress = [&ctx](double f, const std::string& m) { ctx.progress(f, m); };
+    IsoparametricResult res;
+    try {
+      res = plan_isoparametric(*cloud, *neighbors, *map, o);
+    } catch (const std::invalid_argument& e) {
+      throw NodeError(e.what());
+    }
+    Report report;
+    report.data = std::move(res.report);
+    ctx.set("toolpath", std::move(res.toolpath));
+    ctx.set("report", std::move(report));
+  };
+  return d;
+}
+
+}  // namespace scallop

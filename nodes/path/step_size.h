@@ -1,0 +1,69 @@
+// Forward and side steps of iso-parametric tool paths, and the local differential geometry they
+// need (paper: "Iso-parametric tool-path planning for point clouds", sections 3.1-3.2 and
+// appendix A).
+//
+// Sign convention (the same as ../shared/tools and the rest of scallop): normals point up, away
+// from the material, and a normal curvature is positive where the surface is convex seen from
+// the tool (a dome of radius rho has kappa = +1/rho, a bowl -1/rho). With r_uu the second
+// derivative along a direction, kappa = -(n . r_uu) / |r_u|^2.
+#pragma once
+
+#include <Eigen/Core>
+
+namespace scallop {
+
+// Coefficients of the first (E, F, G) and second (L, M, N) fundamental forms at a point of a
+// parametric surface r(u, v) with unit normal n: E = r_u.r_u, F = r_u.r_v, G = r_v.r_v,
+// L = n.r_uu, M = n.r_uv, N = n.r_vv (lengths in mm, parameters in the map's units).
+struct FundamentalForms {
+  double E = 1, F = 0, G = 1, L = 0, M = 0, N = 0;
+};
+
+FundamentalForms fundamental_forms(const Eigen::Vector3d& ru, const Eigen::Vector3d& rv,
+                                   const Eigen::Vector3d& ruu, const Eigen::Vector3d& ruv,
+                                   const Eigen::Vector3d& rvv, const Eigen::Vector3d& n);
+
+// Normal curvature (1/mm, convex positive) along the parameter direction (du, dv):
+// kappa = -II/I (paper section 3.1, with our sign). (du, dv) must not be (0, 0).
+double normal_curvature(const FundamentalForms& f, double du, double dv);
+
+// Principal curvatures (1/mm, convex positive) as {smallest, largest}: the eigenvalues of the
+// shape operator -I^-1 II.
+Eigen::Vector2d principal_curvatures(const FundamentalForms& f);
+
+// Forward interval (mm) along a pass, paper formula (2): l_f = sqrt(8 e R - 4 e^2), where R is
+// the radius of curvature of the pass itself (the paper's R cos(theta), Meusnier) and e the
+// allowed chord deviation (mm). curvature = 1/R >= 0 (1/mm); returns +infinity for a straight
+// pass (curvature 0), and 2R when e >= 2R (the chord may span the whole circle's diameter).
+double forward_interval(double chord_error, double curvature);
+
+// True where a ball of radius r cannot reach the bottom of a concave section: normal
+// curvature radius below r (1 + r kappa <= 0).
+bool ball_cannot_reach(double tool_radius, double kappa);
+
+// Side interval (mm) between passes for scallop height h (mm) with a ball of radius r (mm)
+// across a direction of signed normal curvature kappa (1/mm, convex positive), paper section
+// 3.2: l_s = sqrt(8 h r R / (R + r)) convex, sqrt(8 h r R / (R - r)) concave, i.e.
+// l_s = sqrt(8 h r / (1 + r kappa)); exactly sqrt(8 r h) on a plane. Returns +infinity where
+// ball_cannot_reach(r, kappa): no step keeps the scallop there, the caller must report it.
+double side_interval(double scallop_height, double tool_radius, double kappa);
+
+// Parameter side step from a surface interval l_s (mm).
+// Formula (3), for a conformal point: du = l_s / |r_u|.
+double side_step_conformal(double side_interval, double ru_norm);
+// Formula (4), appendix A, where r_u and r_v meet at an angle theta != pi/2: the interval is
+// measured perpendicular to the pass (direction r_v), so du = l_s / (|r_u| cos|theta - pi/2|)
+// = l_s / (|r_u| sin(theta)). theta in (0, pi) (radians).
+double side_step_corrected(double side_interval, double ru_norm, double theta);
+
+// Height (mm) of the cusp left between two balls of radius r whose centres are w apart (mm) on a
+// plane: r - sqrt(r^2 - w^2 / 4). The exact value that sqrt(8 r h) approximates to first order.
+double cusp_height_plane(double tool_radius, double spacing);
+
+// First entry t along the ray o + t d (d unit) into the capsule of radius r around segment
+// [a, b] (a == b: a ball). Returns 0 when o is inside, +infinity when the ray misses it or the
+// capsule lies wholly behind o (t < 0).
+double ray_capsule_entry(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                         const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r);
+
+}  // namespace scallop

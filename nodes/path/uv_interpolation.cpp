@@ -1,0 +1,156 @@
+#include "nodes/path/uv_interpolation.h"
+
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <nanoflann.hpp>
+#include <stdexcept>
+#include <string>
+
+namespace scallop {
+
+namespace {
+
+struct UVAdaptor {
+  const std::vector<Eigen::Vector2d>& UV;
+  std::size_t kdtree_get_point_count() const { return UV.size(); }
+  double kdtree_get_pt(std::size_t i, std::size_t d) const { return UV[i][static_cast<int>(d)]; }
+  template <class BBox>
+  bool kdtree_get_bbox(BBox&) const { return false; }
+};
+
+using Metric = nanoflann::L2_Simple_Adaptor<double, UVAdaptor, double, std::uint32_t>;
+using Tree = nanoflann::KDTreeSingleIndexAdaptor<Metric, UVAdaptor, 2, std::uint32_t>;
+
+constexpr int kMaxK = 64;
+
+}  // namespace
+
+Eigen::Vector2d UVDomain::clamp(const Eigen::Vector2d& uv) const {
+  if (kind == Kind::Rectangle)
+    return {std::clamp(uv.x(), 0.0, width), std::clamp(uv.y(), 0.0, height)};
+  const double n = uv.norm();
+  return n > radius ? Eigen::Vector2d(uv * (radius / n)) : uv;
+}
+
+struct UVInterpolator::Impl {
+  const std::vector<Eigen::Vector3d>& P;
+  const std::vector<Eigen::Vector3d>& N;
+  UVAdaptor adaptor;
+  Tree tree;
+  int k;
+  Impl(const std::vector<Eigen::Vector3d>& P_, const std::vector<Eigen::Vector3d>& N_,
+       const std::vector<Eigen::Vector2d>& UV, int k_)
+      : P(P_), N(N_), adaptor{UV}, tree(2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10)),
+        k(k_) {
+    tree.buildIndex();
+  }
+};
+
+UVInterpolator::UVInterpolator(const std::vector<Eigen::Vector3d>& P,
+                               const std::vector<Eigen::Vector3d>& N,
+                               const std::vector<Eigen::Vector2d>& UV, UVDomain domain, int k)
+    : domain_(domain) {
+  if (N.size() != P.size() || UV.size() != P.size())
+    throw std::invalid_argument("positions, normals and uv differ in count (" +
+                                std::to_string(P.size()) + ", " + std::to_string(N.size()) +
+                                ", " + std::to_string(UV.size()) + ")");
+  if (k < 6 || k > kMaxK)
+    throw std::invalid_argument("the interpolation needs 6 to 64 neighbours per fit (got " +
+                                std::to_string(k) + ")");
+  if (P.size() <= static_cast<std::size_t>(k))
+    throw std::invalid_argument("the cloud has " + std::to_string(P.size()) +
+                                " points; interpolation with k = " + std::to_string(k) +
+                                " needs at least " + std::to_string(k + 1));
+  for (std::size_t i = 0; i < P.size(); ++i)
+    if (!P[i].allFinite() || !N[i].allFinite() || !UV[i].allFinite())
+      throw std::invalid_argument("point " + std::to_string(i) +
+                                  " has a NaN or infinite position, normal or uv");
+  impl_ = std::make_unique<Impl>(P, N, UV, k);
+
+  // Sampling scale: median nearest-neighbour distance in uv (a subsample is plenty).
+  const std::size_t stride = std::max<std::size_t>(1, P.size() / 4096);
+  std::vector<double> d;
+  for (std::size_t i = 0; i < P.size(); i += stride) {
+    std::array<std::uint32_t, 2> idx{};
+    std::array<double, 2> dist{};
+    nanoflann::KNNResultSet<double, std::uint32_t> rs(2);
+    rs.init(idx.data(), dist.data());
+    impl_->tree.findNeighbors(rs, UV[i].data(), nanoflann::SearchParams());
+    if (rs.size() == 2 && dist[1] > 0) d.push_back(std::sqrt(dist[1]));
+  }
+  if (d.empty()) throw std::invalid_argument("all points have the same uv");
+  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+  uv_spacing_ = d[d.size() / 2];
+}
+
+UVInterpolator::~UVInterpolator() = default;
+
+SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
+  const Eigen::Vector2d q = domain_.clamp(uv_in);
+  const int k = impl_->k;
+  std::array<std::uint32_t, kMaxK + 1> idx{};
+  std::array<double, kMaxK + 1> sq{};
+  nanoflann::KNNResultSet<double, std::uint32_t> rs(k + 1);
+  rs.init(idx.data(), sq.data());
+  impl_->tree.findNeighbors(rs, q.data(), nanoflann::SearchParams());
+  const int found = static_cast<int>(rs.size());
+  const double D2 = sq[found - 1] > 0 ? sq[found - 1] : 1.0;
+  const double inv_D = 1.0 / std::sqrt(D2);
+
+  // Weighted normal equations for the quadratic basis in scaled offsets (x, y) = (uv - q) / D,
+  // six right-hand sides at once: x, y, z, nx, ny, nz.
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  Mat6 M = Mat6::Zero();
+  Eigen::Matrix<double, 6, 6> rhs = Mat6::Zero();
+  Eigen::Matrix3d M3 = Eigen::Matrix3d::Zero();
+  Eigen::Matrix<double, 3, 6> rhs3 = Eigen::Matrix<double, 3, 6>::Zero();
+  int used = 0;
+  for (int j = 0; j < found - 1; ++j) {
+    const double w0 = 1 - sq[j] / D2;
+    const double w = w0 * w0;
+    if (w <= 0) continue;
+    ++used;
+    const Eigen::Vector2d o = (impl_->adaptor.UV[idx[j]] - q) * inv_D;
+    Eigen::Matrix<double, 6, 1> b;
+    b << 1, o.x(), o.y(), o.x() * o.x(), o.x() * o.y(), o.y() * o.y();
+    Eigen::Matrix<double, 1, 6> f;
+    f << impl_->P[idx[j]].transpose(), impl_->N[idx[j]].transpose();
+    M.noalias() += w * b * b.transpose();
+    rhs.noalias() += w * b * f;
+    M3.noalias() += w * b.head<3>() * b.head<3>().transpose();
+    rhs3.noalias() += w * b.head<3>() * f;
+  }
+  Eigen::Matrix<double, 1, 6> value;
+  bool ok = false;
+  if (used >= 6) {
+    Eigen::LDLT<Mat6> ldlt(M);
+    const auto dg = ldlt.vectorD().cwiseAbs();
+    if (ldlt.info() == Eigen::Success && dg.minCoeff() > 1e-9 * dg.maxCoeff()) {
+      value = ldlt.solve(rhs).row(0);
+      ok = value.allFinite();
+    }
+  }
+  if (!ok && used >= 3) {
+    // Too few or collinear neighbours for a quadric: a plane still has linear precision.
+    Eigen::LDLT<Eigen::Matrix3d> ldlt(M3);
+    const auto dg = ldlt.vectorD().cwiseAbs();
+    if (ldlt.info() == Eigen::Success && dg.minCoeff() > 1e-9 * dg.maxCoeff()) {
+      value = ldlt.solve(rhs3).row(0);
+      ok = value.allFinite();
+    }
+  }
+  if (!ok) {  // degenerate neighbourhood: the nearest point
+    value << impl_->P[idx[0]].transpose(), impl_->N[idx[0]].transpose();
+  }
+  SurfaceSample s;
+  s.position = value.head<3>().transpose();
+  Eigen::Vector3d n = value.tail<3>().transpose();
+  const double nn = n.norm();
+  s.normal = nn > 1e-12 ? Eigen::Vector3d(n / nn) : impl_->N[idx[0]];
+  return s;
+}
+
+}  // namespace scallop

@@ -1,0 +1,141 @@
+#include "nodes/post/link.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <nanoflann.hpp>
+#include <stdexcept>
+
+namespace scallop {
+namespace {
+
+struct XY {
+  const std::vector<Eigen::Vector3d>& pts;
+  std::size_t kdtree_get_point_count() const { return pts.size(); }
+  double kdtree_get_pt(std::size_t i, std::size_t d) const { return pts[i][d]; }
+  template <class B>
+  bool kdtree_get_bbox(B&) const { return false; }
+};
+using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, XY>, XY, 2, std::uint32_t>;
+
+double seg_dist(const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  Eigen::Vector3d e = b - a;
+  double ee = e.squaredNorm();
+  double t = ee > 0 ? std::clamp((q - a).dot(e) / ee, 0.0, 1.0) : 0.0;
+  return (a + t * e - q).norm();
+}
+
+double seg_dist_xy(const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  Eigen::Vector2d e = (b - a).head<2>(), w = (q - a).head<2>();
+  double ee = e.squaredNorm();
+  double t = ee > 0 ? std::clamp(w.dot(e) / ee, 0.0, 1.0) : 0.0;
+  return (w - t * e).norm();
+}
+
+}  // namespace
+
+double largest_stepover(const Toolpath& path) {
+  double best = 0;
+  const ToolpathPass* prev = nullptr;
+  for (const auto& p : path.passes) {
+    if (p.contact.empty()) continue;
+    if (prev) {
+      const Eigen::Vector3d& m = p.contact[p.contact.size() / 2];
+      double d = INFINITY;
+      for (const auto& q : prev->contact) d = std::min(d, (q - m).norm());
+      best = std::max(best, d);
+    }
+    prev = &p;
+  }
+  return best;
+}
+
+LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>& surface_in,
+                       const LinkOptions& o) {
+  const double r = path.tool_radius;
+  if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
+  std::vector<Eigen::Vector3d> own;
+  bool any = false;
+  for (const auto& p : path.passes) {
+    if (p.normal.size() != p.contact.size())
+      throw std::invalid_argument("a pass has " + std::to_string(p.contact.size()) + " points but " +
+                                  std::to_string(p.normal.size()) + " normals");
+    for (std::size_t i = 0; i < p.contact.size(); ++i) {
+      if (!p.contact[i].allFinite() || !p.normal[i].allFinite())
+        throw std::invalid_argument("the tool path has a non-finite point");
+      if (surface_in.empty()) own.push_back(p.contact[i]);
+    }
+    any |= !p.contact.empty();
+  }
+  if (!any) throw std::invalid_argument("the tool path has no points");
+  const std::vector<Eigen::Vector3d>& surface = surface_in.empty() ? own : surface_in;
+
+  const double tol = o.tolerance > 0 ? o.tolerance : std::max(path.chord_error, 1e-3);
+  const double max_link = o.max_link > 0 ? o.max_link : 2 * largest_stepover(path);
+  double top = -INFINITY;
+  for (const auto& q : surface) {
+    if (!q.allFinite()) throw std::invalid_argument("the surface has a non-finite point");
+    top = std::max(top, q.z());
+  }
+  for (const auto& p : path.passes)
+    for (const auto& c : p.contact) top = std::max(top, c.z());
+
+  XY adaptor{surface};
+  Tree tree(2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  // A straight move of the ball centre from a to b is safe when no surface point within r of it
+  // in xy is nearer than r − tol to the centre segment.
+  auto safe = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    Eigen::Vector3d mid = 0.5 * (a + b);
+    double R = 0.5 * (b - a).head<2>().norm() + r;
+    std::vector<std::pair<std::uint32_t, double>> hits;
+    tree.radiusSearch(mid.data(), R * R, hits, nanoflann::SearchParams(32, 0, false));
+    for (const auto& [i, d2] : hits) {
+      const Eigen::Vector3d& q = surface[i];
+      if (seg_dist_xy(q, a, b) > r) continue;
+      if (seg_dist(q, a, b) < r - tol) return false;
+    }
+    return true;
+  };
+
+  LinkedPath out;
+  out.tool_radius = r;
+  out.scallop_height = path.scallop_height;
+  out.chord_error = path.chord_error;
+  out.clearance_z = top + o.safety;
+  const Eigen::Vector3d lead(0, 0, o.lead_height);
+  auto& mv = out.moves;
+  auto come_down = [&](const Eigen::Vector3d& tip) {
+    mv.push_back({MoveKind::Rapid, {tip.x(), tip.y(), out.clearance_z}});
+    if (tip.z() + o.lead_height < out.clearance_z) mv.push_back({MoveKind::Plunge, tip + lead});
+    mv.push_back({MoveKind::Feed, tip});
+  };
+  auto go_up = [&](const Eigen::Vector3d& tip) {
+    if (tip.z() + o.lead_height < out.clearance_z) mv.push_back({MoveKind::Feed, tip + lead});
+    mv.push_back({MoveKind::Rapid, {tip.x(), tip.y(), out.clearance_z}});
+  };
+
+  bool started = false;
+  Eigen::Vector3d last_tip, last_centre;
+  for (const auto& p : path.passes) {
+    if (p.contact.empty()) continue;
+    Eigen::Vector3d c0 = path.centre(p.contact[0], p.normal[0]);
+    Eigen::Vector3d t0 = path.tip(p.contact[0], p.normal[0]);
+    if (!started) {
+      come_down(t0);
+    } else if ((c0 - last_centre).norm() <= max_link && safe(last_centre, c0)) {
+      mv.push_back({MoveKind::Feed, t0});
+    } else {
+      go_up(last_tip);
+      come_down(t0);
+    }
+    started = true;
+    for (std::size_t i = 1; i < p.contact.size(); ++i) mv.push_back({MoveKind::Feed, path.tip(p.contact[i], p.normal[i])});
+    last_tip = path.tip(p.contact.back(), p.normal.back());
+    last_centre = path.centre(p.contact.back(), p.normal.back());
+  }
+  go_up(last_tip);
+  return out;
+}
+
+}  // namespace scallop

@@ -1,0 +1,36 @@
+// Linking: passes in the order given joined into one machine program (tool-tip moves).
+//
+// Consecutive passes are joined by a straight feed move between their ball centres when that is
+// safe: the link is at most `max_link` long and no surface point within r (in xy) of it comes
+// closer than r − tolerance to the segment between the two ball centres (the ball never dips into
+// the surface). Otherwise the tool lifts by `lead_height`, rises to the clearance plane (the
+// highest surface point + `safety`, so rapids there never touch the part), travels, and comes
+// down: plunge at plunge rate to `lead_height` above the next start, then feed down.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "nodes/types/toolpath.h"
+
+namespace scallop {
+
+struct LinkOptions {
+  double max_link = 0;     // mm; <= 0: twice the largest stepover between consecutive passes
+  double safety = 5;       // mm above the highest surface point: the clearance plane
+  double lead_height = 1;  // mm above a pass start/end where plunges end and lifts begin
+  double tolerance = 0;    // mm the ball may come closer than r to the surface on a link; <= 0:
+                           // max(path chord error, 0.001) (what a simulation lets pass as gouge)
+};
+
+// surface  #S by 3 points of the surface (the cloud); when empty the passes' own contact points
+// stand for it. Throws std::invalid_argument for r <= 0, no pass with points, a pass whose normals
+// do not match its points, or non-finite coordinates.
+LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>& surface,
+                       const LinkOptions& options);
+
+// Largest distance between consecutive passes: for each pair, the distance from the middle point
+// of the later pass to the nearest contact point of the earlier one (mm); 0 for a single pass.
+double largest_stepover(const Toolpath& path);
+
+}  // namespace scallop

@@ -1,0 +1,39 @@
+#include <stdexcept>
+
+#include "engine/node.h"
+#include "nodes/post/link.h"
+#include "nodes/types/cloud.h"
+#include "nodes/types/toolpath.h"
+
+namespace scallop {
+NodeDecl make_link_node() {
+  NodeDecl d;
+  d.type = "post.link";
+  d.version = 1;
+  d.description = "joins passes in order: short feed links where the ball stays above the surface, else retract to a clearance plane";
+  d.input("path", "Toolpath", "the passes, in cutting order")
+      .input("cloud", "Cloud", "the surface, for link safety and the clearance plane (else the passes' contact points)", false)
+      .output("linked", "LinkedPath", "tool-tip moves: rapids, plunges and feeds")
+      .param_float("max_link", 0, 0, 1e4, "mm", "longest direct feed link; 0: twice the largest stepover")
+      .param_float("safety", 5, 0, 1e4, "mm", "clearance plane height above the highest surface point")
+      .param_float("lead_height", 1, 0, 1e3, "mm", "height above a pass end where plunges stop and lifts start")
+      .param_float("tolerance", 0, 0, 10, "mm", "how much closer than r a link may bring the ball to the surface; 0: max(chord error, 0.001)");
+  d.run = [](NodeContext& ctx) {
+    auto path = ctx.input<Toolpath>("path");
+    std::vector<Eigen::Vector3d> none;
+    std::shared_ptr<const PointCloud> cloud;
+    if (ctx.has_input("cloud")) cloud = ctx.input<PointCloud>("cloud");
+    LinkOptions o;
+    o.max_link = ctx.number("max_link");
+    o.safety = ctx.number("safety");
+    o.lead_height = ctx.number("lead_height");
+    o.tolerance = ctx.number("tolerance");
+    try {
+      ctx.set("linked", link_passes(*path, cloud ? cloud->points : none, o));
+    } catch (const std::invalid_argument& e) {
+      throw NodeError(e.what());
+    }
+  };
+  return d;
+}
+}  // namespace scallop

@@ -1,0 +1,102 @@
+// Cutting simulation: what a ball-end path leaves on the surface a point cloud samples.
+//
+// The product's own certificate, with the definitions of ../shared/tools/verify.py (README
+// there): the surface is a height field z(x, y) fitted to the cloud; it is sampled on a square xy
+// grid rotated by 0.3 rad; for every sample p with upward unit normal n, with C the polyline of
+// ball centres of the feed moves and d the exact distance to C,
+//   gouge   = max(0, r − d(p)),
+//   scallop = smallest t ≥ 0 with d(p + t·n) ≤ r   (exact: first entry of the ray into the
+//             union of capsules of radius r around the pieces of C, found analytically),
+//   uncut   when no such t ≤ 20·h.
+// Fractions, percentiles and means are area-weighted. The 1000 highest values are refined with
+// local grids down to 1/16 of the spacing so the maxima do not depend on the grid.
+#pragma once
+
+#include <Eigen/Core>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "nodes/types/toolpath.h"
+
+namespace scallop {
+
+// One straight piece of the ball-centre polyline (mm).
+struct CentreSegment {
+  Eigen::Vector3d a, b;
+};
+
+// Ball centres of a planned path: consecutive contact points of each pass, c + r·n.
+std::vector<CentreSegment> feed_centres(const Toolpath& path);
+// Ball centres (tip + r·ẑ) of the feed and plunge moves of a linked path; rapid_length gets the
+// total length of its rapid moves.
+std::vector<CentreSegment> feed_centres(const LinkedPath& path, double& rapid_length);
+
+// Height-field model of a cloud seen from +z: z(x, y) and the upward normal from a weighted
+// quadratic least-squares fit of the k nearest cloud points in xy.
+class HeightField {
+ public:
+  // P  #P by 3 cloud points (mm), at least 10. k  neighbours per fit.
+  HeightField(const std::vector<Eigen::Vector3d>& P, int k = 20);
+  ~HeightField();
+  HeightField(const HeightField&) = delete;
+  HeightField& operator=(const HeightField&) = delete;
+  // Evaluates at (x, y); false (and nothing evaluated) when (x, y) is outside the patch: no cloud
+  // point within 1.5 × the mean cloud spacing, or the fitted neighbours lie to one side (their
+  // centroid farther than half their radius from (x, y)), unless `force`.
+  bool eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force = false) const;
+  bool inside(double x, double y) const;
+  double spacing() const { return spacing_; }  // mean cloud spacing in xy (mm)
+  double min_x() const { return lo_.x(); }
+  double min_y() const { return lo_.y(); }
+  double max_x() const { return hi_.x(); }
+  double max_y() const { return hi_.y(); }
+  double max_z() const { return zmax_; }
+
+ private:
+  struct Impl;
+  Impl* impl_;
+  int k_;
+  double spacing_ = 0, zmax_ = 0;
+  Eigen::Vector2d lo_, hi_;
+};
+
+struct SimulateOptions {
+  double tool_radius = 0;   // r (mm)
+  double scallop = 0;       // h, the scallop limit (mm)
+  double chord = 0;         // e, the chord tolerance (mm): gouges up to max(e, 0.001) pass
+  double spacing = 0;       // grid spacing (mm); 0: sqrt(8 r h) / 12
+  double margin = 0;        // interior margin from the outline (mm); 0: sqrt(8 r h)
+  std::size_t max_samples = 1500000;  // the spacing is raised to stay below this
+  int fit_neighbors = 20;
+};
+
+// One surface sample and what the path left there.
+struct SimSample {
+  double x, y, z;
+  double weight;     // surface area it stands for (mm²); 0 for refinement samples
+  double scallop;    // NaN when uncut
+  double gouge;
+  bool interior;
+};
+
+struct SimulationResult {
+  nlohmann::json report;          // the fields listed in the report (see simulate.cpp)
+  std::vector<SimSample> samples; // grid samples, then refinement samples
+  double spacing = 0;
+  std::vector<Eigen::Vector2d> outline;  // grid nodes just outside the patch (xy)
+};
+
+// Simulates the feed polyline `feed` (ball centres) over the surface `surface`.
+// Report keys: scallop_max, scallop_max_interior, scallop_p99, scallop_p99_interior,
+// scallop_mean, scallop_mean_interior, gouge_max, uncut_fraction, uncut_fraction_interior,
+// cut_length, rapid_length, samples, samples_interior, samples_refined, spacing, margin,
+// surface_area, tool_radius, scallop_limit, chord_limit, pass, fail_reasons, worst (up to 10
+// places {x, y, z, kind: "gouge" | "uncut" | "scallop", value}, worst first).
+// Throws std::invalid_argument for r ≤ 0, h ≤ 0, an empty path or a non-finite centre.
+SimulationResult simulate_cut(const HeightField& surface, const std::vector<CentreSegment>& feed,
+                              double rapid_length, const SimulateOptions& options,
+                              const std::function<void(double)>& progress = {});
+
+}  // namespace scallop

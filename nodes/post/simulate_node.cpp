@@ -1,0 +1,64 @@
+#include <stdexcept>
+
+#include "engine/node.h"
+#include "nodes/post/render.h"
+#include "nodes/post/simulate.h"
+#include "nodes/types/cloud.h"
+#include "nodes/types/document.h"
+#include "nodes/types/toolpath.h"
+
+namespace scallop {
+NodeDecl make_simulate_node() {
+  NodeDecl d;
+  d.type = "post.simulate";
+  d.version = 1;
+  d.description = "cutting simulation over the cloud's surface: scallop, gouge and uncut area (the certificate)";
+  d.input("path", "Toolpath", "planned passes (give this or 'linked')", false)
+      .input("linked", "LinkedPath", "linked machine moves (give this or 'path')", false)
+      .input("cloud", "Cloud", "the surface, seen from +z")
+      .output("report", "Report", "scallop/gouge/uncut statistics, pass and fail reasons, the 10 worst places")
+      .output("heatmap", "Image", "top view of the scallop left, colour bar 0..1.01 h")
+      .param_float("scallop", 0, 0, 100, "mm", "scallop limit h; 0: the path's own")
+      .param_float("chord", -1, -1, 100, "mm", "chord tolerance e (gouges up to max(e, 0.001) pass); -1: the path's own")
+      .param_float("spacing", 0, 0, 100, "mm", "grid spacing; 0: sqrt(8 r h)/12")
+      .param_float("margin", 0, 0, 1000, "mm", "interior = farther than this from the outline; 0: sqrt(8 r h)")
+      .param_int("max_samples", 1500000, 1000, 100000000, "", "the spacing is raised to stay below this many samples")
+      .param_int("heatmap_width", 1000, 64, 8000, "px", "width of the heat map");
+  d.run = [](NodeContext& ctx) {
+    if (ctx.has_input("path") == ctx.has_input("linked"))
+      throw NodeError("give exactly one of the inputs 'path' and 'linked'");
+    auto cloud = ctx.input<PointCloud>("cloud");
+    std::vector<CentreSegment> feed;
+    double rapid = 0, r, h, e;
+    if (ctx.has_input("path")) {
+      auto p = ctx.input<Toolpath>("path");
+      feed = feed_centres(*p);
+      r = p->tool_radius, h = p->scallop_height, e = p->chord_error;
+    } else {
+      auto p = ctx.input<LinkedPath>("linked");
+      feed = feed_centres(*p, rapid);
+      r = p->tool_radius, h = p->scallop_height, e = p->chord_error;
+    }
+    SimulateOptions o;
+    o.tool_radius = r;
+    o.scallop = ctx.number("scallop") > 0 ? ctx.number("scallop") : h;
+    o.chord = ctx.number("chord") >= 0 ? ctx.number("chord") : e;
+    o.spacing = ctx.number("spacing");
+    o.margin = ctx.number("margin");
+    o.max_samples = static_cast<std::size_t>(ctx.integer("max_samples"));
+    try {
+      HeightField surf(cloud->points);
+      auto res = simulate_cut(surf, feed, rapid, o, [&](double f) { ctx.progress(f, "simulating"); });
+      Image img;
+      img.png = render_scallop_png(res, o.scallop, std::max(o.chord, 1e-3), static_cast<int>(ctx.integer("heatmap_width")));
+      Report rep;
+      rep.data = std::move(res.report);
+      ctx.set("report", std::move(rep));
+      ctx.set("heatmap", std::move(img));
+    } catch (const std::invalid_argument& ex) {
+      throw NodeError(ex.what());
+    }
+  };
+  return d;
+}
+}  // namespace scallop

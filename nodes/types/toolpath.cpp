@@ -1,0 +1,79 @@
+#include "nodes/types/toolpath.h"
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+namespace scallop {
+
+void Toolpath::serialize(std::ostream& out) const {
+  bin::write_f64(out, tool_radius);
+  bin::write_f64(out, scallop_height);
+  bin::write_f64(out, chord_error);
+  bin::write_string(out, pattern);
+  bin::write_u64(out, passes.size());
+  for (const auto& p : passes) {
+    bin::write_vector(out, p.contact);
+    bin::write_vector(out, p.normal);
+    bin::write_vector(out, p.uv);
+  }
+}
+
+ValuePtr Toolpath::deserialize(std::istream& in) {
+  auto t = std::make_shared<Toolpath>();
+  t->tool_radius = bin::read_f64(in);
+  t->scallop_height = bin::read_f64(in);
+  t->chord_error = bin::read_f64(in);
+  t->pattern = bin::read_string(in);
+  std::uint64_t n = bin::read_u64(in);
+  if (n > (1u << 30)) throw std::runtime_error("corrupt pass count");
+  t->passes.resize(n);
+  for (auto& p : t->passes) {
+    p.contact = bin::read_vector<Eigen::Vector3d>(in);
+    p.normal = bin::read_vector<Eigen::Vector3d>(in);
+    p.uv = bin::read_vector<Eigen::Vector2d>(in);
+  }
+  return t;
+}
+
+void Toolpath::write_file(const std::string& path) const {
+  nlohmann::json j;
+  j["tool_radius"] = tool_radius;
+  j["scallop_height"] = scallop_height;
+  j["chord_error"] = chord_error;
+  j["pattern"] = pattern;
+  j["passes"] = nlohmann::json::array();
+  for (const auto& p : passes) {
+    nlohmann::json pts = nlohmann::json::array();
+    for (std::size_t i = 0; i < p.contact.size(); ++i) {
+      Eigen::Vector3d t = tip(p.contact[i], p.normal[i]);
+      pts.push_back({{"contact", {p.contact[i].x(), p.contact[i].y(), p.contact[i].z()}},
+                     {"normal", {p.normal[i].x(), p.normal[i].y(), p.normal[i].z()}},
+                     {"tip", {t.x(), t.y(), t.z()}}});
+    }
+    j["passes"].push_back(pts);
+  }
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write '" + path + "'");
+  out << j.dump(1) << "\n";
+}
+
+void LinkedPath::serialize(std::ostream& out) const {
+  bin::write_f64(out, tool_radius);
+  bin::write_f64(out, scallop_height);
+  bin::write_f64(out, chord_error);
+  bin::write_f64(out, clearance_z);
+  bin::write_vector(out, moves);
+}
+
+ValuePtr LinkedPath::deserialize(std::istream& in) {
+  auto l = std::make_shared<LinkedPath>();
+  l->tool_radius = bin::read_f64(in);
+  l->scallop_height = bin::read_f64(in);
+  l->chord_error = bin::read_f64(in);
+  l->clearance_z = bin::read_f64(in);
+  l->moves = bin::read_vector<Move>(in);
+  return l;
+}
+
+}  // namespace scallop

@@ -1,0 +1,61 @@
+// Tool path values: planned passes on the surface, and the linked machine program.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "engine/value.h"
+
+namespace scallop {
+
+// One pass: cutter-contact points on the surface with their upward unit normals, in cutting order.
+// uv holds each point's parameter-domain position when the planner has one (else empty).
+struct ToolpathPass {
+  std::vector<Eigen::Vector3d> contact;
+  std::vector<Eigen::Vector3d> normal;
+  std::vector<Eigen::Vector2d> uv;
+};
+
+// Passes of a ball-end cutter of radius tool_radius. The ball centre (cutter location) of a
+// contact point c with normal n is c + r·n; the tool tip (G-code XYZ) is the centre − r·ẑ.
+struct Toolpath final : Value {
+  double tool_radius = 0;
+  double scallop_height = 0;
+  double chord_error = 0;
+  std::string pattern;  // "zigzag", "contour", ...
+  std::vector<ToolpathPass> passes;
+
+  Eigen::Vector3d centre(const Eigen::Vector3d& contact, const Eigen::Vector3d& normal) const {
+    return contact + tool_radius * normal;
+  }
+  Eigen::Vector3d tip(const Eigen::Vector3d& contact, const Eigen::Vector3d& normal) const {
+    return centre(contact, normal) - Eigen::Vector3d(0, 0, tool_radius);
+  }
+
+  std::string type_name() const override { return "Toolpath"; }
+  void serialize(std::ostream& out) const override;
+  static ValuePtr deserialize(std::istream& in);
+  // JSON: tool, tolerances and passes (contact, normal, tip per point).
+  void write_file(const std::string& path) const override;
+};
+
+// A machine program before it is written in a dialect: tool-tip positions with move kinds.
+enum class MoveKind : int { Rapid = 0, Feed = 1, Plunge = 2 };
+struct Move {
+  MoveKind kind;
+  Eigen::Vector3d tip;
+};
+struct LinkedPath final : Value {
+  double tool_radius = 0;
+  double scallop_height = 0;
+  double chord_error = 0;
+  double clearance_z = 0;  // the safe plane rapids travel in
+  std::vector<Move> moves;
+
+  std::string type_name() const override { return "LinkedPath"; }
+  void serialize(std::ostream& out) const override;
+  static ValuePtr deserialize(std::istream& in);
+};
+
+}  // namespace scallop

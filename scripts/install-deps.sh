@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages scallop builds and runs with (as root, or with sudo).
+set -euo pipefail
+packages=(build-essential cmake ninja-build ccache pkg-config
+  libeigen3-dev libcgal-dev libopenmesh-dev libpcl-dev libsuitesparse-dev libtbb-dev nlohmann-json3-dev
+  libnanoflann-dev libspectra-dev libcli11-dev libgtest-dev libbenchmark-dev liblzf-dev libxxhash-dev libpng-dev
+  linuxcnc-uspace)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "installing: ${missing[*]}"
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO=sudo
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi

@@ -1,0 +1,193 @@
+// Whole-graph validation: every error is collected and each message has an exact text.
+#include "engine/graph.h"
+
+#include <gtest/gtest.h>
+
+#include "tests/test_support.h"
+
+namespace scallop {
+namespace {
+
+std::vector<std::string> errors_of(const std::string& text, CompileOptions opt = {}) {
+  Registry reg = test::make_test_registry();
+  try {
+    compile(parse_graph(text), reg, opt);
+  } catch (const ValidationError& e) {
+    return e.errors;
+  }
+  return {};
+}
+
+const char* kGood = R"({
+  "scallop_graph": 1, "name": "good",
+  "params": {"v": {"value": 2, "unit": "mm"}},
+  "nodes": [
+    {"id": "a", "type": "test.const", "params": {"value": "$v"}},
+    {"id": "b", "type": "test.const", "params": {"value": 3}},
+    {"id": "sum", "type": "test.add", "inputs": {"a": "a.out", "b": "b.out"}}
+  ],
+  "outputs": {"total": "sum.out"}
+})";
+
+TEST(Graph, GoodGraphCompilesWithDefaultsAndReferences) {
+  Registry reg = test::make_test_registry();
+  Plan plan = compile(parse_graph(kGood), reg);
+  ASSERT_EQ(plan.nodes.size(), 3u);
+  EXPECT_EQ(plan.nodes[0].params["value"], 2.0);
+  EXPECT_EQ(plan.nodes[2].params["times"], 1);
+  EXPECT_EQ(plan.order.back(), 2);
+  ASSERT_EQ(plan.outputs.size(), 1u);
+}
+
+TEST(Graph, SetOverridesGraphAndNodeParameters) {
+  Registry reg = test::make_test_registry();
+  CompileOptions opt;
+  opt.sets = {"v=7", "sum.times=3"};
+  Plan plan = compile(parse_graph(kGood), reg, opt);
+  EXPECT_EQ(plan.nodes[0].params["value"], 7.0);
+  EXPECT_EQ(plan.nodes[2].params["times"], 3);
+}
+
+TEST(Graph, UnknownNodeType) {
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [{"id": "k", "type": "test.ad"}]})"),
+            std::vector<std::string>{"nodes[0].type: node 'k': unknown node type 'test.ad'; expected a registered "
+                                     "type such as 'test.add' (see 'scallop nodes')"});
+}
+
+TEST(Graph, UnknownPort) {
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [{"id": "a", "type": "test.const"},
+      {"id": "s", "type": "test.add", "inputs": {"a": "a.out", "c": "a.out"}}]})"),
+            std::vector<std::string>{
+                "nodes[1].inputs.c: node 's': unknown input port 'c'; expected one of: a, b"});
+}
+
+TEST(Graph, UnknownOutputPortOfSource) {
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [{"id": "a", "type": "test.const"},
+      {"id": "s", "type": "test.add", "inputs": {"a": "a.result"}}]})"),
+            std::vector<std::string>{
+                "nodes[1].inputs.a: node 's': node 'a' has no output 'result'; expected one of: out"});
+}
+
+TEST(Graph, MissingRequiredInput) {
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [{"id": "s", "type": "test.add"}]})"),
+            std::vector<std::string>{"nodes[0].inputs: node 's': missing required input 'a' (Number)"});
+}
+
+TEST(Graph, DoublyConnectedPort) {
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [{"id": "a", "type": "test.const"},
+      {"id": "s", "type": "test.add", "inputs": {"a": "a.out", "a": "a.out"}}]})"),
+            std::vector<std::string>{"nodes[1].inputs.a: node 's': input port 'a' is connected twice; expected one "
+                                     "source per input"});
+}
+
+TEST(Graph, TypeMismatch) {
+  Registry reg = test::make_test_registry();
+  reg.values().add({"Other", "bin", "", nullptr});
+  NodeDecl d;
+  d.type = "test.other";
+  d.output("o", "Other", "");
+  d.run = [](NodeContext&) {};
+  reg.add(d);
+  try {
+    compile(parse_graph(R"({"scallop_graph": 1, "nodes": [{"id": "x", "type": "test.other"},
+        {"id": "s", "type": "test.add", "inputs": {"a": "x.o"}}]})"),
+            reg);
+    FAIL();
+  } catch (const ValidationError& e) {
+    EXPECT_EQ(e.errors, std::vector<std::string>{"nodes[1].inputs.a: node 's': type mismatch: 'x.o' is Other; "
+                                                 "expected Number"});
+  }
+}
+
+TEST(Graph, Cycle) {
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [
+      {"id": "a", "type": "test.add", "inputs": {"a": "c.out"}},
+      {"id": "b", "type": "test.add", "inputs": {"a": "a.out"}},
+      {"id": "c", "type": "test.add", "inputs": {"a": "b.out"}},
+      {"id": "free", "type": "test.const"}]})"),
+            std::vector<std::string>{"nodes: cycle a -> b -> c -> a; expected an acyclic graph"});
+}
+
+TEST(Graph, SelfLoopIsACycle) {
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [{"id": "a", "type": "test.add", "inputs": {"a": "a.out"}}]})"),
+            std::vector<std::string>{"nodes: cycle a -> a; expected an acyclic graph"});
+}
+
+TEST(Graph, UnknownParameterKey) {
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [{"id": "a", "type": "test.const", "params": {"valeu": 1}}]})"),
+            std::vector<std::string>{"nodes[0].params.valeu: node 'a': unknown parameter 'valeu'; expected one of: value"});
+}
+
+TEST(Graph, WrongParameterType) {
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [{"id": "a", "type": "test.const", "params": {"value": "big"}}]})"),
+            std::vector<std::string>{"nodes[0].params.value: node 'a': parameter 'value' must be a number; got \"big\""});
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [{"id": "a", "type": "test.const"},
+      {"id": "s", "type": "test.add", "params": {"times": 1.5}, "inputs": {"a": "a.out"}}]})"),
+            std::vector<std::string>{"nodes[1].params.times: node 's': parameter 'times' must be an integer; got 1.5"});
+}
+
+TEST(Graph, ValueOutOfRange) {
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [{"id": "a", "type": "test.const"},
+      {"id": "s", "type": "test.add", "params": {"times": 0}, "inputs": {"a": "a.out"}}]})"),
+            std::vector<std::string>{"nodes[1].params.times: node 's': parameter 'times' = 0 is out of range; expected 1 .. 10"});
+}
+
+TEST(Graph, OutOfRangeThroughSetNamesTheOverride) {
+  CompileOptions opt;
+  opt.sets = {"sum.times=11", "nope=1"};
+  EXPECT_EQ(errors_of(kGood, opt),
+            (std::vector<std::string>{"--set nope: unknown graph parameter 'nope'; expected one of: v",
+                                      "--set sum.times: node 'sum': parameter 'times' = 11 is out of range; expected 1 .. 10"}));
+}
+
+TEST(Graph, MissingGraphInput) {
+  const char* text = R"({"scallop_graph": 1, "inputs": {"cloud": {"type": "File"}}, "nodes": []})";
+  EXPECT_EQ(errors_of(text), std::vector<std::string>{"inputs.cloud: graph input 'cloud' is not given; expected --input cloud=PATH"});
+  CompileOptions opt;
+  opt.provided_inputs = {"cloud"};
+  EXPECT_TRUE(errors_of(text, opt).empty());
+}
+
+TEST(Graph, UnknownGraphParameterReference) {
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "params": {"v": 1}, "nodes": [{"id": "a", "type": "test.const", "params": {"value": "$w"}}]})"),
+            std::vector<std::string>{"nodes[0].params.value: node 'a': unknown graph parameter '$w'; expected one of: v"});
+}
+
+TEST(Graph, EveryErrorIsCollected) {
+  auto errs = errors_of(R"({"scallop_graph": 1, "nodes": [
+      {"id": "a", "type": "test.const", "params": {"value": "x", "extra": 1}},
+      {"id": "a", "type": "nope.nope"},
+      {"id": "s", "type": "test.add", "inputs": {"a": "zz.out"}}],
+      "outputs": {"o": "s.bad"}})");
+  EXPECT_EQ(errs, (std::vector<std::string>{
+                      "nodes[1].id: node 'a': duplicate node id; expected ids to be unique",
+                      "nodes[0].params.extra: node 'a': unknown parameter 'extra'; expected one of: value",
+                      "nodes[0].params.value: node 'a': parameter 'value' must be a number; got \"x\"",
+                      "nodes[1].type: node 'a': unknown node type 'nope.nope'; expected a registered type (see 'scallop nodes')",
+                      "nodes[2].inputs.a: node 's': unknown source 'zz.out'; expected '<node id>.<output port>' or '@<graph input>'",
+                      "outputs.o: node 's' has no output 'bad'; expected one of: out"}));
+}
+
+TEST(Graph, FormatVersionAndSyntax) {
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 2, "nodes": []})"),
+            std::vector<std::string>{"scallop_graph: unsupported format version 2; expected 1"});
+  EXPECT_EQ(errors_of(R"({"nodes": []})"),
+            std::vector<std::string>{"scallop_graph: missing format version; expected \"scallop_graph\": 1"});
+  try {
+    parse_graph("{\"scallop_graph\": 1,\n \"nodes\": [}", "g.json");
+    FAIL();
+  } catch (const ValidationError& e) {
+    EXPECT_EQ(e.errors.size(), 1u);
+    EXPECT_EQ(e.errors[0].rfind("g.json: not valid JSON: parse error at line 2, column 12", 0), 0u) << e.errors[0];
+  }
+}
+
+TEST(Graph, DotNamesEveryNodeAndEdge) {
+  Registry reg = test::make_test_registry();
+  std::string dot = to_dot(compile(parse_graph(kGood), reg));
+  EXPECT_NE(dot.find("\"a\" -> \"sum\""), std::string::npos);
+  EXPECT_NE(dot.find("\"sum\" -> \"out:total\""), std::string::npos);
+}
+
+}  // namespace
+}  // namespace scallop

@@ -1,0 +1,113 @@
+#include "nodes/cloud/boundary_order.h"
+
+#include <gtest/gtest.h>
+
+#include <numbers>
+#include <random>
+
+#include "nodes/cloud/boundary.h"
+#include "nodes/cloud/knn.h"
+#include "tests/nodes/param/param_test_util.h"
+
+namespace scallop {
+namespace {
+
+const double kPi = std::numbers::pi;
+
+TEST(BoundaryOrder, NoisyCircleIsOneLoopInAngularOrder) {
+  // 400 points on a circle of radius 10, unevenly spaced (angles random) and with 0.1 mm radial
+  // noise, plus the inside; all boundary flags given.
+  std::mt19937 rng(51);
+  std::uniform_real_distribution<double> ua(0, 2 * kPi);
+  std::normal_distribution<double> noise(0, 0.1);
+  PointCloud c = test::random_disk(1500, 9.5, 52);
+  std::vector<std::uint8_t> flags(c.size(), 0);
+  for (int i = 0; i < 400; ++i) {
+    double a = ua(rng), r = 10 + noise(rng);
+    c.points.emplace_back(r * std::cos(a), r * std::sin(a), 0);
+    c.normals.push_back(Eigen::Vector3d::UnitZ());
+    flags.push_back(1);
+  }
+  auto nb = compute_knn(c.points, 12);
+  auto loops = order_boundary_loops(c.points, c.normals, nb, flags);
+  ASSERT_EQ(loops.size(), 1u);
+  EXPECT_GE(loops[0].size(), 390u);
+  // Counter-clockwise: winding +1, and no step goes back by more than the noise allows.
+  double winding = 0, worst = 0;
+  for (std::size_t i = 0; i < loops[0].size(); ++i) {
+    const auto& p = c.points[loops[0][i]];
+    const auto& q = c.points[loops[0][(i + 1) % loops[0].size()]];
+    double d = std::remainder(std::atan2(q.y(), q.x()) - std::atan2(p.y(), p.x()), 2 * kPi);
+    winding += d;
+    worst = std::min(worst, d);
+  }
+  EXPECT_NEAR(winding, 2 * kPi, 1e-9);
+  EXPECT_GT(worst, -0.02);  // 0.2 mm of backtracking at most
+}
+
+TEST(BoundaryOrder, PatchWithAHoleGivesTwoLoopsOuterFirst) {
+  // Jittered 30 x 20 grid with a round hole of radius 4 at (12, 10).
+  PointCloud g = test::jittered_grid(30, 20, 0.4, 0.4, 0.5, 53);
+  PointCloud c;
+  for (std::size_t i = 0; i < g.size(); ++i)
+    if ((g.points[i].head<2>() - Eigen::Vector2d(12, 10)).norm() > 4) {
+      c.points.push_back(g.points[i]);
+      c.normals.push_back(g.normals[i]);
+    }
+  auto nb = compute_knn(c.points, 12);
+  auto b = detect_boundary(c.points, c.normals, nb, kPi / 2);
+  auto loops = order_boundary_loops(c.points, c.normals, nb, b);
+  ASSERT_EQ(loops.size(), 2u);
+  Eigen::Vector3d c0, n0;
+  best_fit_plane(c.points, c.normals, c0, n0);
+  EXPECT_GT(n0.z(), 0.99);
+  double outer = projected_loop_area(c.points, loops[0], c0, n0);
+  double hole = projected_loop_area(c.points, loops[1], c0, n0);
+  EXPECT_NEAR(outer, 600, 30);             // counter-clockwise
+  // The hole's boundary points are the grid points just outside radius 4 (spacing 0.4).
+  EXPECT_NEAR(hole, -kPi * 4.2 * 4.2, 0.1 * kPi * 16);  // clockwise
+  for (int i : loops[1]) EXPECT_NEAR((c.points[i].head<2>() - Eigen::Vector2d(12, 10)).norm(), 4.2, 0.6);
+}
+
+TEST(BoundaryOrder, NonConvexOutline) {
+  // A C-shaped patch: [0,20]^2 minus the notch [6,20] x [7,13]. The loop follows the notch.
+  PointCloud g = test::jittered_grid(20, 20, 0.4, 0.4, 0.4, 54);
+  PointCloud c;
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    const auto& p = g.points[i];
+    if (p.x() > 6 && p.y() > 7 && p.y() < 13) continue;
+    c.points.push_back(p);
+    c.normals.push_back(g.normals[i]);
+  }
+  auto nb = compute_knn(c.points, 12);
+  auto b = detect_boundary(c.points, c.normals, nb, kPi / 2);
+  auto loops = order_boundary_loops(c.points, c.normals, nb, b);
+  ASSERT_EQ(loops.size(), 1u);
+  double len = 0, step = 0;
+  for (std::size_t i = 0; i < loops[0].size(); ++i) {
+    double s = (c.points[loops[0][i]] - c.points[loops[0][(i + 1) % loops[0].size()]]).norm();
+    len += s;
+    step = std::max(step, s);
+  }
+  EXPECT_LT(step, 1.2);                 // no shortcut across the notch (6 mm wide)
+  EXPECT_NEAR(len, 80 + 2 * 14, 12);    // outline length 108, plus some zig-zag
+}
+
+TEST(BoundaryOrder, ClosedCloudIsAClearError) {
+  PointCloud c = test::random_disk(200, 10, 55);
+  auto nb = compute_knn(c.points, 8);
+  std::vector<std::uint8_t> none(c.size(), 0);
+  try {
+    order_boundary_loops(c.points, c.normals, nb, none);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(),
+                 "no boundary points found: the cloud looks closed (a 3-axis finishing path needs an open patch)");
+  }
+  std::vector<std::uint8_t> few(c.size(), 0);
+  for (int i = 0; i < 5; ++i) few[i] = 1;
+  EXPECT_THROW(order_boundary_loops(c.points, c.normals, nb, few), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace scallop

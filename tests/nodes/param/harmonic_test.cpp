@@ -1,0 +1,125 @@
+#include "nodes/param/harmonic.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <complex>
+
+#include "tests/nodes/param/param_test_util.h"
+
+namespace scallop {
+namespace {
+
+using cd = std::complex<double>;
+
+// Least-squares similarity uv = a z + b (complex a: rotation and scale) fitted to the points with
+// |p| < r_fit; returns the scale |a| and the largest |uv - (a z + b)| / |a| (mm) over the points
+// with |p| < r_eval.
+double similarity_error(const PointCloud& c, const std::vector<Eigen::Vector2d>& uv, double r_fit, double r_eval,
+                        double* scale) {
+  std::vector<std::size_t> fit;
+  for (std::size_t i = 0; i < c.size(); ++i)
+    if (c.points[i].head<2>().norm() < r_fit) fit.push_back(i);
+  Eigen::MatrixXcd A(fit.size(), 2);
+  Eigen::VectorXcd y(fit.size());
+  for (std::size_t r = 0; r < fit.size(); ++r) {
+    A(r, 0) = cd(c.points[fit[r]].x(), c.points[fit[r]].y());
+    A(r, 1) = 1.0;
+    y(r) = cd(uv[fit[r]].x(), uv[fit[r]].y());
+  }
+  Eigen::VectorXcd ab = A.colPivHouseholderQr().solve(y);
+  *scale = std::abs(ab(0));
+  double err = 0;
+  for (std::size_t i = 0; i < c.size(); ++i)
+    if (c.points[i].head<2>().norm() < r_eval)
+      err = std::max(err, std::abs(ab(0) * cd(c.points[i].x(), c.points[i].y()) + ab(1) - cd(uv[i].x(), uv[i].y())));
+  return err / *scale;
+}
+
+TEST(Harmonic, FlatDiskMapsToASimilarDisk) {
+  // Points uniform in a disk of radius 10, the ordered rim mapped to a circle by chord length:
+  // the harmonic map is a similarity uv = s R p + t (closed form), with s = L / (2 pi 10), L the
+  // length of the (jagged) rim polygon. Only the optimal weights have linear precision; the graph
+  // and heat Laplacians are biased by the random sampling, so they get a looser bound.
+  PointCloud c = test::random_disk(3000, 10, 11);
+  for (auto scheme : {LaplacianScheme::Optimal, LaplacianScheme::Heat, LaplacianScheme::Uniform}) {
+    auto p = test::parameterize(c, 12, BoundaryDomain::Disk, scheme);
+    ASSERT_EQ(p.map.uv.size(), c.size());
+    EXPECT_LT(p.map.residual, 1e-10);
+    double s = 0;
+    double all = similarity_error(c, p.map.uv, 10, 11, &s);
+    double inner = similarity_error(c, p.map.uv, 10, 8, &s);
+    EXPECT_NEAR(s, p.map.radius / 10, 0.03 * s) << to_string(scheme);
+    std::printf("[ disk ] %-8s scale %.4f (L/2piR %.4f), max deviation from the similarity: %.3f mm, "
+                "%.3f mm within r < 8\n", to_string(scheme).c_str(), s, p.map.radius / 10, all, inner);
+    const bool optimal = scheme == LaplacianScheme::Optimal;
+    EXPECT_LT(all, optimal ? 0.8 : 2.5) << to_string(scheme);
+    EXPECT_LT(inner, optimal ? 0.4 : 2.0) << to_string(scheme);
+    // Outer loop points sit exactly on the circle.
+    for (std::size_t j = 0; j < p.map.outer_loop.size(); ++j)
+      EXPECT_NEAR(p.map.uv[p.map.outer_loop[j]].norm(), p.map.radius, 1e-9);
+  }
+}
+
+TEST(Harmonic, IterativeSolversAgreeWithDirect) {
+  PointCloud c = test::random_disk(1500, 10, 12);
+  auto d = test::parameterize(c, 12, BoundaryDomain::Rectangle, LaplacianScheme::Optimal, HarmonicSolver::Direct);
+  for (auto s : {HarmonicSolver::BiCGSTAB, HarmonicSolver::GMRES}) {
+    auto it = test::parameterize(c, 12, BoundaryDomain::Rectangle, LaplacianScheme::Optimal, s);
+    EXPECT_LT(it.map.residual, 1e-6);
+    double diff = 0;
+    for (std::size_t i = 0; i < c.size(); ++i) diff = std::max(diff, (it.map.uv[i] - d.map.uv[i]).norm());
+    EXPECT_LT(diff, 1e-5);
+  }
+}
+
+TEST(Harmonic, AffineBoundaryGivesAffineMapWithOptimalWeights) {
+  // Linear precision: when the boundary values are an affine function of the positions, the
+  // optimal-weights harmonic map is that affine function everywhere.
+  PointCloud c = test::random_disk(1500, 10, 13);
+  auto nb = compute_knn(c.points, 12);
+  auto is_b = detect_boundary(c.points, c.normals, nb, std::numbers::pi / 2);
+  auto loops = order_boundary_loops(c.points, c.normals, nb, is_b);
+  UVMap b;
+  b.domain = "disk";
+  b.outer_loop = loops[0];
+  auto f = [](const Eigen::Vector3d& p) { return Eigen::Vector2d(0.5 * p.x() - 0.2 * p.y() + 1, 0.3 * p.x() + 2 * p.y()); };
+  for (int i : b.outer_loop) b.boundary_uv.push_back(f(c.points[i]));
+  auto m = solve_harmonic(build_laplacian(c.points, c.normals, nb, LaplacianScheme::Optimal), b);
+  for (std::size_t i = 0; i < c.size(); ++i) EXPECT_LT((m.uv[i] - f(c.points[i])).norm(), 1e-8);
+}
+
+TEST(Harmonic, DisconnectedClusterIsAClearError) {
+  PointCloud c = test::random_disk(800, 10, 14);
+  // A far-away cluster of 20 points whose 12 neighbours are all inside the cluster.
+  for (int i = 0; i < 20; ++i) c.points.emplace_back(100 + 0.1 * (i % 5), 0.1 * (i / 5), 0), c.normals.push_back(Eigen::Vector3d::UnitZ());
+  auto nb = compute_knn(c.points, 12);
+  UVMap b;
+  std::vector<int> outer;
+  for (int i = 0; i < 800; ++i)
+    if (c.points[i].head<2>().norm() > 9.5) outer.push_back(i);
+  b.outer_loop = outer;
+  for (int i : outer) b.boundary_uv.push_back(c.points[i].head<2>());
+  auto L = build_laplacian(c.points, c.normals, nb, LaplacianScheme::Uniform);
+  try {
+    solve_harmonic(L, b);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("not connected to the outer boundary"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Harmonic, BadInput) {
+  Eigen::SparseMatrix<double, Eigen::RowMajor> L(5, 5);
+  UVMap b;
+  b.outer_loop = {0, 1};
+  b.boundary_uv = {{0, 0}, {1, 0}};
+  EXPECT_THROW(solve_harmonic(L, b), std::invalid_argument);
+  b.outer_loop = {0, 1, 7};
+  b.boundary_uv = {{0, 0}, {1, 0}, {0, 1}};
+  EXPECT_THROW(solve_harmonic(L, b), std::invalid_argument);
+  EXPECT_THROW(parse_harmonic_solver("cg"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace scallop

@@ -1,0 +1,103 @@
+#include "nodes/param/laplacian.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <random>
+
+#include "nodes/cloud/knn.h"
+#include "tests/nodes/param/param_test_util.h"
+
+namespace scallop {
+namespace {
+
+// A wavy height field with exact normals, so the optimal scheme sees curved neighbourhoods.
+PointCloud wavy_cloud(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 20);
+  PointCloud c;
+  for (int i = 0; i < n; ++i) {
+    double x = u(rng), y = u(rng);
+    c.points.emplace_back(x, y, 2 * std::sin(x / 3) * std::cos(y / 4));
+    Eigen::Vector3d g(-2 / 3.0 * std::cos(x / 3) * std::cos(y / 4), 2 / 4.0 * std::sin(x / 3) * std::sin(y / 4), 1);
+    c.normals.push_back(g.normalized());
+  }
+  return c;
+}
+
+TEST(Laplacian, RowsSumToZeroForEveryScheme) {
+  PointCloud c = wavy_cloud(1500, 1);
+  Neighborhoods nb = compute_knn(c.points, 12);
+  for (auto s : {LaplacianScheme::Uniform, LaplacianScheme::Heat, LaplacianScheme::Optimal}) {
+    auto L = build_laplacian(c.points, c.normals, nb, s);
+    ASSERT_EQ(L.rows(), 1500);
+    Eigen::VectorXd rs = L * Eigen::VectorXd::Ones(L.cols());
+    EXPECT_LT(rs.cwiseAbs().maxCoeff(), 1e-12) << to_string(s);
+    // Diagonal 1 (weights normalised), k off-diagonal entries.
+    EXPECT_NEAR(L.coeff(7, 7), 1.0, 1e-12) << to_string(s);
+    EXPECT_EQ(L.nonZeros(), 1500 * 13) << to_string(s);
+  }
+}
+
+TEST(Laplacian, UniformWeightsAreOneOverK) {
+  PointCloud c = wavy_cloud(200, 2);
+  Neighborhoods nb = compute_knn(c.points, 8);
+  auto L = build_laplacian(c.points, {}, nb, LaplacianScheme::Uniform);
+  for (int j = 0; j < 8; ++j) EXPECT_DOUBLE_EQ(L.coeff(3, nb.index(3, j)), -1.0 / 8);
+}
+
+TEST(Laplacian, HeatKernelWeights) {
+  PointCloud c = wavy_cloud(300, 3);
+  Neighborhoods nb = compute_knn(c.points, 10);
+  const double t = 0.7;
+  auto L = build_laplacian(c.points, {}, nb, LaplacianScheme::Heat, t);
+  double s = 0;
+  for (int j = 0; j < 10; ++j) s += std::exp(-nb.sq_dist(5, j) / t);
+  for (int j = 0; j < 10; ++j) EXPECT_NEAR(L.coeff(5, nb.index(5, j)), -std::exp(-nb.sq_dist(5, j) / t) / s, 1e-14);
+  // t = 0 means the mean squared neighbour distance.
+  auto La = build_laplacian(c.points, {}, nb, LaplacianScheme::Heat, 0);
+  auto Lb = build_laplacian(c.points, {}, nb, LaplacianScheme::Heat, mean_sq_neighbor_distance(nb));
+  EXPECT_LT((La - Lb).norm(), 1e-15);
+}
+
+TEST(Laplacian, OptimalWeightsReproducePlanarPoints) {
+  // A tilted plane: sum_j w_ij p_j = p_i at every point whose neighbours surround it.
+  PointCloud c = test::random_disk(2000, 10, 4);
+  Eigen::Matrix3d R = Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
+  for (auto& p : c.points) p = R * p + Eigen::Vector3d(3, -1, 7);
+  for (auto& n : c.normals) n = R * n;
+  Neighborhoods nb = compute_knn(c.points, 12);
+  auto L = build_laplacian(c.points, c.normals, nb, LaplacianScheme::Optimal);
+  Eigen::MatrixXd P(c.size(), 3);
+  for (std::size_t i = 0; i < c.size(); ++i) P.row(i) = c.points[i].transpose();
+  Eigen::MatrixXd LP = L * P;  // (L p)_i = p_i - sum_j w_ij p_j
+  int checked = 0;
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    EXPECT_LT(LP.row(i).norm(), 1e-9) << "point " << i;  // holds at boundary points too
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2000);
+  // Linear precision also without normals (local PCA planes).
+  auto L2 = build_laplacian(c.points, {}, nb, LaplacianScheme::Optimal);
+  EXPECT_LT((L2 * P).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+TEST(Laplacian, Errors) {
+  PointCloud c = wavy_cloud(50, 5);
+  Neighborhoods nb2 = compute_knn(c.points, 2);
+  try {
+    build_laplacian(c.points, c.normals, nb2, LaplacianScheme::Optimal);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "the optimal Laplacian needs k >= 3 neighbours per point (k = 2)");
+  }
+  Neighborhoods nb = compute_knn(c.points, 6);
+  std::vector<Eigen::Vector3d> fewer(c.points.begin(), c.points.begin() + 40);
+  EXPECT_THROW(build_laplacian(fewer, {}, nb, LaplacianScheme::Uniform), std::invalid_argument);
+  EXPECT_THROW(parse_laplacian_scheme("cotan"), std::invalid_argument);
+  EXPECT_EQ(parse_laplacian_scheme("heat"), LaplacianScheme::Heat);
+}
+
+}  // namespace
+}  // namespace scallop

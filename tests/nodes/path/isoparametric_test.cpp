@@ -1,0 +1,302 @@
+#include "nodes/path/isoparametric.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <map>
+
+#include "engine/node.h"
+#include "nodes/cloud/knn.h"
+#include "nodes/types/document.h"
+
+namespace scallop {
+NodeDecl make_isoparametric_node();
+}
+
+using namespace scallop;
+
+namespace {
+
+struct Input {
+  PointCloud cloud;
+  Neighborhoods nb;
+  UVMap map;
+};
+
+// Height field z(x, y) with gradient g(x, y), sampled on a grid of step d over [0,W] x [0,H];
+// the stand-in map is uv = xy on the rectangle.
+template <class Z, class G>
+Input rect_patch(double W, double H, double d, Z z, G g) {
+  Input in;
+  const int nx = static_cast<int>(std::lround(W / d)), ny = static_cast<int>(std::lround(H / d));
+  for (int i = 0; i <= nx; ++i)
+    for (int j = 0; j <= ny; ++j) {
+      const double x = W * i / nx, y = H * j / ny;
+      const Eigen::Vector2d gr = g(x, y);
+      in.cloud.points.emplace_back(x, y, z(x, y));
+      in.cloud.normals.push_back(Eigen::Vector3d(-gr.x(), -gr.y(), 1).normalized());
+      in.map.uv.emplace_back(x, y);
+    }
+  in.map.domain = "rectangle";
+  in.map.width = W;
+  in.map.height = H;
+  in.nb = compute_knn(in.cloud.points, 12);
+  return in;
+}
+
+// The same over the disk of radius R (grid inside, plus a ring of points on the rim); uv = xy.
+template <class Z, class G>
+Input disk_patch(double R, double d, Z z, G g) {
+  Input in;
+  auto add = [&](double x, double y) {
+    const Eigen::Vector2d gr = g(x, y);
+    in.cloud.points.emplace_back(x, y, z(x, y));
+    in.cloud.normals.push_back(Eigen::Vector3d(-gr.x(), -gr.y(), 1).normalized());
+    in.map.uv.emplace_back(x, y);
+  };
+  const int n = static_cast<int>(std::ceil(R / d));
+  for (int i = -n; i <= n; ++i)
+    for (int j = -n; j <= n; ++j)
+      if (std::hypot(i * d, j * d) < R - 0.5 * d) add(i * d, j * d);
+  const int m = static_cast<int>(std::ceil(2 * M_PI * R / d));
+  for (int k = 0; k < m; ++k) add(R * std::cos(2 * M_PI * k / m), R * std::sin(2 * M_PI * k / m));
+  in.map.domain = "disk";
+  in.map.radius = R;
+  in.nb = compute_knn(in.cloud.points, 12);
+  return in;
+}
+
+Input flat(double W = 30, double H = 20) {
+  return rect_patch(W, H, 0.5, [](double, double) { return 0.0; },
+                    [](double, double) { return Eigen::Vector2d(0, 0); });
+}
+
+std::string error_of(const Input& in, const IsoparametricOptions& o) {
+  try {
+    plan_isoparametric(in.cloud, in.nb, in.map, o);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+}  // namespace
+
+TEST(Isoparametric, FlatRectanglePassesAreStraightEvenAndCoverIt) {
+  const Input in = flat();
+  IsoparametricOptions o;
+  o.tool_radius = 3;
+  o.scallop_height = 0.01;
+  o.chord_error = 0.005;
+  o.max_segment = 5;
+  const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  const Toolpath& tp = res.toolpath;
+  ASSERT_GE(tp.passes.size(), 3u);
+  EXPECT_EQ(tp.pattern, "zigzag");
+  EXPECT_EQ(tp.tool_radius, 3);
+  std::vector<double> xs;
+  for (std::size_t i = 0; i < tp.passes.size(); ++i) {
+    const ToolpathPass& p = tp.passes[i];
+    ASSERT_EQ(p.contact.size(), 5u);  // a straight pass: only max_segment limits the step
+    for (std::size_t k = 0; k < p.contact.size(); ++k) {
+      EXPECT_NEAR(p.contact[k].x(), p.contact[0].x(), 1e-9);  // straight, at u = const
+      EXPECT_NEAR(p.contact[k].z(), 0, 1e-9);
+      EXPECT_NEAR((p.normal[k] - Eigen::Vector3d::UnitZ()).norm(), 0, 1e-9);
+      if (k) {
+        EXPECT_NEAR((p.contact[k] - p.contact[k - 1]).norm(), 5, 1e-9);
+      }
+    }
+    // covers v = 0 .. 20, in alternate directions
+    const double y0 = i % 2 ? 20 : 0;
+    EXPECT_NEAR(p.contact.front().y(), y0, 1e-9);
+    EXPECT_NEAR(p.contact.back().y(), 20 - y0, 1e-9);
+    xs.push_back(p.contact[0].x());
+  }
+  EXPECT_NEAR(xs.front(), 0, 1e-9);
+  EXPECT_NEAR(xs.back(), 30, 1e-9);
+  // Evenly spaced (the last step takes what is left), at the exact cusp spacing for h.
+  const double w_exact = 2 * std::sqrt(2 * 3 * 0.01 - 0.01 * 0.01);
+  const double w = xs[1] - xs[0];
+  for (std::size_t i = 1; i + 1 < xs.size(); ++i) EXPECT_NEAR(xs[i] - xs[i - 1], w, 1e-6);
+  EXPECT_LE(xs.back() - xs[xs.size() - 2], w + 1e-9);
+  EXPECT_LE(w, w_exact);
+  EXPECT_GE(w, 0.99 * w_exact);
+  const auto& r = res.report;
+  EXPECT_EQ(r["passes"], tp.passes.size());
+  EXPECT_LE(r["predicted"]["scallop_max"].get<double>(), 0.01);
+  EXPECT_GE(r["predicted"]["scallop_max"].get<double>(), 0.98 * 0.01);
+  EXPECT_EQ(r["side_formula"]["formula4_points"], 0);
+  EXPECT_GT(r["side_formula"]["formula3_points"].get<int>(), 0);
+  EXPECT_EQ(r["concave_regions"]["count"], 0);
+  EXPECT_NEAR(r["side_interval"]["nominal_plane"].get<double>(), std::sqrt(8 * 3 * 0.01), 1e-12);
+}
+
+TEST(Isoparametric, ForwardStepOnACylinderKeepsTheChordDeviation) {
+  // Convex cylinder of radius 20 along x; passes at x = const run round it.
+  const double Rc = 20, r = 3, e = 0.002;
+  const Input in = rect_patch(
+      4, 10, 0.2, [&](double, double y) { return std::sqrt(Rc * Rc - (y - 5) * (y - 5)); },
+      [&](double, double y) {
+        return Eigen::Vector2d(0, -(y - 5) / std::sqrt(Rc * Rc - (y - 5) * (y - 5)));
+      });
+  IsoparametricOptions o;
+  o.tool_radius = r;
+  o.scallop_height = 0.01;
+  o.chord_error = e;
+  const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  // Ball centres run on a circle of radius Rc + r; the sagitta of each centre chord is the
+  // chord deviation. All within e, and the steps not needlessly short.
+  double worst = 0;
+  for (const ToolpathPass& p : res.toolpath.passes)
+    for (std::size_t k = 1; k < p.contact.size(); ++k) {
+      const double L = (res.toolpath.centre(p.contact[k], p.normal[k]) -
+                        res.toolpath.centre(p.contact[k - 1], p.normal[k - 1])).norm();
+      const double Rcen = Rc + r;
+      worst = std::max(worst, Rcen - std::sqrt(Rcen * Rcen - L * L / 4));
+    }
+  EXPECT_LE(worst, e * 1.001);
+  EXPECT_GE(worst, 0.9 * e);
+  // Formula (2) on the contact circle, mapped to the centre circle, is where the steps start.
+  const double lf_contact = std::sqrt(8 * e * Rc - 4 * e * e);
+  EXPECT_LT(res.report["forward_interval"]["max"].get<double>(), 1.05 * lf_contact);
+  EXPECT_LE(res.report["predicted"]["chord_overcut_max"].get<double>(), e);
+}
+
+TEST(Isoparametric, ContourOnADomeIsConcentricCirclesToTheCentre) {
+  const double rho = 50, R = 12, r = 3, h = 0.05;
+  const Input in = disk_patch(
+      R, 0.3, [&](double x, double y) { return std::sqrt(rho * rho - x * x - y * y); },
+      [&](double x, double y) {
+        const double z = std::sqrt(rho * rho - x * x - y * y);
+        return Eigen::Vector2d(-x / z, -y / z);
+      });
+  IsoparametricOptions o;
+  o.pattern = "contour";
+  o.tool_radius = r;
+  o.scallop_height = h;
+  o.chord_error = 0.01;
+  const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  const auto& passes = res.toolpath.passes;
+  ASSERT_GE(passes.size(), 5u);
+  double prev = R + 1;
+  for (std::size_t i = 0; i + 1 < passes.size(); ++i) {
+    const ToolpathPass& p = passes[i];
+    const double rad = p.uv[0].norm();
+    for (const Eigen::Vector2d& q : p.uv) EXPECT_NEAR(q.norm(), rad, 1e-9);
+    EXPECT_LT(rad, prev);
+    prev = rad;
+    EXPECT_NEAR((p.contact.front() - p.contact.back()).norm(), 0, 1e-9);  // closed
+    EXPECT_GE(p.contact.size(), 17u);
+  }
+  EXPECT_NEAR(passes[0].uv[0].norm(), R, 1e-9);
+  ASSERT_EQ(passes.back().uv.size(), 1u);  // the centre
+  EXPECT_NEAR(passes.back().uv[0].norm(), 0, 1e-12);
+  // Side interval on a convex sphere: sqrt(8 h r rho / (rho + r)), never more.
+  const double ls = std::sqrt(8 * h * r * rho / (rho + r));
+  const auto& rep = res.report;
+  EXPECT_LE(rep["side_interval"]["max"].get<double>(), 1.01 * ls);
+  EXPECT_GE(rep["side_interval"]["max"].get<double>(), 0.95 * ls);
+  EXPECT_LE(rep["predicted"]["scallop_max"].get<double>(), h);
+  EXPECT_GE(rep["predicted"]["scallop_max"].get<double>(), 0.97 * h);
+}
+
+TEST(Isoparametric, ReportsConcaveRegionsTighterThanTheTool) {
+  // A trough z = (y - 3)^2 / 4: curvature radius 2 at its bottom, below r = 3 for |y - 3| < 1.11.
+  const Input in = rect_patch(
+      4, 6, 0.15, [](double, double y) { return (y - 3) * (y - 3) / 4; },
+      [](double, double y) { return Eigen::Vector2d(0, (y - 3) / 2); });
+  IsoparametricOptions o;
+  o.tool_radius = 3;
+  o.scallop_height = 0.01;
+  o.chord_error = 0.005;
+  const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  const auto& cr = res.report["concave_regions"];
+  ASSERT_EQ(cr["count"], 1);
+  const auto& g = cr["regions"][0];
+  EXPECT_NEAR(g["centre"][0].get<double>(), 2, 0.5);
+  EXPECT_NEAR(g["centre"][1].get<double>(), 3, 0.3);
+  EXPECT_NEAR(g["min_radius"].get<double>(), 2, 0.1);
+  EXPECT_GT(g["bbox_min"][1].get<double>(), 3 - 1.2);
+  EXPECT_LT(g["bbox_max"][1].get<double>(), 3 + 1.2);
+  bool warned = false;
+  for (const auto& w : res.report["warnings"])
+    warned |= w.get<std::string>().find("concave with a radius below the tool radius") != std::string::npos;
+  EXPECT_TRUE(warned);
+}
+
+TEST(Isoparametric, PatternMustMatchTheMapDomain) {
+  const Input disk = disk_patch(5, 0.5, [](double, double) { return 0.0; },
+                                [](double, double) { return Eigen::Vector2d(0, 0); });
+  IsoparametricOptions o;
+  o.pattern = "zigzag";
+  EXPECT_EQ(error_of(disk, o),
+            "pattern 'zigzag' needs a UV map on a rectangle; this map's domain is 'disk' (use "
+            "pattern 'contour', or map the boundary to a rectangle)");
+  o.pattern = "contour";
+  EXPECT_EQ(error_of(flat(), o),
+            "pattern 'contour' needs a UV map on a disk; this map's domain is 'rectangle' (use "
+            "pattern 'zigzag', or map the boundary to a disk)");
+  o.pattern = "spiral";
+  EXPECT_EQ(error_of(flat(), o), "unknown pattern 'spiral' (zigzag or contour)");
+}
+
+TEST(Isoparametric, BadInput) {
+  IsoparametricOptions o;
+  Input in = flat(4, 3);
+  o.scallop_height = 3;
+  EXPECT_EQ(error_of(in, o), "scallop_height (3 mm) must be smaller than tool_radius (3 mm)");
+  o = IsoparametricOptions();
+  o.chord_error = 0;
+  EXPECT_EQ(error_of(in, o), "chord_error must be positive (got 0)");
+  o = IsoparametricOptions();
+  in.map.uv.pop_back();
+  EXPECT_EQ(error_of(in, o), "the UV map has 62 points; the cloud has 63");
+  in = flat(4, 3);
+  in.cloud.normals.clear();
+  EXPECT_EQ(error_of(in, o), "the cloud has no normals; estimate them first (cloud.normals)");
+  Input empty;
+  empty.map.domain = "rectangle";
+  EXPECT_EQ(error_of(empty, o), "the cloud is empty");
+}
+
+TEST(Isoparametric, NodeRunsAndReportsErrors) {
+  const NodeDecl d = make_isoparametric_node();
+  EXPECT_EQ(d.type, "path.isoparametric");
+  ASSERT_NE(d.find_input("map"), nullptr);
+  EXPECT_EQ(d.find_input("map")->type, "UVMap");
+  EXPECT_EQ(d.find_output("toolpath")->type, "Toolpath");
+  EXPECT_EQ(d.find_output("report")->type, "Report");
+  nlohmann::json params = {{"pattern", "zigzag"},      {"tool_radius", 3.0},
+                           {"scallop_height", 0.01},   {"chord_error", 0.005},
+                           {"safety_factor", 1.0},     {"conformal_tolerance", 5.0},
+                           {"max_segment", 5.0},       {"interpolation_k", 20}};
+  auto in = std::make_shared<Input>(flat(6, 4));
+  std::map<std::string, ValuePtr> inputs = {
+      {"cloud", std::make_shared<PointCloud>(in->cloud)},
+      {"neighbors", std::make_shared<Neighborhoods>(in->nb)},
+      {"map", std::make_shared<UVMap>(in->map)}};
+  NodeContext ctx(d, "path", "part", params, inputs, nullptr);
+  d.run(ctx);
+  auto out = ctx.take_outputs();
+  auto tp = std::dynamic_pointer_cast<const Toolpath>(out.at("toolpath"));
+  auto rep = std::dynamic_pointer_cast<const Report>(out.at("report"));
+  ASSERT_TRUE(tp && rep);
+  EXPECT_EQ(rep->data["passes"], tp->passes.size());
+  EXPECT_NEAR(tp->passes.back().contact[0].x(), 6, 1e-9);
+
+  auto disk = std::make_shared<Input>(disk_patch(3, 0.5, [](double, double) { return 0.0; },
+                                                 [](double, double) { return Eigen::Vector2d(0, 0); }));
+  inputs["map"] = std::make_shared<UVMap>(disk->map);
+  inputs["cloud"] = std::make_shared<PointCloud>(disk->cloud);
+  inputs["neighbors"] = std::make_shared<Neighborhoods>(disk->nb);
+  NodeContext bad(d, "path", "part", params, inputs, nullptr);
+  try {
+    d.run(bad);
+    FAIL() << "no error";
+  } catch (const NodeError& e) {
+    EXPECT_STREQ(e.what(),
+                 "pattern 'zigzag' needs a UV map on a rectangle; this map's domain is 'disk' "
+                 "(use pattern 'contour', or map the boundary to a rectangle)");
+  }
+}

@@ -1,0 +1,96 @@
+#include "nodes/post/link.h"
+
+#include <gtest/gtest.h>
+
+namespace scallop {
+namespace {
+
+// Zig-zag on the plane z = 0: passes along x at y = j s, alternating direction.
+Toolpath zigzag(int passes, double s, double length = 10) {
+  Toolpath t;
+  t.tool_radius = 2;
+  t.chord_error = 0.002;
+  for (int j = 0; j < passes; ++j) {
+    ToolpathPass p;
+    for (int i = 0; i <= 10; ++i) {
+      double x = (j % 2 ? 10 - i : i) * length / 10;
+      p.contact.emplace_back(x, j * s, 0);
+      p.normal.emplace_back(0, 0, 1);
+    }
+    t.passes.push_back(p);
+  }
+  return t;
+}
+
+std::vector<Eigen::Vector3d> flat_cloud() {
+  std::vector<Eigen::Vector3d> c;
+  for (double x = -2; x <= 12; x += 0.25)
+    for (double y = -2; y <= 6; y += 0.25) c.emplace_back(x, y, 0);
+  return c;
+}
+
+int count(const LinkedPath& l, MoveKind k) {
+  return static_cast<int>(std::count_if(l.moves.begin(), l.moves.end(), [&](const Move& m) { return m.kind == k; }));
+}
+
+TEST(Link, ShortSafeLinksAreFeedMoves) {
+  auto l = link_passes(zigzag(4, 1.0), flat_cloud(), {});
+  EXPECT_DOUBLE_EQ(l.clearance_z, 5.0);  // highest surface point 0 + safety 5
+  // Rapid to clearance, plunge to lead height; then all passes fed; lift and rapid at the end.
+  EXPECT_EQ(count(l, MoveKind::Rapid), 2);
+  EXPECT_EQ(count(l, MoveKind::Plunge), 1);
+  ASSERT_GE(l.moves.size(), 4u);
+  EXPECT_EQ(l.moves[0].kind, MoveKind::Rapid);
+  EXPECT_DOUBLE_EQ(l.moves[0].tip.z(), 5.0);
+  EXPECT_EQ(l.moves[1].kind, MoveKind::Plunge);
+  EXPECT_DOUBLE_EQ(l.moves[1].tip.z(), 1.0);  // lead height above the first tip
+  EXPECT_EQ(l.moves[2].kind, MoveKind::Feed);
+  EXPECT_DOUBLE_EQ(l.moves[2].tip.z(), 0.0);
+  EXPECT_EQ(l.moves.back().kind, MoveKind::Rapid);
+  // 3 + 4 × 11 points + lift + rapid
+  EXPECT_EQ(l.moves.size(), 3u + 4 * 10 + 3 + 2);
+}
+
+TEST(Link, LinksOverABumpOrTooLongRetract) {
+  auto cloud = flat_cloud();
+  cloud.emplace_back(10.0, 0.5, 0.5);  // a bump between the end of pass 0 and the start of pass 1
+  auto l = link_passes(zigzag(2, 1.0), cloud, {});
+  EXPECT_DOUBLE_EQ(l.clearance_z, 5.5);
+  EXPECT_EQ(count(l, MoveKind::Rapid), 4);  // down, up, over, up
+  EXPECT_EQ(count(l, MoveKind::Plunge), 2);
+  for (const auto& m : l.moves)
+    if (m.kind == MoveKind::Rapid) EXPECT_DOUBLE_EQ(m.tip.z(), 5.5);
+
+  LinkOptions o;
+  o.max_link = 0.5;  // shorter than the stepover
+  auto l2 = link_passes(zigzag(3, 1.0), flat_cloud(), o);
+  EXPECT_EQ(count(l2, MoveKind::Plunge), 3);
+}
+
+TEST(Link, WithoutACloudThePassesStandForTheSurface) {
+  auto l = link_passes(zigzag(3, 1.0), {}, {});
+  EXPECT_EQ(count(l, MoveKind::Plunge), 1);
+  EXPECT_DOUBLE_EQ(largest_stepover(zigzag(3, 1.5)), 1.5);
+}
+
+TEST(Link, BadInputIsRefused) {
+  Toolpath t = zigzag(2, 1.0);
+  t.passes[1].normal.pop_back();
+  try {
+    link_passes(t, {}, {});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "a pass has 11 points but 10 normals");
+  }
+  Toolpath empty;
+  empty.tool_radius = 1;
+  try {
+    link_passes(empty, {}, {});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "the tool path has no points");
+  }
+}
+
+}  // namespace
+}  // namespace scallop

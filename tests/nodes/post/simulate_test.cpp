@@ -1,0 +1,161 @@
+#include "nodes/post/simulate.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace scallop {
+namespace {
+
+// Tilted plane z = 5 + 0.2 x + 0.25 y (n_z = 1/1.05 exactly) over [0, 16] × [0, 12].
+constexpr double kA = 0.2, kB = 0.25, kC = 5.0;
+double plane_z(double x, double y) { return kC + kA * x + kB * y; }
+const Eigen::Vector3d kNormal = Eigen::Vector3d(-kA, -kB, 1).normalized();
+
+std::vector<Eigen::Vector3d> plane_cloud() {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> jitter(-0.08, 0.08);
+  std::vector<Eigen::Vector3d> P;
+  for (double x = 0; x <= 16 + 1e-9; x += 0.25)
+    for (double y = 0; y <= 12 + 1e-9; y += 0.25) {
+      double xx = std::clamp(x + jitter(rng), 0.0, 16.0), yy = std::clamp(y + jitter(rng), 0.0, 12.0);
+      P.emplace_back(xx, yy, plane_z(xx, yy));
+    }
+  return P;
+}
+
+// Raster of passes along x at contact y = y0 + j s (j < passes), extended 1 mm past the patch.
+Toolpath raster(double r, double s, double dz = 0, int skip = -1) {
+  Toolpath t;
+  t.tool_radius = r;
+  t.scallop_height = 0.02;
+  t.pattern = "zigzag";
+  int j = 0;
+  for (double y = -1; y <= 13 + 1e-9; y += s, ++j) {
+    if (j == skip) continue;
+    ToolpathPass p;
+    for (double x = -1; x <= 17 + 1e-9; x += 0.5) {
+      p.contact.emplace_back(x, y, plane_z(x, y) + dz);
+      p.normal.push_back(kNormal);
+    }
+    t.passes.push_back(p);
+  }
+  return t;
+}
+
+// Distance between neighbouring centre lines, measured perpendicular to them.
+double line_gap(double s) {
+  Eigen::Vector3d step(0, s, kB * s), dir = Eigen::Vector3d(1, 0, kA).normalized();
+  return (step - step.dot(dir) * dir).norm();
+}
+
+SimulationResult run(const Toolpath& t, double h) {
+  static const auto cloud = plane_cloud();
+  HeightField surf(cloud);
+  SimulateOptions o;
+  o.tool_radius = t.tool_radius;
+  o.scallop = h;
+  o.spacing = 0.08;
+  return simulate_cut(surf, feed_centres(t), 0.0, o);
+}
+
+TEST(Simulate, HeightFieldReproducesAPlane) {
+  HeightField surf(plane_cloud());
+  double z;
+  Eigen::Vector3d n;
+  ASSERT_TRUE(surf.eval(7.3, 4.1, z, n));
+  EXPECT_NEAR(z, plane_z(7.3, 4.1), 1e-9);
+  EXPECT_NEAR((n - kNormal).norm(), 0, 1e-9);
+  EXPECT_FALSE(surf.eval(20, 4, z, n));    // off the patch
+  EXPECT_FALSE(surf.eval(16.6, 4, z, n));  // just past the edge
+  EXPECT_NEAR(surf.spacing(), 0.25, 0.06);
+}
+
+TEST(Simulate, RasterOnAPlaneLeavesTheClosedFormScallop) {
+  const double r = 3, s = 0.7;
+  auto res = run(raster(r, s), 0.02);
+  const auto& j = res.report;
+  double w = line_gap(s);
+  double expect = r - std::sqrt(r * r - w * w / 4);
+  EXPECT_NEAR(j["scallop_max_interior"].get<double>(), expect, 0.01 * expect);
+  EXPECT_LT(j["gouge_max"].get<double>(), 1e-9);
+  EXPECT_EQ(j["uncut_fraction"].get<double>(), 0.0);
+  EXPECT_NEAR(j["surface_area"].get<double>(), 16 * 12 * 1.05, 0.03 * 16 * 12 * 1.05);
+  EXPECT_GT(j["samples"].get<int>(), 25000);
+  EXPECT_EQ(j["pass"].get<bool>(), expect <= 1.01 * 0.02);
+  EXPECT_EQ(j["worst"].size(), 10u);
+  EXPECT_EQ(j["worst"][0]["kind"], "scallop");
+}
+
+TEST(Simulate, LoweredRasterGougesByTheNormalComponent) {
+  const double r = 3, s = 0.7;
+  auto res = run(raster(r, s, -0.1), 0.02);
+  double expect = 0.1 / 1.05;  // 0.1 in z is 0.1·n_z along the normal
+  EXPECT_NEAR(res.report["gouge_max"].get<double>(), expect, 0.01 * expect);
+  EXPECT_FALSE(res.report["pass"].get<bool>());
+  ASSERT_FALSE(res.report["fail_reasons"].empty());
+  EXPECT_EQ(res.report["worst"][0]["kind"], "gouge");
+  bool found = false;
+  for (const auto& f : res.report["fail_reasons"])
+    found |= f.get<std::string>().rfind("gouge max 0.09", 0) == 0;
+  EXPECT_TRUE(found) << res.report["fail_reasons"].dump();
+}
+
+TEST(Simulate, RemovedPassDoublesTheGap) {
+  const double r = 3, s = 0.7;
+  auto res = run(raster(r, s, 0, 10), 0.02);  // pass 10 runs at y = 6
+  double w = line_gap(s);
+  double expect = r - std::sqrt(r * r - w * w);
+  EXPECT_NEAR(res.report["scallop_max_interior"].get<double>(), expect, 0.01 * expect);
+  EXPECT_FALSE(res.report["pass"].get<bool>());
+}
+
+TEST(Simulate, WideRasterWithARemovedPassLeavesUncutArea) {
+  const double r = 1, s = 1.0;  // the gap left by pass 6 is about 2 r: its middle is not reached
+  auto res = run(raster(r, s, 0, 6), 0.02);
+  double u = res.report["uncut_fraction"].get<double>();
+  EXPECT_GT(u, 0.0);
+  EXPECT_LT(u, 0.2);
+  EXPECT_FALSE(res.report["pass"].get<bool>());
+  bool found = false;
+  for (const auto& f : res.report["fail_reasons"]) found |= f.get<std::string>().rfind("uncut fraction", 0) == 0;
+  EXPECT_TRUE(found);
+}
+
+TEST(Simulate, LinkedPathCentresAndRapids) {
+  LinkedPath p;
+  p.tool_radius = 2;
+  p.moves = {{MoveKind::Rapid, {0, 0, 10}}, {MoveKind::Plunge, {0, 0, 1}}, {MoveKind::Feed, {5, 0, 1}},
+             {MoveKind::Rapid, {5, 0, 10}}, {MoveKind::Rapid, {5, 4, 10}}};
+  double rapid = 0;
+  auto segs = feed_centres(p, rapid);
+  ASSERT_EQ(segs.size(), 2u);
+  EXPECT_NEAR(rapid, 13, 1e-12);
+  EXPECT_NEAR((segs[1].a - Eigen::Vector3d(0, 0, 3)).norm(), 0, 1e-12);
+}
+
+TEST(Simulate, BadInputIsRefused) {
+  auto cloud = plane_cloud();
+  HeightField surf(cloud);
+  SimulateOptions o;
+  o.tool_radius = 3;
+  o.scallop = 0.02;
+  try {
+    simulate_cut(surf, {}, 0, o);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "the path has no feed moves");
+  }
+  o.tool_radius = 0;
+  EXPECT_THROW(simulate_cut(surf, feed_centres(raster(3, 0.7)), 0, o), std::invalid_argument);
+  try {
+    HeightField tiny(std::vector<Eigen::Vector3d>(3, Eigen::Vector3d::Zero()));
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "the cloud has 3 points; the surface model needs at least 10");
+  }
+}
+
+}  // namespace
+}  // namespace scallop
