@@ -22,6 +22,7 @@ NodeDecl make_boundary_map_node();
 NodeDecl make_laplacian_node();
 NodeDecl make_harmonic_node();
 NodeDecl make_map_check_node();
+NodeDecl make_isoparametric_node();
 NodeDecl make_link_node();
 NodeDecl make_gcode_node();
 NodeDecl make_simulate_node();
@@ -47,6 +48,7 @@ void register_builtins(Registry& r) {
                     make_clean_node, make_knn_node, make_normals_node, make_boundary_node,
                     make_boundary_order_node, make_smooth_node,  // cloud
                     make_boundary_map_node, make_laplacian_node, make_harmonic_node, make_map_check_node,  // param
+                    make_isoparametric_node,  // path
                     make_link_node, make_gcode_node, make_simulate_node, make_render_node})  // post
     r.add(make());
 }
