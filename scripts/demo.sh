@@ -4,4 +4,5 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 bash scripts/build.sh
-./build/scallop run graphs/prepare-cloud.json -o out/example --no-cache
+./build/scallop run graphs/isoparametric-zigzag.json -o out/example --no-cache
+echo "outputs in out/example/: gcode.ngc (G-code), report.json (certificate), preview.png, scallop_map.png"

@@ -16,26 +16,25 @@ BoundaryDomain parse_boundary_domain(const std::string& name) {
 
 namespace {
 
-// cum[i] = chord length from loop[0] to loop[i]; cum[n] = total length L.
-std::vector<double> cumulative_lengths(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& loop) {
-  const std::size_t n = loop.size();
+// cum[i] = chord length from Q[0] to Q[i] along the closed polyline Q; cum[n] = total length L.
+std::vector<double> cumulative_lengths(const std::vector<Eigen::Vector3d>& Q) {
+  const std::size_t n = Q.size();
   std::vector<double> cum(n + 1, 0.0);
-  for (std::size_t i = 0; i < n; ++i) cum[i + 1] = cum[i] + (P[loop[(i + 1) % n]] - P[loop[i]]).norm();
+  for (std::size_t i = 0; i < n; ++i) cum[i + 1] = cum[i] + (Q[(i + 1) % n] - Q[i]).norm();
   return cum;
 }
 
-// Point at arc length s (any real, taken modulo L) along the closed polyline.
-Eigen::Vector3d point_at(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& loop,
-                         const std::vector<double>& cum, double s) {
-  const std::size_t n = loop.size();
+// Point at arc length s (any real, taken modulo L) along the closed polyline Q.
+Eigen::Vector3d point_at(const std::vector<Eigen::Vector3d>& Q, const std::vector<double>& cum, double s) {
+  const std::size_t n = Q.size();
   const double L = cum[n];
   s = std::fmod(s, L);
   if (s < 0) s += L;
   std::size_t i = static_cast<std::size_t>(std::upper_bound(cum.begin(), cum.end(), s) - cum.begin());
-  i = std::clamp<std::size_t>(i, 1, n) - 1;  // segment i: loop[i] -> loop[i+1]
+  i = std::clamp<std::size_t>(i, 1, n) - 1;  // segment i: Q[i] -> Q[i+1]
   double seg = cum[i + 1] - cum[i];
   double f = seg > 0 ? (s - cum[i]) / seg : 0.0;
-  return (1 - f) * P[loop[i]] + f * P[loop[(i + 1) % n]];
+  return (1 - f) * Q[i] + f * Q[(i + 1) % n];
 }
 
 void check_loop(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& loop) {

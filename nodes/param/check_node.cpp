@@ -36,6 +36,8 @@ NodeDecl make_map_check_node() {
     r.data = std::move(c.report);
     r.data["domain"] = map->domain;
     r.data["residual"] = map->residual;
+    if (map->domain == "disk") r.data["radius"] = map->radius;
+    if (map->domain == "rectangle") r.data["size"] = {map->width, map->height};
     ctx.set("report", std::move(r));
     ctx.set_output("map", map);
   };

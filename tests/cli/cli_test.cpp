@@ -125,3 +125,18 @@ TEST(Cli, NodesReferenceAndDot) {
 
 }  // namespace
 }  // namespace scallop
+
+namespace scallop {
+namespace {
+TEST(Readme, NodeReferenceMatchesTheDeclarations) {
+  std::string readme = test::read_file(std::string(SCALLOP_SOURCE_DIR) + "/README.md");
+  std::string generated;
+  ASSERT_EQ(test::run_command(kScallop + " nodes --markdown 2>/dev/null", &generated), 0);
+  auto begin = readme.find("<!-- nodes:begin -->\n"), end = readme.find("<!-- nodes:end -->");
+  ASSERT_NE(begin, std::string::npos);
+  ASSERT_NE(end, std::string::npos);
+  std::string in_readme = readme.substr(begin + 21, end - begin - 21);
+  EXPECT_EQ(in_readme, generated + "\n") << "run scripts/update-readme-nodes.sh";
+}
+}  // namespace
+}  // namespace scallop
