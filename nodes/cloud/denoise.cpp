@@ -177,7 +177,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
         }
         // Gaussian width h = R / 2, R the neighbourhood radius: the weight at R is e^-4, so the
         // fit is local but still averages over most of the neighbourhood.
-        const double h2 = (r2 > 0 ? r2 : far2) / 4;
+        static const double hdiv = getenv("HDIV") ? atof(getenv("HDIV")) : 4.0; const double h2 = (r2 > 0 ? r2 : far2) / hdiv;
         const Vector3d up = N.empty() ? Vector3d::UnitZ() : N[i];
         const Projection p =
             project(s.pts.data(), s.pd2.data(), static_cast<int>(s.pts.size()), h2, up);

@@ -1,10 +1,14 @@
 #include "nodes/param/boundary_map.h"
 
 #include <algorithm>
+#include <limits>
+#include <memory>
 #include <cmath>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
+
+#include "nodes/cloud/knn.h"
 
 namespace scallop {
 
@@ -49,6 +53,96 @@ void check_loop(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& l
 
 }  // namespace
 
+std::vector<Eigen::Vector3d> smoothed_loop(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& loop,
+                                           int half_window) {
+  check_loop(P, loop);
+  const int n = static_cast<int>(loop.size());
+  const int w = std::clamp(half_window, 0, (n - 1) / 2);
+  std::vector<Eigen::Vector3d> Q(n);
+  if (w == 0) {
+    for (int i = 0; i < n; ++i) Q[i] = P[loop[i]];
+    return Q;
+  }
+  // Running sum over the closed loop.
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (int j = -w; j <= w; ++j) sum += P[loop[(j + n) % n]];
+  for (int i = 0; i < n; ++i) {
+    Q[i] = sum / (2 * w + 1);
+    sum += P[loop[(i + w + 1) % n]] - P[loop[(i - w + n) % n]];
+  }
+  return Q;
+}
+
+std::vector<std::pair<int, Eigen::Vector2d>> outer_band_values(const std::vector<Eigen::Vector3d>& P,
+                                                               const std::vector<std::uint8_t>& is_boundary,
+                                                               const std::vector<std::vector<int>>& loops,
+                                                               const UVMap& map) {
+  const auto& outer = map.outer_loop;
+  check_loop(P, outer);
+  if (is_boundary.size() != P.size())
+    throw std::invalid_argument("the boundary flags are for " + std::to_string(is_boundary.size()) +
+                                " points but the cloud has " + std::to_string(P.size()));
+  if (map.boundary_uv.size() != outer.size())
+    throw std::invalid_argument("the boundary map has " + std::to_string(outer.size()) + " loop points and " +
+                                std::to_string(map.boundary_uv.size()) + " boundary positions");
+  const int n = static_cast<int>(outer.size());
+  std::vector<char> on_loop(P.size(), 0);
+  for (const auto& l : loops)
+    for (int i : l)
+      if (i >= 0 && static_cast<std::size_t>(i) < P.size()) on_loop[i] = 1;
+  for (int i : outer) on_loop[i] = 1;
+  std::vector<Eigen::Vector3d> holes;
+  for (std::size_t l = 1; l < loops.size(); ++l)
+    if (loops[l] != outer)
+      for (int i : loops[l])
+        if (i >= 0 && static_cast<std::size_t>(i) < P.size()) holes.push_back(P[i]);
+
+  const std::vector<Eigen::Vector3d> Q = smoothed_loop(P, outer);
+  // Local sampling step: the raw loop's segment lengths averaged like the positions.
+  std::vector<double> step(n);
+  {
+    const int w = std::clamp(kLoopSmoothing, 0, (n - 1) / 2);
+    for (int i = 0; i < n; ++i) {
+      double s = 0;
+      for (int j = -w; j <= w; ++j) {
+        int a = ((i + j) % n + n) % n;
+        s += (P[outer[(a + 1) % n]] - P[outer[a]]).norm();
+      }
+      step[i] = s / (2 * w + 1);
+    }
+  }
+  KnnIndex on_outer(Q);
+  std::unique_ptr<KnnIndex> on_holes = holes.empty() ? nullptr : std::make_unique<KnnIndex>(holes);
+  std::vector<std::pair<int, Eigen::Vector2d>> out;
+  std::vector<int> idx;
+  std::vector<double> sq;
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    if (!is_boundary[i] || on_loop[i]) continue;
+    // Nearest point on the smoothed loop: the segments next to the few nearest vertices.
+    on_outer.query(P[i], std::min(4, n), idx, sq);
+    double best = std::numeric_limits<double>::infinity(), best_t = 0;
+    int best_seg = -1;
+    for (int v : idx)
+      for (int seg : {(v + n - 1) % n, v}) {
+        const Eigen::Vector3d& a = Q[seg];
+        const Eigen::Vector3d& b = Q[(seg + 1) % n];
+        Eigen::Vector3d ab = b - a;
+        double len2 = ab.squaredNorm();
+        double t = len2 > 0 ? std::clamp((P[i] - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+        double d = (P[i] - (a + t * ab)).norm();
+        if (d < best) best = d, best_t = t, best_seg = seg;
+      }
+    if (best_seg < 0 || best > kBandWidth * step[best_seg]) continue;  // a false boundary point inside
+    if (on_holes) {
+      on_holes->query(P[i], 1, idx, sq);
+      if (!idx.empty() && std::sqrt(sq[0]) < best) continue;  // a hole's band: stays free
+    }
+    out.emplace_back(static_cast<int>(i), (1 - best_t) * map.boundary_uv[best_seg] +
+                                              best_t * map.boundary_uv[(best_seg + 1) % n]);
+  }
+  return out;
+}
+
 std::vector<int> parse_corners(const std::string& text, std::size_t loop_size) {
   std::vector<int> c;
   if (text.find_first_not_of(" \t") == std::string::npos) return c;
@@ -82,14 +176,15 @@ std::vector<int> detect_corners(const std::vector<Eigen::Vector3d>& P, const std
   check_loop(P, loop);
   const std::size_t n = loop.size();
   if (n < 4) throw std::invalid_argument("a rectangle map needs an outer loop of at least 4 points");
-  std::vector<double> cum = cumulative_lengths(P, loop);
+  const std::vector<Eigen::Vector3d> Q = smoothed_loop(P, loop);
+  std::vector<double> cum = cumulative_lengths(Q);
   const double L = cum[n];
   if (!(L > 0)) throw std::invalid_argument("the outer loop has zero length");
   const double h = L / 48, sep = L / 16;
   std::vector<double> turn(n);
   for (std::size_t i = 0; i < n; ++i) {
-    Eigen::Vector3d a = P[loop[i]] - point_at(P, loop, cum, cum[i] - h);
-    Eigen::Vector3d b = point_at(P, loop, cum, cum[i] + h) - P[loop[i]];
+    Eigen::Vector3d a = Q[i] - point_at(Q, cum, cum[i] - h);
+    Eigen::Vector3d b = point_at(Q, cum, cum[i] + h) - Q[i];
     double na = a.norm(), nb = b.norm();
     turn[i] = (na > 0 && nb > 0) ? std::acos(std::clamp(a.dot(b) / (na * nb), -1.0, 1.0)) : 0.0;
   }
@@ -131,7 +226,7 @@ UVMap map_boundary(const std::vector<Eigen::Vector3d>& P, const std::vector<int>
                    BoundaryDomain domain, std::vector<int> corners) {
   check_loop(P, outer);
   const std::size_t n = outer.size();
-  std::vector<double> cum = cumulative_lengths(P, outer);
+  std::vector<double> cum = cumulative_lengths(smoothed_loop(P, outer));
   const double L = cum[n];
   if (!(L > 0)) throw std::invalid_argument("the outer loop has zero length");
   UVMap m;

@@ -10,7 +10,7 @@ namespace scallop {
 NodeDecl make_boundary_map_node() {
   NodeDecl d;
   d.type = "param.boundary_map";
-  d.version = 1;
+  d.version = 2;
   d.description = "map the outer boundary loop by chord length to a circle or a rectangle";
   d.input("cloud", "Cloud", "the points")
       .input("loops", "Loops", "ordered boundary loops; loops[0] is mapped")

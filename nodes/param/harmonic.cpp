@@ -44,7 +44,8 @@ Eigen::MatrixXd solve_iterative(Solver& s, const Eigen::SparseMatrix<double>& A,
 }  // namespace
 
 UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, const UVMap& boundary,
-                     HarmonicSolver solver) {
+                     HarmonicSolver solver,
+                     const std::vector<std::pair<int, Eigen::Vector2d>>& fixed) {
   const Eigen::Index n = L.rows();
   if (L.cols() != n) throw std::invalid_argument("the Laplacian is not square");
   const auto& outer = boundary.outer_loop;
@@ -63,6 +64,15 @@ UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, cons
     unknown[i] = -1;
     uv[i] = boundary.boundary_uv[j];
   }
+  for (const auto& [i, q] : fixed) {
+    if (i < 0 || i >= n)
+      throw std::invalid_argument("a fixed point index " + std::to_string(i) + " is outside the Laplacian's " +
+                                  std::to_string(n) + " points");
+    if (unknown[i] < 0)
+      throw std::invalid_argument("point " + std::to_string(i) + " is fixed twice (outer loop or repeated)");
+    unknown[i] = -1;
+    uv[i] = q;
+  }
   Eigen::Index m = 0;
   for (auto& u : unknown)
     if (u >= 0) u = m++;
@@ -76,7 +86,8 @@ UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, cons
         if (it.col() != i && it.value() != 0) depends_on_me[it.col()].push_back(i);
     std::vector<char> reached(n, 0);
     std::vector<Eigen::Index> stack;
-    for (int i : outer) reached[i] = 1, stack.push_back(i);
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (unknown[i] < 0) reached[i] = 1, stack.push_back(i);
     while (!stack.empty()) {
       Eigen::Index j = stack.back();
       stack.pop_back();

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "nodes/types/param.h"
@@ -28,10 +29,14 @@ HarmonicSolver parse_harmonic_solver(const std::string& name);
 // Laplace row; points of inner loops (holes) are thereby free, natural boundaries: in the
 // meshless setting their one-sided neighbourhood row is the natural-boundary discretisation.
 // Outer-loop points keep boundary_uv exactly.
+// fixed     further Dirichlet points (point index, uv), e.g. the rest of the outer boundary band
+//           (outer_band_values); they keep their uv exactly and are not unknowns. Entries for
+//           outer-loop points are an error.
 // Throws std::invalid_argument for mismatched sizes, and std::runtime_error when the solve fails
 // (singular system: points not connected to the outer loop through neighbours) or its relative
 // residual exceeds 1e-6.
 UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, const UVMap& boundary,
-                     HarmonicSolver solver = HarmonicSolver::Direct);
+                     HarmonicSolver solver = HarmonicSolver::Direct,
+                     const std::vector<std::pair<int, Eigen::Vector2d>>& fixed = {});
 
 }  // namespace scallop

@@ -1,6 +1,7 @@
 #include <stdexcept>
 
 #include "engine/node.h"
+#include "nodes/param/boundary_map.h"
 #include "nodes/param/harmonic.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/param.h"
@@ -10,7 +11,7 @@ namespace scallop {
 NodeDecl make_harmonic_node() {
   NodeDecl d;
   d.type = "param.harmonic";
-  d.version = 1;
+  d.version = 2;
   d.description = "harmonic (conformal) map: L u = L v = 0 inside, outer loop fixed, holes free";
   d.input("laplacian", "Laplacian", "the meshless Laplacian of the cloud")
       .input("map", "UVMap", "the boundary map (param.boundary_map)")
@@ -18,7 +19,10 @@ NodeDecl make_harmonic_node() {
       .input("cloud", "Cloud", "the points")
       .output("map", "UVMap", "the map with uv of every point and the solve's relative residual")
       .param_choice("solver", "direct", {"direct", "bicgstab", "gmres"},
-                    "direct: UMFPACK sparse LU; bicgstab / gmres: Eigen iterative with incomplete LU");
+                    "direct: UMFPACK sparse LU; bicgstab / gmres: Eigen iterative with incomplete LU")
+      .param_bool("fix_band", true,
+                  "fix the outer boundary band's points off the loop at their projection on the loop "
+                  "(else they are free and can fold the map)");
   d.run = [](NodeContext& ctx) {
     auto lap = ctx.input<Laplacian>("laplacian");
     auto bmap = ctx.input<UVMap>("map");
@@ -30,7 +34,9 @@ NodeDecl make_harmonic_node() {
     if (loops->loops.empty() || loops->loops[0] != bmap->outer_loop)
       throw NodeError("the boundary map was not made from the outer loop of these loops");
     try {
-      ctx.set("map", solve_harmonic(lap->L, *bmap, parse_harmonic_solver(ctx.text("solver"))));
+      std::vector<std::pair<int, Eigen::Vector2d>> band;
+      if (ctx.flag("fix_band")) band = outer_band_values(cloud->points, loops->is_boundary, loops->loops, *bmap);
+      ctx.set("map", solve_harmonic(lap->L, *bmap, parse_harmonic_solver(ctx.text("solver")), band));
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     } catch (const std::runtime_error& e) {

@@ -1,0 +1,61 @@
+#include <stdexcept>
+
+#include "engine/node.h"
+#include "nodes/cloud/height_field.h"
+#include "nodes/types/cloud.h"
+#include "nodes/types/document.h"
+
+namespace scallop {
+
+NodeDecl make_height_field_node() {
+  NodeDecl d;
+  d.type = "cloud.height_field_check";
+  d.version = 1;
+  d.description =
+      "checks that the cloud is one open height-field patch a 3-axis machine reaches from +Z "
+      "(one part, no overlapping layers, no walls too steep) and passes it through";
+  d.input("cloud", "Cloud", "the points with normals (oriented or not)")
+      .input("neighbors", "Neighbors", "k nearest neighbours of each point (cloud.knn)")
+      .output("cloud", "Cloud", "the same cloud, unchanged, once it passed")
+      .output("report", "Report",
+              "parts, points under other points, slopes, xy extent and spacing")
+      .param_int("min_points", 100, 0, 1e9, "", "fewer points are refused")
+      .param_int("max_components", 1, 1, 1e6, "",
+                 "separate parts (components of the neighbour graph) allowed")
+      .param_float("min_component_fraction", 0.01, 0, 1, "",
+                   "parts with a smaller share of the points are specks: reported, ignored")
+      .param_float("layer_gap", 4.0, 0.5, 1000, "spacings",
+                   "two sheets closer than this (in median point spacings) are not told apart")
+      .param_float("max_layered_fraction", 0.002, 0, 1, "",
+                   "share of points under other points that is tolerated (noise)")
+      .param_float("max_slope", 85.0, 0, 90, "deg", "walls steeper than this are steep")
+      .param_float("max_steep_fraction", 0.05, 0, 1, "",
+                   "share of steep points that is tolerated");
+  d.run = [](NodeContext& ctx) {
+    auto cloud = ctx.input<PointCloud>("cloud");
+    auto nbrs = ctx.input<Neighborhoods>("neighbors");
+    HeightFieldLimits limits;
+    limits.min_points = static_cast<int>(ctx.integer("min_points"));
+    limits.max_components = static_cast<int>(ctx.integer("max_components"));
+    limits.min_component_fraction = ctx.number("min_component_fraction");
+    limits.layer_gap = ctx.number("layer_gap");
+    limits.max_layered_fraction = ctx.number("max_layered_fraction");
+    limits.max_slope_deg = ctx.number("max_slope");
+    limits.max_steep_fraction = ctx.number("max_steep_fraction");
+    HeightFieldStats stats;
+    try {
+      stats = analyze_height_field(cloud->points, cloud->normals, *nbrs, limits);
+    } catch (const std::invalid_argument& e) {
+      throw NodeError(e.what());
+    }
+    if (auto problem = height_field_problem(stats, limits); !problem.empty())
+      throw NodeError(problem);
+    Report report;
+    report.data = to_json(stats, limits);
+    ctx.set("report", std::move(report));
+    ctx.set_output("cloud", cloud);  // the very same value: downstream sees it unchanged
+  };
+  return d;
+}
+
+}  // namespace scallop
