@@ -10,55 +10,104 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <xxhash.h>
+
 #include "engine/hash.h"
 
 namespace scallop {
 namespace fs = std::filesystem;
 
 namespace {
-constexpr char kMagic[] = "SCALLOP-CACHE 1\n";
+constexpr char kMagic[] = "SCALLOP-CACHE 2\n";
 constexpr std::size_t kMagicLen = sizeof(kMagic) - 1;
 constexpr std::size_t kHashLen = 32;
 
 std::string read_all(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return {};
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
+  in.seekg(0, std::ios::end);
+  std::string bytes(static_cast<std::size_t>(std::max<std::streamoff>(0, in.tellg())), '\0');
+  in.seekg(0);
+  in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  return bytes;
 }
 
-// Writes bytes to a fresh temp file in dir and renames it to `target` (atomic on POSIX).
-void write_atomically(const std::string& dir, const std::string& target, const std::string& bytes,
-                      const std::function<void(const std::string&)>& after_half) {
-  static std::atomic<unsigned> counter{0};
-  fs::create_directories(fs::path(target).parent_path());
-  fs::create_directories(fs::path(dir) / "tmp");
-  std::string tmp = (fs::path(dir) / "tmp" /
-                     (fs::path(target).filename().string() + "." + std::to_string(::getpid()) + "." +
-                      std::to_string(counter++) + ".tmp"))
-                        .string();
-  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (fd < 0) throw std::runtime_error("cannot create cache file '" + tmp + "'");
-  auto write_span = [&](const char* p, std::size_t n) {
+// A read-only stream over bytes that already sit in memory (no copy).
+struct MemoryBuffer : std::streambuf {
+  MemoryBuffer(const char* begin, std::size_t size) {
+    char* b = const_cast<char*>(begin);
+    setg(b, b, b + size);
+  }
+  std::size_t position() const { return static_cast<std::size_t>(gptr() - eback()); }
+  void skip(std::size_t n) { setg(eback(), gptr() + n, egptr()); }
+};
+
+// Writes an entry into a fresh temp file in dir/tmp and renames it to `target` (atomic on POSIX).
+// `write_body` streams the body through `put`; a checksum of the body goes last.
+class AtomicWriter {
+ public:
+  AtomicWriter(const std::string& dir, const std::string& target) : target_(target) {
+    static std::atomic<unsigned> counter{0};
+    fs::create_directories(fs::path(target).parent_path());
+    fs::create_directories(fs::path(dir) / "tmp");
+    tmp_ = (fs::path(dir) / "tmp" /
+            (fs::path(target).filename().string() + "." + std::to_string(::getpid()) + "." +
+             std::to_string(counter++) + ".tmp"))
+               .string();
+    fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd_ < 0) throw std::runtime_error("cannot create cache file '" + tmp_ + "'");
+    state_ = XXH3_createState();
+    XXH3_128bits_reset(state_);
+  }
+  ~AtomicWriter() {
+    if (fd_ >= 0) {
+      ::close(fd_);
+      std::error_code ec;
+      fs::remove(tmp_, ec);
+    }
+    XXH3_freeState(state_);
+  }
+  void put(const char* p, std::size_t n) {
+    XXH3_128bits_update(state_, p, n);
+    raw(p, n);
+  }
+  void put(const std::string& s) { put(s.data(), s.size()); }
+  void commit() {
+    XXH128_hash_t h = XXH3_128bits_digest(state_);
+    char hex[33];
+    std::snprintf(hex, sizeof hex, "%016llx%016llx", static_cast<unsigned long long>(h.high64),
+                  static_cast<unsigned long long>(h.low64));
+    raw(hex, kHashLen);
+    ::fsync(fd_);
+    ::close(fd_);
+    fd_ = -1;
+    fs::rename(tmp_, target_);
+  }
+  const std::string& temp_path() const { return tmp_; }
+
+ private:
+  void raw(const char* p, std::size_t n) {
     while (n > 0) {
-      ssize_t w = ::write(fd, p, n);
-      if (w <= 0) {
-        ::close(fd);
-        fs::remove(tmp);
-        throw std::runtime_error("cannot write cache file '" + tmp + "'");
-      }
+      ssize_t w = ::write(fd_, p, n);
+      if (w <= 0) throw std::runtime_error("cannot write cache file '" + tmp_ + "'");
       p += w;
       n -= static_cast<std::size_t>(w);
     }
-  };
-  std::size_t half = bytes.size() / 2;
-  write_span(bytes.data(), half);
-  if (after_half) after_half(tmp);
-  write_span(bytes.data() + half, bytes.size() - half);
-  ::fsync(fd);
-  ::close(fd);
-  fs::rename(tmp, target);
+  }
+  std::string target_, tmp_;
+  int fd_ = -1;
+  XXH3_state_t* state_ = nullptr;
+};
+
+std::string encoded_u64(std::uint64_t v) { return std::string(reinterpret_cast<const char*>(&v), sizeof v); }
+std::string encoded_string(const std::string& s) { return encoded_u64(s.size()) + s; }
+
+// Checks magic and checksum of an entry held in memory; returns "" when it is sound.
+std::string verify_entry(const std::string& bytes) {
+  if (bytes.size() < kMagicLen + kHashLen || bytes.compare(0, kMagicLen, kMagic) != 0) return "bad header";
+  std::string_view body(bytes.data(), bytes.size() - kHashLen);
+  if (hash_bytes(body) != bytes.substr(bytes.size() - kHashLen)) return "checksum mismatch";
+  return "";
 }
 }  // namespace
 
@@ -72,6 +121,15 @@ std::string DiskCache::default_dir() {
 
 std::string DiskCache::entry_path(const std::string& key) const {
   return (fs::path(dir_) / key.substr(0, 2) / (key + ".entry")).string();
+}
+
+bool DiskCache::contains(const std::string& key) const {
+  std::string path = entry_path(key);
+  if (!fs::exists(path)) return false;
+  if (verify_entry(read_all(path)).empty()) return true;
+  std::error_code ec;
+  fs::remove(path, ec);
+  return false;
 }
 
 DiskCache::Lookup DiskCache::load(const std::string& key, const ValueTypes& types) const {
@@ -89,20 +147,23 @@ DiskCache::Lookup DiskCache::load(const std::string& key, const ValueTypes& type
     r.outputs.clear();
     return r;
   };
-  if (bytes.size() < kMagicLen + kHashLen || bytes.compare(0, kMagicLen, kMagic) != 0) return reject("bad header");
-  std::string body = bytes.substr(0, bytes.size() - kHashLen);
-  if (hash_bytes(body) != bytes.substr(bytes.size() - kHashLen)) return reject("checksum mismatch");
+  if (std::string bad = verify_entry(bytes); !bad.empty()) return reject(bad);
   try {
-    std::istringstream in(body.substr(kMagicLen));
+    MemoryBuffer buf(bytes.data() + kMagicLen, bytes.size() - kMagicLen - kHashLen);
+    std::istream in(&buf);
     std::uint64_t n = bin::read_u64(in);
     for (std::uint64_t i = 0; i < n; ++i) {
       std::string port = bin::read_string(in);
       std::string type = bin::read_string(in);
-      std::string payload = bin::read_string(in);
+      std::uint64_t size = bin::read_u64(in);
       const ValueType* vt = types.find(type);
       if (!vt || !vt->deserialize) return reject("unknown value type " + type);
-      std::istringstream pin(payload);
+      std::size_t at = buf.position() + kMagicLen;
+      if (size > bytes.size() - kHashLen - at) return reject("payload runs past the end");
+      MemoryBuffer pbuf(bytes.data() + at, size);
+      std::istream pin(&pbuf);
       r.outputs[port] = vt->deserialize(pin);
+      buf.skip(size);
     }
   } catch (const std::exception& e) {
     return reject(e.what());
@@ -112,33 +173,34 @@ DiskCache::Lookup DiskCache::load(const std::string& key, const ValueTypes& type
 }
 
 void DiskCache::store(const std::string& key, const std::map<std::string, ValuePtr>& outputs) const {
-  std::ostringstream s;
-  s.write(kMagic, kMagicLen);
-  bin::write_u64(s, outputs.size());
+  AtomicWriter w(dir_, entry_path(key));
+  w.put(kMagic, kMagicLen);
+  w.put(encoded_u64(outputs.size()));
+  if (after_partial_write) after_partial_write(w.temp_path());
   for (const auto& [port, value] : outputs) {
-    bin::write_string(s, port);
-    bin::write_string(s, value->type_name());
     std::ostringstream payload;
     value->serialize(payload);
-    bin::write_string(s, payload.str());
+    w.put(encoded_string(port) + encoded_string(value->type_name()) + encoded_u64(payload.tellp()));
+    w.put(payload.str());  // one copy of the payload at a time
   }
-  std::string body = s.str();
-  write_atomically(dir_, entry_path(key), body + hash_bytes(body), after_partial_write);
+  w.commit();
 }
 
 std::optional<nlohmann::json> DiskCache::last_manifest(const std::string& identity) const {
   std::string text = read_all((fs::path(dir_) / "manifests" / (hash_bytes(identity) + ".json")).string());
-  if (text.empty()) return std::nullopt;
+  if (text.size() <= kHashLen) return std::nullopt;
   try {
-    return nlohmann::json::parse(text);
+    return nlohmann::json::parse(text.substr(0, text.size() - kHashLen));
   } catch (const std::exception&) {
     return std::nullopt;
   }
 }
 
 void DiskCache::write_manifest(const std::string& identity, const nlohmann::json& manifest) const {
-  write_atomically(dir_, (fs::path(dir_) / "manifests" / (hash_bytes(identity) + ".json")).string(),
-                   manifest.dump(), nullptr);
+  std::string path = (fs::path(dir_) / "manifests" / (hash_bytes(identity) + ".json")).string();
+  AtomicWriter w(dir_, path);
+  w.put(manifest.dump());
+  w.commit();
 }
 
 }  // namespace scallop

@@ -28,6 +28,8 @@ class DiskCache {
     std::string why;  // for a miss: "no entry", "unreadable entry (...)"
   };
   Lookup load(const std::string& key, const ValueTypes& types) const;
+  // Whether a sound entry exists (checksum verified, values not decoded); drops a bad one.
+  bool contains(const std::string& key) const;
   void store(const std::string& key, const std::map<std::string, ValuePtr>& outputs) const;
 
   // What the last run of a node (by graph and node id) was keyed on, for --explain.
@@ -37,7 +39,7 @@ class DiskCache {
   std::string entry_path(const std::string& key) const;
   const std::string& dir() const { return dir_; }
 
-  // Test hook: called with the temp file after half of an entry is written (kill tests).
+  // Test hook: called with the temp file after the header of an entry is written (kill tests).
   std::function<void(const std::string& temp_path)> after_partial_write;
 
  private:

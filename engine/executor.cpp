@@ -72,91 +72,106 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
   std::map<std::string, std::string> input_keys;
   for (const auto& [name, value] : inputs) input_keys[name] = value ? value->content_key() : "";
 
+  // Keys first (a Merkle chain needs no values), then which nodes must be materialised: graph
+  // outputs, sinks (side effects), and the inputs of every node that has to run. A cached node
+  // nothing downstream needs is never even loaded.
+  std::vector<json> manifests(n);
+  for (int i : plan.order) {
+    const PlanNode& pn = plan.nodes[i];
+    json m{{"type", pn.decl->type}, {"version", pn.decl->version}, {"params", pn.params}, {"inputs", json::object()}};
+    for (const auto& [port, src] : pn.inputs)
+      m["inputs"][port] = src.node < 0 ? input_keys[src.port] : hash_bytes(keys[src.node] + "." + src.port);
+    keys[i] = hash_bytes(m.dump());
+    m["key"] = keys[i];
+    manifests[i] = std::move(m);
+  }
+  std::vector<char> have(n, 0), needed(n, 0);
+  if (options.cache)
+    for (int i = 0; i < n; ++i) have[i] = plan.nodes[i].decl->cache_on_disk && options.cache->contains(keys[i]);
+  for (auto it = plan.order.rbegin(); it != plan.order.rend(); ++it) {
+    int i = *it;
+    needed[i] = is_graph_output[i] || plan.nodes[i].dependents.empty();
+    for (int d : plan.nodes[i].dependents) needed[i] |= needed[d] && !have[d];
+  }
+
   auto run_node = [&](int i) {
     const PlanNode& pn = plan.nodes[i];
     NodeRun& rec = result.nodes[i];
     rec.id = pn.id;
     rec.type = pn.decl->type;
+    rec.key = keys[i];
     rec.start = seconds_since_start();
     emit({{"event", "node_start"}, {"node", pn.id}, {"type", rec.type}});
 
-    // Inputs and the cache key (Merkle chain over the inputs' keys).
     std::map<std::string, ValuePtr> in;
-    json manifest{{"type", rec.type}, {"version", pn.decl->version}, {"params", pn.params},
-                  {"inputs", json::object()}};
     std::string skipped_because;
-    {
+    if (needed[i] && !have[i]) {
       std::lock_guard lock(output_mutex);
       for (const auto& [port, src] : pn.inputs) {
         if (src.node < 0) {
-          auto it = inputs.find(src.port);
-          in[port] = it == inputs.end() ? nullptr : it->second;
-          manifest["inputs"][port] = input_keys[src.port];
+          auto found = inputs.find(src.port);
+          in[port] = found == inputs.end() ? nullptr : found->second;
         } else if (!good[src.node]) {
           skipped_because = "input from '" + plan.nodes[src.node].id + "' is missing";
         } else {
           in[port] = outputs[src.node][src.port];
-          manifest["inputs"][port] = hash_bytes(keys[src.node] + "." + src.port);
         }
       }
     }
-    keys[i] = hash_bytes(manifest.dump());
-    manifest["key"] = keys[i];
-    rec.key = keys[i];
 
+    std::map<std::string, ValuePtr> out;
+    std::string identity = plan.graph_path + "#" + plan.graph_name + "#" + pn.id;
+    rec.cache = options.cache ? "miss" : "off";
     if (!skipped_because.empty()) {
       rec.status = "skipped";
       rec.why = skipped_because;
-    } else {
-      std::map<std::string, ValuePtr> out;
-      bool have = false;
-      std::string identity = plan.graph_path + "#" + plan.graph_name + "#" + pn.id;
-      if (options.cache) {
+    } else if (have[i]) {
+      rec.status = "cached";
+      rec.cache = "hit";
+      rec.why = "same type, version, parameters and inputs";
+      if (needed[i]) {
         auto hit = options.cache->load(keys[i], registry.values());
         if (hit.hit) {
           out = std::move(hit.outputs);
-          have = true;
-          rec.status = "cached";
-          rec.cache = "hit";
-          rec.why = "same type, version, parameters and inputs";
-        } else {
-          rec.cache = "miss";
-          rec.why = hit.why == "no entry" ? explain_miss(options.cache->last_manifest(identity), manifest) : hit.why;
+        } else {  // the entry went bad after it was checked: its inputs were never loaded
+          rec.status = "failed";
+          rec.error = "its cache entry became unreadable during the run (" + hit.why + "); run again";
         }
       } else {
-        rec.cache = "off";
+        rec.why += " (not loaded: nothing downstream needs it)";
       }
-      if (!have) {
-        try {
-          double last_emit = -1;
-          NodeContext ctx(*pn.decl, pn.id, options.part, pn.params, in, [&](double f, const std::string& msg) {
-            if (f - last_emit < 0.01 && f < 1.0) return;
-            last_emit = f;
-            emit({{"event", "node_progress"}, {"node", pn.id}, {"type", rec.type}, {"fraction", f}, {"message", msg}});
-          });
-          pn.decl->run(ctx);
-          out = ctx.take_outputs();
-          for (const auto& od : pn.decl->outputs)
-            if (!out.count(od.name) || !out[od.name])
-              throw std::logic_error("node did not produce its output '" + od.name + "'");
-          rec.status = "ok";
-          if (options.cache && pn.decl->cache_on_disk) {
-            options.cache->store(keys[i], out);
-            options.cache->write_manifest(identity, manifest);
-          }
-        } catch (const std::exception& e) {
-          rec.status = "failed";
-          rec.error = e.what();
-          std::lock_guard lock(error_mutex);
-          result.errors.push_back("node '" + pn.id + "' (" + rec.type + ") failed" +
-                                  (options.part.empty() ? "" : " on part '" + options.part + "'") + ": " + e.what());
+    } else {
+      if (options.cache) rec.why = explain_miss(options.cache->last_manifest(identity), manifests[i]);
+      try {
+        double last_emit = -1;
+        NodeContext ctx(*pn.decl, pn.id, options.part, pn.params, in, [&](double f, const std::string& msg) {
+          if (f - last_emit < 0.01 && f < 1.0) return;
+          last_emit = f;
+          emit({{"event", "node_progress"}, {"node", pn.id}, {"type", rec.type}, {"fraction", f}, {"message", msg}});
+        });
+        pn.decl->run(ctx);
+        out = ctx.take_outputs();
+        for (const auto& od : pn.decl->outputs)
+          if (!out.count(od.name) || !out[od.name])
+            throw std::logic_error("node did not produce its output '" + od.name + "'");
+        rec.status = "ok";
+        if (options.cache && pn.decl->cache_on_disk) {
+          options.cache->store(keys[i], out);
+          options.cache->write_manifest(identity, manifests[i]);
         }
+      } catch (const std::exception& e) {
+        rec.status = "failed";
+        rec.error = e.what();
       }
-      if (rec.status != "failed") {
-        std::lock_guard lock(output_mutex);
-        outputs[i] = std::move(out);
-        good[i] = true;
-      }
+    }
+    if (rec.status == "failed") {
+      std::lock_guard lock(error_mutex);
+      result.errors.push_back("node '" + pn.id + "' (" + rec.type + ") failed" +
+                              (options.part.empty() ? "" : " on part '" + options.part + "'") + ": " + rec.error);
+    } else if (rec.status != "skipped") {
+      std::lock_guard lock(output_mutex);
+      outputs[i] = std::move(out);
+      good[i] = true;
     }
     rec.finish = seconds_since_start();
     emit({{"event", "node_finish"}, {"node", pn.id}, {"type", rec.type}, {"status", rec.status},

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "nodes/cloud/boundary_order.h"
 #include "nodes/cloud/knn.h"
 
 namespace scallop {
@@ -74,6 +75,7 @@ std::vector<Eigen::Vector3d> smoothed_loop(const std::vector<Eigen::Vector3d>& P
 }
 
 std::vector<std::pair<int, Eigen::Vector2d>> outer_band_values(const std::vector<Eigen::Vector3d>& P,
+                                                               const std::vector<Eigen::Vector3d>& N,
                                                                const std::vector<std::uint8_t>& is_boundary,
                                                                const std::vector<std::vector<int>>& loops,
                                                                const UVMap& map) {
@@ -82,20 +84,22 @@ std::vector<std::pair<int, Eigen::Vector2d>> outer_band_values(const std::vector
   if (is_boundary.size() != P.size())
     throw std::invalid_argument("the boundary flags are for " + std::to_string(is_boundary.size()) +
                                 " points but the cloud has " + std::to_string(P.size()));
+  if (!N.empty() && N.size() != P.size())
+    throw std::invalid_argument("the cloud has " + std::to_string(N.size()) + " normals for " +
+                                std::to_string(P.size()) + " points");
   if (map.boundary_uv.size() != outer.size())
     throw std::invalid_argument("the boundary map has " + std::to_string(outer.size()) + " loop points and " +
                                 std::to_string(map.boundary_uv.size()) + " boundary positions");
   const int n = static_cast<int>(outer.size());
-  std::vector<char> on_loop(P.size(), 0);
-  for (const auto& l : loops)
-    for (int i : l)
-      if (i >= 0 && static_cast<std::size_t>(i) < P.size()) on_loop[i] = 1;
-  for (int i : outer) on_loop[i] = 1;
+  // 1: on the outer loop; 2: on a hole loop.
+  std::vector<char> loop_of(P.size(), 0);
   std::vector<Eigen::Vector3d> holes;
   for (std::size_t l = 1; l < loops.size(); ++l)
-    if (loops[l] != outer)
-      for (int i : loops[l])
-        if (i >= 0 && static_cast<std::size_t>(i) < P.size()) holes.push_back(P[i]);
+    for (int i : loops[l])
+      if (i >= 0 && static_cast<std::size_t>(i) < P.size()) loop_of[i] = 2, holes.push_back(P[i]);
+  for (int i : outer) loop_of[i] = 1;
+  Eigen::Vector3d plane_c, plane_n;
+  if (N.empty()) best_fit_plane(P, N, plane_c, plane_n);
 
   const std::vector<Eigen::Vector3d> Q = smoothed_loop(P, outer);
   // Local sampling step: the raw loop's segment lengths averaged like the positions.
@@ -117,7 +121,7 @@ std::vector<std::pair<int, Eigen::Vector2d>> outer_band_values(const std::vector
   std::vector<int> idx;
   std::vector<double> sq;
   for (std::size_t i = 0; i < P.size(); ++i) {
-    if (!is_boundary[i] || on_loop[i]) continue;
+    if (loop_of[i] != 1 && (!is_boundary[i] || loop_of[i] == 2)) continue;
     // Nearest point on the smoothed loop: the segments next to the few nearest vertices.
     on_outer.query(P[i], std::min(4, n), idx, sq);
     double best = std::numeric_limits<double>::infinity(), best_t = 0;
@@ -125,20 +129,35 @@ std::vector<std::pair<int, Eigen::Vector2d>> outer_band_values(const std::vector
     for (int v : idx)
       for (int seg : {(v + n - 1) % n, v}) {
         const Eigen::Vector3d& a = Q[seg];
-        const Eigen::Vector3d& b = Q[(seg + 1) % n];
-        Eigen::Vector3d ab = b - a;
+        Eigen::Vector3d ab = Q[(seg + 1) % n] - a;
         double len2 = ab.squaredNorm();
         double t = len2 > 0 ? std::clamp((P[i] - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
         double d = (P[i] - (a + t * ab)).norm();
         if (d < best) best = d, best_t = t, best_seg = seg;
       }
-    if (best_seg < 0 || best > kBandWidth * step[best_seg]) continue;  // a false boundary point inside
-    if (on_holes) {
-      on_holes->query(P[i], 1, idx, sq);
-      if (!idx.empty() && std::sqrt(sq[0]) < best) continue;  // a hole's band: stays free
+    if (best_seg < 0) continue;
+    if (loop_of[i] != 1) {
+      if (best > kBandWidth * step[best_seg]) continue;  // a false boundary point inside the patch
+      if (on_holes) {
+        on_holes->query(P[i], 1, idx, sq);
+        if (!idx.empty() && std::sqrt(sq[0]) < best) continue;  // a hole's band: stays free
+      }
     }
-    out.emplace_back(static_cast<int>(i), (1 - best_t) * map.boundary_uv[best_seg] +
-                                              best_t * map.boundary_uv[(best_seg + 1) % n]);
+    const Eigen::Vector3d& qa = Q[best_seg];
+    const Eigen::Vector3d& qb = Q[(best_seg + 1) % n];
+    const Eigen::Vector2d& ua = map.boundary_uv[best_seg];
+    const Eigen::Vector2d& ub = map.boundary_uv[(best_seg + 1) % n];
+    Eigen::Vector2d uv = (1 - best_t) * ua + best_t * ub;
+    // Inward offset: the loop runs with the patch on its left seen from the normal, and so does
+    // the domain boundary in (u,v); a point d inside the smoothed loop goes d inside the domain.
+    Eigen::Vector3d T = (qb - qa).normalized();
+    Eigen::Vector3d inward = (N.empty() ? plane_n : N[i]).cross(T);
+    Eigen::Vector2d duv = ub - ua;
+    if (inward.norm() > 1e-6 && duv.norm() > 0 && T.allFinite()) {
+      double d = std::max(0.0, (P[i] - ((1 - best_t) * qa + best_t * qb)).dot(inward.normalized()));
+      uv += d * Eigen::Vector2d(-duv.y(), duv.x()).normalized();
+    }
+    out.emplace_back(static_cast<int>(i), uv);
   }
   return out;
 }

@@ -52,17 +52,23 @@ UVMap map_boundary(const std::vector<Eigen::Vector3d>& P, const std::vector<int>
 std::vector<Eigen::Vector3d> smoothed_loop(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& loop,
                                            int half_window = kLoopSmoothing);
 
-// Dirichlet values for the rest of the outer boundary band (paper section 2.2 fixes the whole
-// boundary; our detected boundary is a band and the loop threads through only part of it).
+// Dirichlet values for the whole outer boundary band (paper section 2.2 fixes the boundary; our
+// detected boundary is a band one or two points thick, and the loop zig-zags through it).
+// N            #P unit normals, or empty (the cloud's least-squares plane normal is used)
 // is_boundary  #P flags (detect_boundary);  loops  all loops (order_boundary_loops)
 // map          the boundary map of loops[0] (map_boundary)
-// Every flagged point on no loop, within kBandWidth local loop steps of the smoothed outer loop
-// and nearer to it than to any hole loop point, is projected onto the smoothed outer loop; its
-// value interpolates boundary_uv of the two loop points of that segment. Without this, band
-// points outside the loop are free unknowns whose harmonic (u,v) can land outside the domain
-// and fold the map. Hole bands stay free (natural boundaries).
-// Returns (point index, uv) pairs, ascending index. Throws std::invalid_argument for mismatched sizes.
+// The band: the outer loop's points, and every flagged point on no loop within kBandWidth local
+// loop steps of the smoothed outer loop and nearer to it than to any hole loop point (hole bands
+// stay free: natural boundaries). Each band point is projected on the smoothed outer loop
+// (smoothed_loop); its value interpolates boundary_uv of that segment's two loop points, moved
+// into the domain (normal to the segment's (u,v) chord) by the point's distance d >= 0 inside the
+// smoothed loop, measured in its tangent plane (points outside it get d = 0). The map of the band
+// then follows its geometry: a loop point that zig-zags inwards lands inside the domain, not on
+// its edge, and band points off the loop are no free unknowns that could land outside the domain.
+// Returns (point index, uv) pairs, ascending index, outer-loop points included.
+// Throws std::invalid_argument for mismatched sizes.
 std::vector<std::pair<int, Eigen::Vector2d>> outer_band_values(const std::vector<Eigen::Vector3d>& P,
+                                                               const std::vector<Eigen::Vector3d>& N,
                                                                const std::vector<std::uint8_t>& is_boundary,
                                                                const std::vector<std::vector<int>>& loops,
                                                                const UVMap& map);

@@ -68,8 +68,6 @@ UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, cons
     if (i < 0 || i >= n)
       throw std::invalid_argument("a fixed point index " + std::to_string(i) + " is outside the Laplacian's " +
                                   std::to_string(n) + " points");
-    if (unknown[i] < 0)
-      throw std::invalid_argument("point " + std::to_string(i) + " is fixed twice (outer loop or repeated)");
     unknown[i] = -1;
     uv[i] = q;
   }
@@ -160,6 +158,7 @@ UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, cons
     for (Eigen::Index i = 0; i < n; ++i)
       if (unknown[i] >= 0) uv[i] = X.row(unknown[i]).transpose();
   }
+  for (std::size_t j = 0; j < outer.size(); ++j) out.boundary_uv[j] = uv[outer[j]];
   out.uv = std::move(uv);
   return out;
 }

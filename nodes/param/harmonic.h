@@ -29,9 +29,9 @@ HarmonicSolver parse_harmonic_solver(const std::string& name);
 // Laplace row; points of inner loops (holes) are thereby free, natural boundaries: in the
 // meshless setting their one-sided neighbourhood row is the natural-boundary discretisation.
 // Outer-loop points keep boundary_uv exactly.
-// fixed     further Dirichlet points (point index, uv), e.g. the rest of the outer boundary band
-//           (outer_band_values); they keep their uv exactly and are not unknowns. Entries for
-//           outer-loop points are an error.
+// fixed     Dirichlet values (point index, uv) of further points, or replacing boundary_uv of
+//           outer-loop points (outer_band_values gives both for the whole boundary band); these
+//           points keep their uv exactly. The returned boundary_uv holds the values used.
 // Throws std::invalid_argument for mismatched sizes, and std::runtime_error when the solve fails
 // (singular system: points not connected to the outer loop through neighbours) or its relative
 // residual exceeds 1e-6.

@@ -12,7 +12,7 @@ NodeDecl make_harmonic_node() {
   NodeDecl d;
   d.type = "param.harmonic";
   d.version = 2;
-  d.description = "harmonic (conformal) map: L u = L v = 0 inside, outer loop fixed, holes free";
+  d.description = "harmonic (conformal) map: L u = L v = 0 inside, outer boundary band fixed, holes free";
   d.input("laplacian", "Laplacian", "the meshless Laplacian of the cloud")
       .input("map", "UVMap", "the boundary map (param.boundary_map)")
       .input("loops", "Loops", "the boundary loops the map was made from")
@@ -21,8 +21,8 @@ NodeDecl make_harmonic_node() {
       .param_choice("solver", "direct", {"direct", "bicgstab", "gmres"},
                     "direct: UMFPACK sparse LU; bicgstab / gmres: Eigen iterative with incomplete LU")
       .param_bool("fix_band", true,
-                  "fix the outer boundary band's points off the loop at their projection on the loop "
-                  "(else they are free and can fold the map)");
+                  "fix the whole outer boundary band by its projection on the smoothed loop and its depth "
+                  "inside it (else only the loop points, on the domain's edge)");
   d.run = [](NodeContext& ctx) {
     auto lap = ctx.input<Laplacian>("laplacian");
     auto bmap = ctx.input<UVMap>("map");
@@ -35,7 +35,7 @@ NodeDecl make_harmonic_node() {
       throw NodeError("the boundary map was not made from the outer loop of these loops");
     try {
       std::vector<std::pair<int, Eigen::Vector2d>> band;
-      if (ctx.flag("fix_band")) band = outer_band_values(cloud->points, loops->is_boundary, loops->loops, *bmap);
+      if (ctx.flag("fix_band")) band = outer_band_values(cloud->points, cloud->normals, loops->is_boundary, loops->loops, *bmap);
       ctx.set("map", solve_harmonic(lap->L, *bmap, parse_harmonic_solver(ctx.text("solver")), band));
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());

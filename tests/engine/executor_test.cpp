@@ -67,6 +67,9 @@ TEST(Executor, RerunHitsTheCache) {
     EXPECT_EQ(n.cache, "hit");
   }
   EXPECT_EQ(executions()["sum"], 1);
+  // Only what is needed is loaded: the graph output, not the nodes upstream of it.
+  EXPECT_EQ(second.find("a")->why, "same type, version, parameters and inputs (not loaded: nothing downstream needs it)");
+  EXPECT_EQ(second.find("twice")->why, "same type, version, parameters and inputs");
 }
 
 TEST(Executor, ParameterChangeReexecutesOnlyThatNodeAndDependents) {
