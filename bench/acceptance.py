@@ -27,11 +27,14 @@ def main():
     ap.add_argument("--set", action="append", default=[], help="extra --set for scallop run")
     args = ap.parse_args()
     os.makedirs(args.work, exist_ok=True)
-    rows = []
+    rows, lines = [], []
     header = ("| surface | noise | graph | passes | verify scallop max (interior) | simulate scallop max (interior) "
               "| sim/verify | gouge max | uncut | rs274 | rapids through part | efficiency L*/L | verify pass | plan s |")
-    print(header)
-    print("|---" * (header.count("|") - 1) + "|")
+    def emit(line):
+        print(line, flush=True)
+        lines.append(line)
+    emit(header)
+    emit("|---" * (header.count("|") - 1) + "|")
     for surface in args.surfaces.split(","):
         r = 2.0 if surface == "bowl" else 4.0
         for noise in args.noise.split(","):
@@ -57,7 +60,7 @@ def main():
                 gcode = os.path.join(out, "gcode.ngc")
                 if p.returncode != 0 or not os.path.exists(gcode):
                     err = (p.stderr.strip().splitlines() or ["?"])[-1]
-                    print(f"| {surface} | {noise} | {graph} | FAILED: {err} |||||||||||", flush=True)
+                    emit(f"| {surface} | {noise} | {graph} | FAILED: {err} |||||||||||")
                     rows.append({"surface": surface, "noise": noise, "graph": graph, "error": err})
                     continue
                 vj = os.path.join(out, "verify.json")
@@ -72,17 +75,39 @@ def main():
                 row = {"surface": surface, "noise": noise, "graph": graph, "passes": plan.get("passes"),
                        "verify": v, "simulate": sim, "plan_seconds": plan_s}
                 rows.append(row)
-                print(f"| {surface} | {noise} | {graph} | {plan.get('passes')} | {vs:.5f} | {ss:.5f} | {ratio} "
+                emit(f"| {surface} | {noise} | {graph} | {plan.get('passes')} | {vs:.5f} | {ss:.5f} | {ratio} "
                       f"| {v.get('gouge_max', float('nan')):.5f} | {v.get('uncut_fraction')} | {v.get('gcode_valid')} "
                       f"| {v.get('rapids_through_part')} | {v.get('efficiency', float('nan')):.3f} | {v.get('pass')} "
-                      f"| {plan_s:.1f} |", flush=True)
-                if args.docs:
+                      f"| {plan_s:.1f} |")
+                if args.docs and float(noise) == 0:
                     os.makedirs(args.docs, exist_ok=True)
                     for name in ("preview.png", "scallop_map.png"):
                         src = os.path.join(out, name)
                         if os.path.exists(src):
                             shutil.copy(src, os.path.join(args.docs, f"{tag}_{graph}_{name}"))
     json.dump(rows, open(os.path.join(args.work, "acceptance.json"), "w"), indent=1)
+    if args.docs:
+        write_catalog(args, lines)
+
+
+def write_catalog(args, table):
+    """docs/catalog.md: the table and, for every clean surface and graph, the paths and the scallop map."""
+    rel = os.path.basename(os.path.normpath(args.docs))
+    md = ["# Catalog surfaces", "",
+          "Every catalog surface of `../shared/tools/surfaces.py` (50 000 points, seed 1), through both shipped graphs: "
+          "tool radius 4 mm (2 mm for the bowl), scallop 0.05 mm, chord 0.01 mm. Made by `bench/acceptance.py --docs docs/catalog`; "
+          "verify.py is the independent measurement, simulate is the product's own `post.simulate`.", ""] + table + [""]
+    for surface in args.surfaces.split(","):
+        md.append(f"## {surface}")
+        md.append("")
+        for graph in args.graphs.split(","):
+            pre, heat = f"{rel}/{surface}_{graph}_preview.png", f"{rel}/{surface}_{graph}_scallop_map.png"
+            if os.path.exists(os.path.join(os.path.dirname(os.path.normpath(args.docs)), pre)):
+                md.append(f"{graph}: paths and scallop map")
+                md.append("")
+                md.append(f'<img src="{pre}" width="48%"> <img src="{heat}" width="48%">')
+                md.append("")
+    open(os.path.join(os.path.dirname(os.path.normpath(args.docs)), "catalog.md"), "w").write("\n".join(md) + "\n")
 
 if __name__ == "__main__":
     main()

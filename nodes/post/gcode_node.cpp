@@ -1,3 +1,4 @@
+#include "engine/file_ref.h"
 #include "engine/node.h"
 #include "nodes/post/gcode.h"
 #include "nodes/types/document.h"
@@ -10,6 +11,7 @@ NodeDecl make_gcode_node() {
   d.version = 1;
   d.description = "G-code of a linked path (XYZ = tool tip, mm, 4 decimals), optional G2/G3 arc fitting";
   d.input("path", "LinkedPath", "the linked machine moves")
+      .input("source", "File", "the part's input file: its content hash goes into the header", false)
       .output("gcode", "GCode", "the program text")
       .param_choice("dialect", "linuxcnc", {"linuxcnc", "grbl", "fanuc"},
                     "controller dialect: linuxcnc (M2), grbl (M2), fanuc (% framing, O-number, M30)")
@@ -21,7 +23,7 @@ NodeDecl make_gcode_node() {
                    "largest distance between an arc and the points it replaces; 0: the chord error of the path (at least 0.001)")
       .param_int("program_number", 1000, 1, 9999, "", "fanuc O-number")
       .param_string("graph_name", "", "graph name written in the header comment")
-      .param_string("input_hash", "", "input hash written in the header comment");
+      .param_string("input_hash", "", "input hash written in the header comment (default: the source file's)");
   d.run = [](NodeContext& ctx) {
     auto path = ctx.input<LinkedPath>("path");
     if (path->moves.empty()) throw NodeError("the linked path has no moves");
@@ -35,6 +37,7 @@ NodeDecl make_gcode_node() {
     o.program_number = static_cast<int>(ctx.integer("program_number"));
     o.graph_name = ctx.text("graph_name");
     o.input_hash = ctx.text("input_hash");
+    if (o.input_hash.empty() && ctx.has_input("source")) o.input_hash = ctx.input<FileRef>("source")->content_hash;
     GCode g;
     g.dialect = o.dialect;
     try {
