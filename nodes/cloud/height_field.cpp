@@ -13,6 +13,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "nodes/cloud/knn.h"
+
 namespace scallop {
 
 namespace {
@@ -25,7 +27,9 @@ struct XyAdaptor {
   std::size_t kdtree_get_point_count() const { return P.size(); }
   double kdtree_get_pt(std::size_t i, std::size_t d) const { return P[i][static_cast<int>(d)]; }
   template <class BBox>
-  bool kdtree_get_bbox(BBox&) const { return false; }
+  bool kdtree_get_bbox(BBox&) const {
+    return false;
+  }
 };
 using XyMetric = nanoflann::L2_Simple_Adaptor<double, XyAdaptor, double, std::uint32_t>;
 using XyTree = nanoflann::KDTreeSingleIndexAdaptor<XyMetric, XyAdaptor, 2, std::uint32_t>;
@@ -39,8 +43,15 @@ class LayerProbe {
   using CountType = std::size_t;
 
   LayerProbe(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
-             const std::vector<char>& skip, std::size_t i, double sq_radius, double min_sep)
-      : P_(P), N_(N), skip_(skip), i_(i), sq_radius_(sq_radius), min_sep_(min_sep) {}
+             const KnnIndex& index3d, const std::vector<char>& skip, std::size_t i,
+             double sq_radius, double min_sep)
+      : P_(P),
+        N_(N),
+        index3d_(index3d),
+        skip_(skip),
+        i_(i),
+        sq_radius_(sq_radius),
+        min_sep_(min_sep) {}
 
   std::size_t size() const { return 0; }
   bool full() const { return true; }
@@ -53,7 +64,7 @@ class LayerProbe {
     // Distance of each point from the other's tangent plane: both small on one smooth sheet
     // (a vertical wall included), both large between stacked sheets.
     const double sep = std::min(std::abs(N_[i_].dot(d)), std::abs(N_[j].dot(d)));
-    if (sep > min_sep_ && sep > best_sep) {
+    if (sep > min_sep_ && sep > best_sep && gap_between(j)) {
       best_sep = sep;
       best_dz = d.z();
     }
@@ -63,8 +74,17 @@ class LayerProbe {
   double best_sep = 0, best_dz = 0;
 
  private:
+  // Is the space between p_i and p_j empty? Stacked sheets have a gap between them; a vertical
+  // wall (whose bottom and top corners have blurred normals) or a floor point next to the top
+  // edge of a wall does not: the wall runs between them.
+  bool gap_between(std::uint32_t j) const {
+    const Eigen::Vector3d mid = 0.5 * (P_[i_] + P_[j]);
+    return (P_[index3d_.nearest(mid)] - mid).squaredNorm() > sq_radius_;
+  }
+
   const std::vector<Eigen::Vector3d>& P_;
   const std::vector<Eigen::Vector3d>& N_;
+  const KnnIndex& index3d_;
   const std::vector<char>& skip_;
   std::size_t i_;
   double sq_radius_, min_sep_;
@@ -132,8 +152,7 @@ std::vector<int> knn_components(const Neighborhoods& nbrs, std::vector<std::size
 
 HeightFieldStats analyze_height_field(const std::vector<Eigen::Vector3d>& P,
                                       const std::vector<Eigen::Vector3d>& N,
-                                      const Neighborhoods& nbrs,
-                                      const HeightFieldLimits& limits) {
+                                      const Neighborhoods& nbrs, const HeightFieldLimits& limits) {
   const std::size_t n = P.size();
   if (n == 0) throw std::invalid_argument("the cloud is empty");
   if (N.size() != n)
@@ -186,6 +205,13 @@ HeightFieldStats analyze_height_field(const std::vector<Eigen::Vector3d>& P,
   }
   for (std::size_t i = 0; i < n; ++i)
     speck[i] = static_cast<double>(s.component_sizes[s.component[i]]) < speck_limit;
+  s.component_centroids.assign(std::min<std::size_t>(s.component_sizes.size(), 10),
+                               Eigen::Vector3d::Zero());
+  for (std::size_t i = 0; i < n; ++i)
+    if (static_cast<std::size_t>(s.component[i]) < s.component_centroids.size())
+      s.component_centroids[s.component[i]] += P[i];
+  for (std::size_t c = 0; c < s.component_centroids.size(); ++c)
+    s.component_centroids[c] /= static_cast<double>(s.component_sizes[c]);
 
   // Extent and slopes of the points that count.
   const double cos_max = std::cos(limits.max_slope_deg * kDeg);
@@ -213,10 +239,12 @@ HeightFieldStats analyze_height_field(const std::vector<Eigen::Vector3d>& P,
   if (min_nz <= 1) s.max_slope_deg = std::acos(std::min(1.0, min_nz)) / kDeg;
 
   // Layers: every point looks for points above it within 2h in xy.
+  s.under.assign(n, 0);
   if (s.spacing > 0 && s.significant_components > 0) {
     XyAdaptor adaptor{P};
     XyTree tree(2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
     tree.buildIndex();
+    const KnnIndex index3d(P);
     const double radius = 2 * s.spacing;
     const double min_sep = limits.layer_gap * s.spacing;
     std::vector<double> sep(n, 0), dz(n, 0);
@@ -226,7 +254,7 @@ HeightFieldStats analyze_height_field(const std::vector<Eigen::Vector3d>& P,
                         for (std::size_t q = r.begin(); q != r.end(); ++q) {
                           const std::size_t i = order[q];
                           if (speck[i]) continue;
-                          LayerProbe probe(P, N, speck, i, radius * radius, min_sep);
+                          LayerProbe probe(P, N, index3d, speck, i, radius * radius, min_sep);
                           tree.findNeighbors(probe, P[i].data(), nanoflann::SearchParams());
                           sep[i] = probe.best_sep;
                           dz[i] = probe.best_dz;
@@ -235,6 +263,7 @@ HeightFieldStats analyze_height_field(const std::vector<Eigen::Vector3d>& P,
     double best = 0;
     for (std::size_t i = 0; i < n; ++i) {
       if (sep[i] <= 0) continue;
+      s.under[i] = 1;
       ++s.layered_points;
       if (sep[i] > best) {
         best = sep[i];
@@ -265,30 +294,36 @@ std::string height_field_problem(const HeightFieldStats& s, const HeightFieldLim
       parts += (c ? ", " : "") + percent(static_cast<double>(s.component_sizes[c]) / n);
     if (shown < s.significant_components) parts += ", ...";
     std::string specks;
-    if (s.speck_points > 0)
-      specks = "; " + std::to_string(s.component_sizes.size() - s.significant_components) +
-               " specks with " + percent(static_cast<double>(s.speck_points) / n) + " ignored";
-    const std::string plan = limits.max_components == 1
-                                 ? "scallop plans one patch at a time"
-                                 : "at most " + std::to_string(limits.max_components) +
-                                       " are allowed (max_components)";
+    if (s.speck_points > 0) {
+      const std::size_t count = s.component_sizes.size() - s.significant_components;
+      specks = "; " + std::to_string(count) + (count == 1 ? " speck" : " specks") + " with " +
+               percent(static_cast<double>(s.speck_points) / n) + " ignored";
+    }
+    // Where the second part is tells the user which one to remove.
+    std::string where;
+    if (s.component_centroids.size() > 1)
+      where = "; the second centred near " + point_text(s.component_centroids[1]);
+    const std::string plan =
+        limits.max_components == 1
+            ? "scallop plans one patch at a time"
+            : "at most " + std::to_string(limits.max_components) + " are allowed (max_components)";
     return "the cloud has " + std::to_string(s.significant_components) + " separate parts (" +
-           parts + " of the points, not linked in the " + graph + specks + "): " + plan +
+           parts + " of the points, not linked in the " + graph + specks + where + "): " + plan +
            "; split it or remove the others";
   }
   if (static_cast<double>(s.layered_points) > limits.max_layered_fraction * n)
     return "not a height field seen from +Z: " + std::to_string(s.layered_points) + " points (" +
            percent(static_cast<double>(s.layered_points) / n) +
            ") lie under other points of the cloud (a closed object, an overhang or several "
-           "layers), e.g. near " + point_text(s.layered_example) + " with a layer " +
-           number_text(s.layered_example_gap) +
+           "layers), e.g. near " +
+           point_text(s.layered_example) + " with a layer " + number_text(s.layered_example_gap) +
            " mm above it; a 3-axis machine cannot reach them";
   if (static_cast<double>(s.steep_points) > limits.max_steep_fraction * n)
-    return "walls steeper than " + number_text(limits.max_slope_deg, "%g") + "°: " +
-           std::to_string(s.steep_points) + " points (" +
+    return "walls steeper than " + number_text(limits.max_slope_deg, "%g") +
+           "°: " + std::to_string(s.steep_points) + " points (" +
            percent(static_cast<double>(s.steep_points) / n) + ", more than the " +
-           percent(limits.max_steep_fraction) + " allowed), up to " +
-           number_text(s.max_slope_deg) + "° near " + point_text(s.steepest) +
+           percent(limits.max_steep_fraction) + " allowed), up to " + number_text(s.max_slope_deg) +
+           "° near " + point_text(s.steepest) +
            "; a ball-end cutter coming from +Z cannot finish them; turn the part to face +Z "
            "or raise max_slope";
   return {};
@@ -297,7 +332,8 @@ std::string height_field_problem(const HeightFieldStats& s, const HeightFieldLim
 nlohmann::json to_json(const HeightFieldStats& s, const HeightFieldLimits& limits) {
   const double n = static_cast<double>(std::max<std::size_t>(s.points, 1));
   nlohmann::json parts = nlohmann::json::array();
-  for (std::size_t c = 0; c < s.component_sizes.size() && c < 10; ++c) parts.push_back(s.component_sizes[c]);
+  for (std::size_t c = 0; c < s.component_sizes.size() && c < 10; ++c)
+    parts.push_back(s.component_sizes[c]);
   return {
       {"points", s.points},
       {"spacing_mm", s.spacing},

@@ -20,43 +20,50 @@
 namespace scallop {
 
 struct HeightFieldLimits {
-  int min_points = 100;                 // fewer points cannot describe a patch to machine
-  int max_components = 1;               // significant parts allowed
-  double min_component_fraction = 0.01; // smaller parts are specks: reported, not counted
-  double layer_gap = 4.0;               // layers closer than this many spacings are not told apart
-  double max_layered_fraction = 0.002;  // share of points under other points that is tolerated
-  double max_slope_deg = 85.0;          // steeper points count as steep walls
-  double max_steep_fraction = 0.05;     // share of steep points that is tolerated
+  int min_points = 100;                  // fewer points cannot describe a patch to machine
+  int max_components = 1;                // significant parts allowed
+  double min_component_fraction = 0.01;  // smaller parts are specks: reported, not counted
+  double layer_gap = 4.0;                // layers closer than this many spacings are not told apart
+  double max_layered_fraction = 0.002;   // share of points under other points that is tolerated
+  double max_slope_deg = 85.0;           // steeper points count as steep walls
+  double max_steep_fraction = 0.05;      // share of steep points that is tolerated
 };
 
 struct HeightFieldStats {
   std::size_t points = 0;
-  double spacing = 0;                    // median distance to the nearest neighbour (mm)
-  int k = 0;                             // neighbours per point of the graph used
+  double spacing = 0;  // median distance to the nearest neighbour (mm)
+  int k = 0;           // neighbours per point of the graph used
   // Components of the symmetric k-nearest-neighbour graph, largest first.
   std::vector<std::size_t> component_sizes;
-  std::vector<int> component;            // #P label of each point (index into component_sizes)
-  int significant_components = 0;        // with at least min_component_fraction of the points
-  std::size_t speck_points = 0;          // points in the other components (ignored below)
+  std::vector<int> component;  // #P label of each point (index into component_sizes)
+  std::vector<Eigen::Vector3d> component_centroids;  // of the (at most 10) largest components
+  int significant_components = 0;  // with at least min_component_fraction of the points
+  std::size_t speck_points = 0;    // points in the other components (ignored below)
   // Points (outside specks) that have a point of another layer above them in xy.
   std::size_t layered_points = 0;
+  std::vector<char> under;  // #P: 1 where the point lies under another layer
   Eigen::Vector3d layered_example = Eigen::Vector3d::Zero();  // the clearest such point
-  double layered_example_gap = 0;        // its distance to the layer above (mm)
+  double layered_example_gap = 0;  // its distance to the layer above (mm)
   // Slopes (angle of the surface to the xy plane, from |n_z|), outside specks.
   double max_slope_deg = 0;
   Eigen::Vector3d steepest = Eigen::Vector3d::Zero();
-  std::size_t steep_points = 0;          // slope above limits.max_slope_deg
+  std::size_t steep_points = 0;  // slope above limits.max_slope_deg
   Eigen::Vector2d xy_min = Eigen::Vector2d::Zero(), xy_max = Eigen::Vector2d::Zero();
   double z_min = 0, z_max = 0;
 };
 
 // P  #P by 3 positions (mm), all finite;  N  #P by 3 unit normals, oriented or not (only |n_z|
 // and the tangent planes are used);  nbrs  k nearest neighbours of every point (cloud.knn).
-// Spacing h = median nearest-neighbour distance. Two points i, j count as different layers when
-// they are within 2h of each other in xy and each lies farther than layer_gap * h from the
-// other's tangent plane: points on one smooth sheet lie (up to curvature) in each other's
-// tangent planes, while stacked sheets do not, and a vertical wall (tangent plane containing the
-// z axis) is not mistaken for a stack. The lower point of such a pair "lies under" the cloud.
+// Spacing h = median nearest-neighbour distance. Points i, j (j higher) count as different
+// layers when (1) they are within 2h of each other in xy, (2) each lies farther than
+// layer_gap * h from the other's tangent plane, and (3) no point of the cloud lies within 2h of
+// their midpoint. Points of one smooth sheet lie (up to curvature) in each other's tangent
+// planes, so a steep or vertical wall (tangent plane containing the z axis) is not a stack;
+// (3) keeps the corners of a vertical wall, whose PCA normals are blurred, from counting: the
+// wall fills the space between them, while stacked sheets have a gap. The lower point of such a
+// pair "lies under" the cloud. Parts smaller than min_component_fraction are left out of the
+// layer and slope measurements. Sheets closer than layer_gap * h (thin plates) are not told
+// apart.
 // Throws std::invalid_argument for mismatched sizes, missing normals, non-finite values, or an
 // empty cloud.
 HeightFieldStats analyze_height_field(const std::vector<Eigen::Vector3d>& P,

@@ -17,8 +17,7 @@ NodeDecl make_height_field_node() {
   d.input("cloud", "Cloud", "the points with normals (oriented or not)")
       .input("neighbors", "Neighbors", "k nearest neighbours of each point (cloud.knn)")
       .output("cloud", "Cloud", "the same cloud, unchanged, once it passed")
-      .output("report", "Report",
-              "parts, points under other points, slopes, xy extent and spacing")
+      .output("report", "Report", "parts, points under other points, slopes, xy extent and spacing")
       .param_int("min_points", 100, 0, 1e9, "", "fewer points are refused")
       .param_int("max_components", 1, 1, 1e6, "",
                  "separate parts (components of the neighbour graph) allowed")
@@ -29,8 +28,7 @@ NodeDecl make_height_field_node() {
       .param_float("max_layered_fraction", 0.002, 0, 1, "",
                    "share of points under other points that is tolerated (noise)")
       .param_float("max_slope", 85.0, 0, 90, "deg", "walls steeper than this are steep")
-      .param_float("max_steep_fraction", 0.05, 0, 1, "",
-                   "share of steep points that is tolerated");
+      .param_float("max_steep_fraction", 0.05, 0, 1, "", "share of steep points that is tolerated");
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");
     auto nbrs = ctx.input<Neighborhoods>("neighbors");

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <numbers>
@@ -13,6 +14,7 @@
 #include "engine/node.h"
 #include "nodes/cloud/knn.h"
 #include "nodes/cloud/normals.h"
+#include "nodes/io/read_cloud.h"
 #include "nodes/types/document.h"
 
 namespace scallop {
@@ -70,7 +72,8 @@ TEST(HeightField, DomeCapPasses) {
   EXPECT_EQ(st.significant_components, 1);
   EXPECT_EQ(st.layered_points, 0u);
   EXPECT_EQ(st.steep_points, 0u);
-  EXPECT_NEAR(st.max_slope_deg, 50, 1.0);
+  // PCA normals on the rim see a one-sided neighbourhood: slightly less steep than the surface.
+  EXPECT_NEAR(st.max_slope_deg, 49, 1.5);
   EXPECT_NEAR(st.xy_max.x(), 30 * std::sin(50 * kPi / 180), 0.5);
   // Area of the cap 2 pi R^2 (1 - cos 50°) = 2019 mm^2 over 3000 points: about 0.8 mm apart.
   EXPECT_GT(st.spacing, 0.5);
@@ -84,7 +87,7 @@ TEST(HeightField, SteepCapAt70DegreesPasses) {
   EXPECT_EQ(height_field_problem(st, limits), "");
   EXPECT_EQ(st.layered_points, 0u);
   EXPECT_EQ(st.steep_points, 0u);
-  EXPECT_NEAR(st.max_slope_deg, 70, 1.5);
+  EXPECT_NEAR(st.max_slope_deg, 69, 1.5);
   // The same cap with a 60° limit has too many steep points.
   HeightFieldLimits strict;
   strict.max_slope_deg = 60;
@@ -98,19 +101,19 @@ TEST(HeightField, ClosedSphereIsNotAHeightField) {
   const auto s = prepare(sphere_cap(20, kPi, 4000));
   const HeightFieldLimits limits;
   const auto st = analyze_height_field(s.P, s.N, s.nbrs, limits);
-  // Everything under the upper half, less a band around the equator where the two halves are
-  // closer than layer_gap spacings, lies under another point.
-  EXPECT_GT(st.layered_points, 1200u);
+  // The lower half lies under the upper half, less a band around the equator where the two
+  // halves are within 2 spacings of the sphere's inside (|z| < 0.44 R): about 28 % of the points.
+  EXPECT_GT(st.layered_points, 1000u);
   EXPECT_LT(st.layered_points, 2000u);
   EXPECT_LT(st.layered_example.z(), -10);  // the clearest case is near the bottom
   EXPECT_EQ(height_field_problem(st, limits),
-            "not a height field seen from +Z: 1727 points (43 %) lie under other points of the "
-            "cloud (a closed object, an overhang or several layers), e.g. near (-0.1, 0.6, "
+            "not a height field seen from +Z: 1294 points (32 %) lie under other points of the "
+            "cloud (a closed object, an overhang or several layers), e.g. near (-0.4, 0.1, "
             "-20.0) with a layer 40.0 mm above it; a 3-axis machine cannot reach them");
 }
 
 TEST(HeightField, TwoSeparatePatchesFail) {
-  auto P = grid(0, 0, 30, 20, 0, 1.0);        // 31 x 21 = 651 points
+  auto P = grid(0, 0, 30, 20, 0, 1.0);         // 31 x 21 = 651 points
   const auto Q = grid(50, 0, 20, 20, 3, 1.0);  // 21 x 21 = 441 points
   P.insert(P.end(), Q.begin(), Q.end());
   const auto s = prepare(P);
@@ -123,24 +126,26 @@ TEST(HeightField, TwoSeparatePatchesFail) {
   EXPECT_EQ(st.component.back(), 1);
   EXPECT_EQ(height_field_problem(st, limits),
             "the cloud has 2 separate parts (60 %, 40 % of the points, not linked in the "
-            "16-nearest-neighbour graph): scallop plans one patch at a time; split it or remove "
-            "the others");
+            "16-nearest-neighbour graph; the second centred near (60.0, 10.0, 3.0)): scallop "
+            "plans one patch at a time; split it or remove the others");
   HeightFieldLimits two;
   two.max_components = 2;
   EXPECT_EQ(height_field_problem(st, two), "");
 }
 
 TEST(HeightField, SpecksAreReportedNotCounted) {
-  auto P = grid(0, 0, 40, 30, 0, 1.0);  // 1271 points
-  for (int i = 0; i < 5; ++i) P.push_back({100.0 + i, 100.0, 0.0});  // 5 < 1 % far away
+  // A part is at least k + 1 = 17 points in a 16-nearest-neighbour graph.
+  auto P = grid(0, 0, 60, 40, 0, 1.0);              // 61 x 41 = 2501 points
+  const auto speck = grid(100, 100, 3, 4, 0, 1.0);  // 20 points (0.8 %) far away
+  P.insert(P.end(), speck.begin(), speck.end());
   const auto s = prepare(P);
   const HeightFieldLimits limits;
   const auto st = analyze_height_field(s.P, s.N, s.nbrs, limits);
   EXPECT_EQ(st.component_sizes.size(), 2u);
   EXPECT_EQ(st.significant_components, 1);
-  EXPECT_EQ(st.speck_points, 5u);
+  EXPECT_EQ(st.speck_points, 20u);
   EXPECT_EQ(height_field_problem(st, limits), "");
-  EXPECT_DOUBLE_EQ(st.xy_max.x(), 40);  // specks are outside the measured extent
+  EXPECT_DOUBLE_EQ(st.xy_max.x(), 60);  // specks are outside the measured extent
 }
 
 // A sheet folded like a Z seen from the side (y is the extrusion): z = 0 for x in [0, 40], a
@@ -196,7 +201,7 @@ TEST(HeightField, VerticalWallIsSteepNotLayered) {
   const HeightFieldLimits limits;
   const auto st = analyze_height_field(s.P, s.N, s.nbrs, limits);
   EXPECT_EQ(st.layered_points, 0u);
-  EXPECT_GT(st.steep_points, 19u * 21);
+  EXPECT_GT(st.steep_points, 300u);  // the wall has 21 x 21 points, its corners are blurred
   EXPECT_NEAR(st.max_slope_deg, 90, 1e-6);
   EXPECT_EQ(height_field_problem(st, limits).rfind("walls steeper than 85°: ", 0), 0u);
 }
@@ -250,7 +255,7 @@ TEST(HeightField, NodePassesTheCloudThroughAndReports) {
   ASSERT_TRUE(report);
   EXPECT_EQ(report->data["components"]["count"], 1);
   EXPECT_EQ(report->data["layered"]["points"], 0);
-  EXPECT_NEAR(report->data["slope"]["max_deg"].get<double>(), 50, 1.0);
+  EXPECT_NEAR(report->data["slope"]["max_deg"].get<double>(), 49, 1.5);
   EXPECT_GT(report->data["spacing_mm"].get<double>(), 0.5);
 }
 
@@ -264,7 +269,7 @@ TEST(HeightField, NodeRefusesAClosedSphereAndACloudWithoutNormals) {
     run_node({}, {{"cloud", cloud}, {"neighbors", nbrs}});
     FAIL() << "no error";
   } catch (const NodeError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("not a height field seen from +Z: 1727 points", 0), 0u)
+    EXPECT_EQ(std::string(e.what()).rfind("not a height field seen from +Z: 1294 points", 0), 0u)
         << e.what();
   }
   auto bare = std::make_shared<PointCloud>();
@@ -276,6 +281,32 @@ TEST(HeightField, NodeRefusesAClosedSphereAndACloudWithoutNormals) {
     EXPECT_EQ(std::string(e.what()),
               "the cloud has no normals; compute them first (cloud.normals)");
   }
+}
+
+// The public test data in ../shared/data (see its PROVENANCE.md), scaled to tens of mm.
+TEST(HeightField, RealDataHemispherePassesCamelheadAndMilkDoNot) {
+  const std::string data = std::string(SCALLOP_SOURCE_DIR) + "/../shared/data";
+  if (!std::filesystem::exists(data)) GTEST_SKIP() << "../shared/data not found";
+  const HeightFieldLimits limits;
+  auto check = [&](const std::string& file, double scale) {
+    const auto s = prepare(read_cloud(data + "/" + file, scale).points);
+    return analyze_height_field(s.P, s.N, s.nbrs, limits);
+  };
+  // Analytic cap z >= 0.098 of the unit sphere: a height field, slopes up to 84°.
+  const auto hemi = check("hemisphere/hemisphere.off", 50);
+  EXPECT_EQ(height_field_problem(hemi, limits), "");
+  EXPECT_EQ(hemi.layered_points, 0u);
+  EXPECT_GT(hemi.max_slope_deg, 80);
+  // A head cut at the neck, standing along z: much of it is under the rest.
+  const auto camel = check("camelhead/camelhead.off", 500);
+  EXPECT_GT(camel.layered_points, camel.points / 5);
+  EXPECT_EQ(height_field_problem(camel, limits).rfind("not a height field seen from +Z", 0), 0u);
+  // A Kinect view of a box: in parallel projection along z (not the camera's perspective) a
+  // near face at z = 361 mm lies under a farther one at z = 380 mm.
+  const auto milk = check("milk_kinect/milk.pcd", 500);
+  EXPECT_GT(milk.layered_points, 50u);
+  EXPECT_LT(milk.layered_points, 300u);
+  EXPECT_EQ(height_field_problem(milk, limits).rfind("not a height field seen from +Z", 0), 0u);
 }
 
 }  // namespace
