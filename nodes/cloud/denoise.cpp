@@ -30,21 +30,15 @@ struct Projection {
   bool moved = false;
 };
 
-// One MLS projection of q (= X[0]) given its neighbourhood X[0..m) with squared distances
-// d2[0..m) from q (d2[0] = 0). h2 is the squared Gaussian width: weight exp(-d2 / h2).
-// `up` orients the normal.
-Projection project(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up) {
-  Projection out;
-  out.point = X[0];
-  out.normal = up;
-  if (m < 6 || !(h2 > 0)) return out;
-
-  // Step 1: reference plane = weighted PCA (Alexa et al. 2003, eq. 3 with the plane's origin
-  // freed). Weights theta(d) = exp(-d^2 / h^2), Gaussian as in Levin 2003.
+// Gaussian weights w[j] = exp(-d2[j] / h2) and the weighted PCA frame (t1, t2, n) of X[0..m)
+// around q = X[0], n oriented along `up` (step 1 below). False for coincident or collinear points.
+bool weighted_frame(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up,
+                    std::vector<double>& w, Vector3d& n, Vector3d& t1, Vector3d& t2) {
+  // Reference plane = weighted PCA (Alexa et al. 2003, eq. 3 with the plane's origin freed).
+  // Weights theta(d) = exp(-d^2 / h^2), Gaussian as in Levin 2003.
   const Vector3d& q = X[0];
   double sw = 0;
   Vector3d c = Vector3d::Zero();
-  thread_local std::vector<double> w;
   w.resize(m);
   for (int j = 0; j < m; ++j) {
     w[j] = std::exp(-d2[j] / h2);
@@ -59,11 +53,35 @@ Projection project(const Vector3d* X, const double* d2, int m, double h2, const 
   }
   Eigen::SelfAdjointEigenSolver<Matrix3d> es(C);
   const Vector3d lambda = es.eigenvalues();  // ascending
-  if (!(lambda(1) > 1e-12 * lambda(2))) return out;  // coincident or collinear points
-  Vector3d n = es.eigenvectors().col(0);
+  if (!(lambda(1) > 1e-12 * lambda(2))) return false;
+  n = es.eigenvectors().col(0);
   if (n.dot(up) < 0) n = -n;
-  const Vector3d t1 = es.eigenvectors().col(2);
-  const Vector3d t2 = n.cross(t1);
+  t1 = es.eigenvectors().col(2);
+  t2 = n.cross(t1);
+  return true;
+}
+
+// Basis of the quadric w = a + b s + c t + d s^2 + e s t + f t^2 at frame coordinates (s, t).
+Vector6d quadric_basis(double s, double t) {
+  Vector6d phi;
+  phi << 1, s, t, s * s, s * t, t * t;
+  return phi;
+}
+
+// One MLS projection of q (= X[0]) given its neighbourhood X[0..m) with squared distances
+// d2[0..m) from q (d2[0] = 0). h2 is the squared Gaussian width: weight exp(-d2 / h2).
+// `up` orients the normal.
+Projection project(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up) {
+  Projection out;
+  out.point = X[0];
+  out.normal = up;
+  if (m < 6 || !(h2 > 0)) return out;
+
+  // Step 1: reference plane.
+  thread_local std::vector<double> w;
+  Vector3d n, t1, t2;
+  if (!weighted_frame(X, d2, m, h2, up, w, n, t1, t2)) return out;
+  const Vector3d& q = X[0];
 
   // Step 2: weighted least squares for w = a + b s + c t + d s^2 + e s t + f t^2, with the frame
   // coordinates scaled by h (s = u / h, t = v / h) so that the 6x6 normal equations are well
@@ -73,11 +91,9 @@ Projection project(const Vector3d* X, const double* d2, int m, double h2, const 
   Vector6d rhs = Vector6d::Zero();
   for (int j = 0; j < m; ++j) {
     const Vector3d r = X[j] - q;
-    const double s = r.dot(t1) * inv_h, t = r.dot(t2) * inv_h, z = r.dot(n);
-    Vector6d phi;
-    phi << 1, s, t, s * s, s * t, t * t;
+    const Vector6d phi = quadric_basis(r.dot(t1) * inv_h, r.dot(t2) * inv_h);
     A.selfadjointView<Eigen::Lower>().rankUpdate(phi, w[j]);
-    rhs += (w[j] * z) * phi;
+    rhs += (w[j] * r.dot(n)) * phi;
   }
   A = A.selfadjointView<Eigen::Lower>();
   Eigen::LDLT<Matrix6d> ldlt(A);
@@ -93,17 +109,68 @@ Projection project(const Vector3d* X, const double* d2, int m, double h2, const 
   return out;
 }
 
-void check_input(const std::vector<Vector3d>& P, const std::vector<Vector3d>& N,
-                 const DenoiseOptions& o, const Neighborhoods* nbrs) {
+// The residual variance of the weighted quadric fit to X[0..m) (see estimate_noise_sigma), and its
+// effective degrees of freedom. False when the fit is degenerate.
+bool fit_variance(const Vector3d* X, const double* d2, int m, double h2, double& var,
+                  double& dof) {
+  if (m < 10 || !(h2 > 0)) return false;
+  thread_local std::vector<double> w;
+  Vector3d n, t1, t2;
+  if (!weighted_frame(X, d2, m, h2, Vector3d::UnitZ(), w, n, t1, t2)) return false;
+  const double inv_h = 1.0 / std::sqrt(h2);
+  thread_local std::vector<Vector6d> phi;
+  thread_local std::vector<double> z;
+  phi.resize(m);
+  z.resize(m);
+  Matrix6d A = Matrix6d::Zero(), B = Matrix6d::Zero();
+  Vector6d rhs = Vector6d::Zero();
+  double sw = 0, sw2 = 0;
+  for (int j = 0; j < m; ++j) {
+    const Vector3d r = X[j] - X[0];
+    phi[j] = quadric_basis(r.dot(t1) * inv_h, r.dot(t2) * inv_h);
+    z[j] = r.dot(n);
+    A.selfadjointView<Eigen::Lower>().rankUpdate(phi[j], w[j]);
+    B.selfadjointView<Eigen::Lower>().rankUpdate(phi[j], w[j] * w[j]);
+    rhs += (w[j] * z[j]) * phi[j];
+    sw += w[j];
+    sw2 += w[j] * w[j];
+  }
+  A = A.selfadjointView<Eigen::Lower>();
+  B = B.selfadjointView<Eigen::Lower>();
+  Eigen::LDLT<Matrix6d> ldlt(A);
+  if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-10)) return false;
+  const Vector6d coef = ldlt.solve(rhs);
+  // E[sum w r^2] = sigma^2 tr(W (I - H)) with the hat matrix H = Phi A^-1 Phi^T W, and
+  // tr(W H) = tr(A^-1 Phi^T W^2 Phi) = tr(A^-1 B).
+  const double denom = sw - ldlt.solve(B).trace();
+  dof = sw * sw / sw2 - 6;
+  if (!coef.allFinite() || !(denom > 0) || !(dof > 1)) return false;
+  double ssr = 0;
+  for (int j = 0; j < m; ++j) ssr += w[j] * std::pow(z[j] - phi[j].dot(coef), 2);
+  var = ssr / denom;
+  return std::isfinite(var);
+}
+
+void check_points(const std::vector<Vector3d>& P) {
   if (P.empty()) throw std::invalid_argument("the cloud is empty");
   for (std::size_t i = 0; i < P.size(); ++i)
     if (!P[i].allFinite())
       throw std::invalid_argument("point " + std::to_string(i) +
                                   " has a NaN or infinite coordinate");
+}
+
+void check_input(const std::vector<Vector3d>& P, const std::vector<Vector3d>& N,
+                 const DenoiseOptions& o, const Neighborhoods* nbrs) {
+  check_points(P);
   if (!N.empty() && N.size() != P.size())
     throw std::invalid_argument("the cloud has " + std::to_string(P.size()) + " points but " +
                                 std::to_string(N.size()) + " normals");
-  if (o.k < 5) throw std::invalid_argument("k must be at least 5 (got " + std::to_string(o.k) + ")");
+  if (o.k != 0 && o.k < 5)
+    throw std::invalid_argument("k must be 0 (automatic) or at least 5 (got " +
+                                std::to_string(o.k) + ")");
+  if (o.k == 0 && !(std::isfinite(o.tolerance) && o.tolerance > 0))
+    throw std::invalid_argument("tolerance must be finite and > 0 (got " +
+                                std::to_string(o.tolerance) + ")");
   if (!std::isfinite(o.radius) || o.radius < 0)
     throw std::invalid_argument("radius must be finite and >= 0 (got " +
                                 std::to_string(o.radius) + ")");
@@ -124,18 +191,90 @@ void check_input(const std::vector<Vector3d>& P, const std::vector<Vector3d>& N,
 
 }  // namespace
 
+double estimate_noise_sigma(const std::vector<Vector3d>& P, int k, int samples) {
+  check_points(P);
+  if (k < 10) throw std::invalid_argument("k must be at least 10 (got " + std::to_string(k) + ")");
+  if (samples < 1)
+    throw std::invalid_argument("samples must be at least 1 (got " + std::to_string(samples) + ")");
+  const std::size_t n = P.size();
+  if (n < 11) return 0;
+  const KnnIndex index(P);
+  const std::size_t count = std::min<std::size_t>(n, samples);
+  // var < 0 marks a failed fit
+  std::vector<double> var(count, -1), dof(count, 0);
+  struct Scratch {
+    std::vector<int> idx;
+    std::vector<double> d2, pd2;
+    std::vector<Vector3d> pts;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 64), [&](const auto& range) {
+    Scratch& s = scratch.local();
+    for (std::size_t c = range.begin(); c != range.end(); ++c) {
+      const std::size_t i = c * n / count;  // evenly spaced indices
+      index.query(P[i], k, s.idx, s.d2, static_cast<int>(i));
+      if (s.idx.empty()) continue;
+      s.pts.assign(1, P[i]);
+      s.pd2.assign(1, 0.0);
+      for (std::size_t j = 0; j < s.idx.size(); ++j) {
+        s.pts.push_back(P[s.idx[j]]);
+        s.pd2.push_back(s.d2[j]);
+      }
+      // the denoiser's weights: exp(-2 d^2 / R^2), R the distance to the k-th neighbour
+      const double h2 = *std::max_element(s.d2.begin(), s.d2.end()) / 2;
+      fit_variance(s.pts.data(), s.pd2.data(), static_cast<int>(s.pts.size()), h2, var[c],
+                   dof[c]);
+    }
+  });
+  std::vector<double> v, d;
+  for (std::size_t c = 0; c < count; ++c)
+    if (var[c] >= 0) {
+      v.push_back(var[c]);
+      d.push_back(dof[c]);
+    }
+  if (v.empty()) return 0;
+  auto median = [](std::vector<double>& x) {
+    std::nth_element(x.begin(), x.begin() + x.size() / 2, x.end());
+    return x[x.size() / 2];
+  };
+  const double nu = median(d);
+  const double chi2_median = std::pow(1 - 2 / (9 * nu), 3);  // of chi^2_nu / nu
+  return std::sqrt(median(v) / chi2_median);
+}
+
+int choose_denoise_k(double sigma, double tolerance) {
+  if (!(tolerance > 0) || !std::isfinite(tolerance) || !(sigma >= 0))
+    throw std::invalid_argument("choose_denoise_k needs sigma >= 0 and tolerance > 0");
+  constexpr double c = 3;
+  const double k = c * std::pow(sigma / tolerance, 2);
+  return static_cast<int>(std::lround(std::clamp(k, 32.0, 512.0)));
+}
+
 DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vector3d>& N,
                           const DenoiseOptions& o, const Neighborhoods* nbrs,
                           const std::function<void(double)>& progress) {
   check_input(P, N, o, nbrs);
   const std::size_t n = P.size();
   DenoiseResult res;
+  int k_wanted = o.k;
+  if (k_wanted == 0) {
+    res.noise_sigma = estimate_noise_sigma(P);
+    if (res.noise_sigma < o.tolerance) {
+      res.points = P;
+      res.normals = N;
+      res.skipped = true;
+      if (progress) progress(1.0);
+      return res;
+    }
+    k_wanted = choose_denoise_k(res.noise_sigma, o.tolerance);
+  }
   res.points = P;
   res.normals.assign(n, Vector3d::UnitZ());
   if (!N.empty()) res.normals = N;
 
-  const int k = nbrs ? std::min(o.k, nbrs->k)
-                     : static_cast<int>(std::min<std::size_t>(o.k, n - 1));
+  const int k = nbrs ? std::min(k_wanted, nbrs->k)
+                     : static_cast<int>(std::min<std::size_t>(k_wanted, n - 1));
+  res.k = k;
   const double r2 = o.radius * o.radius;
   const int iterations = o.iterations;
   std::vector<Vector3d> next(n), next_normals(n);
@@ -175,7 +314,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
         Scratch& s = scratch.local();
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
           neighbours(i, s);
-          reach[i] = std::sqrt(*std::max_element(s.d2.begin(), s.d2.end()));
+          reach[i] = s.d2.empty() ? 0.0 : std::sqrt(*std::max_element(s.d2.begin(), s.d2.end()));
         }
       });
     }
@@ -202,7 +341,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
         // Gaussian width h = R / sqrt(2): the weight at R is e^-2, so the fit is local but still
         // averages over most of the neighbourhood (measured: lower noise than h = R / 2 for the
         // same k, with no visible bias).
-        static const double hdiv = getenv("HDIV") ? atof(getenv("HDIV")) : 2.0; const double h2 = R2 / hdiv;
+        const double h2 = R2 / 2;
         const Vector3d up = N.empty() ? Vector3d::UnitZ() : N[i];
         const Projection p =
             project(s.pts.data(), s.pd2.data(), static_cast<int>(s.pts.size()), h2, up);
@@ -223,7 +362,9 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
     res.kept = kept;
   }
   if (!o.set_normals) res.normals.clear();
-  if (o.set_normals && N.empty() && iterations == 0) res.normals.assign(n, Vector3d::UnitZ());
+  double moved = 0;
+  for (std::size_t i = 0; i < n; ++i) moved += (res.points[i] - P[i]).squaredNorm();
+  res.moved_rms = std::sqrt(moved / n);
   return res;
 }
 

@@ -1,28 +1,42 @@
+#include <cstdio>
 #include <stdexcept>
 
 #include "engine/node.h"
 #include "nodes/cloud/denoise.h"
 #include "nodes/types/cloud.h"
+#include "nodes/types/document.h"
 
 namespace scallop {
 
 NodeDecl make_denoise_node() {
   NodeDecl d;
   d.type = "cloud.denoise";
-  d.version = 1;
+  d.version = 2;  // 2: automatic k (default), tolerance, report output
   d.description =
       "moving-least-squares denoising: each point projected along its local normal onto a "
       "weighted quadric fitted to its neighbours (parallel)";
   d.input("cloud", "Cloud", "the noisy points; their normals, if any, only orient the new ones")
       .input("neighbors", "Neighbors",
              "neighbours of each point (its first k are used); computed here when absent", false)
-      .output("cloud", "Cloud", "the projected points, with normals from the fitted quadrics")
-      .param_int("k", 64, 6, 512, "",
+      .output("cloud", "Cloud",
+              "the projected points, with normals from the fitted quadrics (the input cloud "
+              "itself when automatic mode finds it already smooth enough)")
+      .output("report", "Report",
+              "{noise_sigma (mm, estimated; -1 unless k = 0), k (used; 0 when skipped), "
+              "moved_rms (mm), skipped}")
+      .param_int("k", 0, 0, 512, "",
                  "neighbours in each fit; more averages more noise away (noise in the normal "
-                 "direction falls roughly as 1/sqrt(k)) but smooths more of the shape")
+                 "direction falls roughly as 1/sqrt(k)) but smooths more of the shape. 0: "
+                 "automatic: the noise sigma is estimated from local quadric fits; below "
+                 "`tolerance` the cloud passes unchanged, otherwise k = clamp(3 (sigma / "
+                 "tolerance)^2, 32, 512)")
+      .param_float("tolerance", 0.002, 1e-6, 1e3, "mm",
+                   "automatic mode (k = 0): the normal error the denoised cloud should reach; "
+                   "clouds with less estimated noise are left as they are")
       .param_float("radius", 0.0, 0.0, 1e6, "mm",
-                   "0: each fit uses its k neighbours, Gaussian weights of width half the "
-                   "distance to the k-th; > 0: only neighbours within radius, width radius/2")
+                   "neighbourhood radius R (of the k nearest, those within R count, Gaussian "
+                   "weights exp(-2 d^2/R^2)); 0: automatic, the smallest k-th neighbour distance "
+                   "around each point")
       .param_int("iterations", 1, 0, 20, "", "projections in sequence")
       .param_bool("normals", true,
                   "set normals from the fitted quadrics (oriented like the input normals, or "
@@ -34,6 +48,7 @@ NodeDecl make_denoise_node() {
     if (ctx.has_input("neighbors")) nbrs = ctx.input<Neighborhoods>("neighbors");
     DenoiseOptions o;
     o.k = static_cast<int>(ctx.integer("k"));
+    o.tolerance = ctx.number("tolerance");
     o.radius = ctx.number("radius");
     o.iterations = static_cast<int>(ctx.integer("iterations"));
     o.set_normals = ctx.flag("normals");
@@ -45,6 +60,21 @@ NodeDecl make_denoise_node() {
                       [&](double f) { ctx.progress(f, "denoising"); });
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
+    }
+    Report report;
+    report.data = {{"noise_sigma", r.noise_sigma},
+                   {"k", r.k},
+                   {"moved_rms", r.moved_rms},
+                   {"skipped", r.skipped}};
+    ctx.set("report", std::move(report));
+    if (r.skipped) {
+      char msg[160];
+      std::snprintf(msg, sizeof msg,
+                    "estimated noise %.2g mm is below the tolerance %.2g mm: cloud unchanged",
+                    r.noise_sigma, o.tolerance);
+      ctx.progress(1.0, msg);
+      ctx.set_output("cloud", cloud);
+      return;
     }
     PointCloud out;
     out.points = std::move(r.points);

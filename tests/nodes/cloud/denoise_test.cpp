@@ -1,0 +1,377 @@
+#include "nodes/cloud/denoise.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+#include "engine/node.h"
+#include "nodes/cloud/knn.h"
+#include "nodes/types/document.h"
+
+namespace scallop {
+namespace {
+
+using Eigen::Vector3d;
+
+// Uniform random points on the plane z = z0 + a x + b y over [0, w] x [0, h], with Gaussian
+// noise of `sigma` on every axis (only on z when z_only).
+std::vector<Vector3d> noisy_plane(double a, double b, double z0, double w, double h, int n,
+                                  double sigma, bool z_only, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> g(0.0, sigma);
+  std::vector<Vector3d> P(n);
+  for (auto& p : P) {
+    const double x = w * u(rng), y = h * u(rng);
+    p = {x, y, z0 + a * x + b * y};
+    if (sigma > 0) p += z_only ? Vector3d(0, 0, g(rng)) : Vector3d(g(rng), g(rng), g(rng));
+  }
+  return P;
+}
+
+// Distance of p to the plane z = z0 + a x + b y.
+double plane_distance(const Vector3d& p, double a, double b, double z0) {
+  return (p.z() - z0 - a * p.x() - b * p.y()) / std::sqrt(1 + a * a + b * b);
+}
+
+double rms_plane_distance(const std::vector<Vector3d>& P, double a, double b, double z0) {
+  double s = 0;
+  for (const auto& p : P) s += std::pow(plane_distance(p, a, b, z0), 2);
+  return std::sqrt(s / P.size());
+}
+
+TEST(Denoise, NoisyPlaneBecomesPlanar) {
+  const double a = 0.3, b = -0.2, z0 = 5;
+  const auto P = noisy_plane(a, b, z0, 40, 30, 3000, 0.05, false, 1);
+  DenoiseOptions o;
+  o.k = 256;  // the quadric's height at its centre averages ~sqrt(k / 6) of the noise away
+  const DenoiseResult r = mls_denoise(P, {}, o);
+  ASSERT_EQ(r.points.size(), P.size());
+  ASSERT_EQ(r.normals.size(), P.size());
+  EXPECT_EQ(r.kept, 0u);
+  const double before = rms_plane_distance(P, a, b, z0);
+  const double after = rms_plane_distance(r.points, a, b, z0);
+  EXPECT_NEAR(before, 0.05, 0.005);
+  EXPECT_LT(after, before / 5) << "before " << before << " after " << after;
+  const Vector3d n_true = Vector3d(-a, -b, 1).normalized();
+  double worst_angle = 0;
+  for (const auto& n : r.normals) {
+    EXPECT_NEAR(n.norm(), 1, 1e-12);
+    EXPECT_GT(n.z(), 0);  // oriented +Z without input normals
+    worst_angle = std::max(worst_angle, std::acos(std::min(1.0, n.dot(n_true))));
+  }
+  EXPECT_LT(worst_angle, 0.05);
+}
+
+TEST(Denoise, ExactPlaneIsKeptExactly) {
+  const double a = -0.4, b = 0.7, z0 = -3;
+  const auto P = noisy_plane(a, b, z0, 20, 20, 800, 0, false, 2);
+  DenoiseOptions o;
+  o.k = 24;
+  o.iterations = 2;
+  const DenoiseResult r = mls_denoise(P, {}, o);
+  const Vector3d n_true = Vector3d(-a, -b, 1).normalized();
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    EXPECT_LT((r.points[i] - P[i]).norm(), 1e-9);
+    EXPECT_LT((r.normals[i] - n_true).norm(), 1e-9);
+  }
+}
+
+// A sphere of radius 5 sampled coarsely enough that every neighbourhood spans ~1.3 mm: a
+// plane-only projection would shrink it by ~0.05 mm (1 %); the quadric must not.
+TEST(Denoise, NoisySphereCapKeepsItsRadius) {
+  const double R = 5;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> g(0.0, 0.01);
+  std::vector<Vector3d> P;
+  std::vector<bool> interior;
+  const double cos_max = std::cos(50 * std::numbers::pi / 180);  // cap of half-angle 50 degrees
+  while (P.size() < 3000) {
+    // uniform by area on the cap: cos(theta) uniform in [cos_max, 1]
+    const double c = cos_max + (1 - cos_max) * u(rng), phi = 2 * std::numbers::pi * u(rng);
+    const double s = std::sqrt(1 - c * c);
+    P.push_back(R * Vector3d(s * std::cos(phi), s * std::sin(phi), c) +
+                Vector3d(g(rng), g(rng), g(rng)));
+    interior.push_back(c > std::cos(40 * std::numbers::pi / 180));
+  }
+  DenoiseOptions o;
+  o.k = 48;
+  const DenoiseResult r = mls_denoise(P, {}, o);
+  double mean = 0, rms_before = 0, rms_after = 0;
+  int m = 0;
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    mean += r.points[i].norm();
+    if (!interior[i]) continue;
+    rms_before += std::pow(P[i].norm() - R, 2);
+    rms_after += std::pow(r.points[i].norm() - R, 2);
+    ++m;
+    // outward normals (the cap is seen from +Z)
+    EXPECT_GT(r.normals[i].dot(P[i].normalized()), 0.99);
+  }
+  mean /= P.size();
+  EXPECT_NEAR(mean, R, 1e-3 * R);
+  EXPECT_LT(std::sqrt(rms_after / m), 0.5 * std::sqrt(rms_before / m));
+}
+
+// On the boundary of a horizontal sheet the neighbourhood is one-sided; a point must still only
+// move vertically (a centroid-based smoother would pull it inwards by a fraction of the radius).
+TEST(Denoise, BoundaryPointsDoNotMoveInwards) {
+  const auto P = noisy_plane(0, 0, 2, 20, 20, 2000, 0.05, true, 4);
+  DenoiseOptions o;
+  o.k = 64;
+  const DenoiseResult r = mls_denoise(P, {}, o);
+  double worst_xy = 0, rim_before = 0, rim_after = 0, inward = 0;
+  int rim = 0;
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    worst_xy = std::max(worst_xy, (r.points[i] - P[i]).head<2>().norm());
+    const double edge = std::min({P[i].x(), P[i].y(), 20 - P[i].x(), 20 - P[i].y()});
+    if (edge < 0.5) {
+      // displacement towards the centre of the sheet
+      inward += (r.points[i] - P[i]).head<2>().dot((Eigen::Vector2d(10, 10) - P[i].head<2>()).normalized());
+      rim_before += std::pow(P[i].z() - 2, 2);
+      rim_after += std::pow(r.points[i].z() - 2, 2);
+      ++rim;
+    }
+  }
+  // Only the tilt of the fitted normal (from the noise) moves a point sideways: a few um at most
+  // against a neighbourhood radius of ~2 mm, and with no inward bias.
+  EXPECT_LT(worst_xy, 0.01);
+  ASSERT_GT(rim, 50);
+  EXPECT_LT(std::abs(inward / rim), 2e-4);
+  EXPECT_LT(std::sqrt(rim_after / rim), 0.5 * std::sqrt(rim_before / rim));
+}
+
+TEST(Denoise, GivenNeighbourhoodsGiveTheSameResult) {
+  const auto P = noisy_plane(0.1, 0.2, 0, 10, 10, 500, 0.02, false, 5);
+  DenoiseOptions o;
+  o.k = 20;
+  const DenoiseResult a = mls_denoise(P, {}, o);
+  const Neighborhoods nb = compute_knn(P, 30);  // more than k: the first k are used
+  const DenoiseResult b = mls_denoise(P, {}, o, &nb);
+  for (std::size_t i = 0; i < P.size(); ++i) EXPECT_LT((a.points[i] - b.points[i]).norm(), 1e-12);
+}
+
+TEST(Denoise, NormalsFollowTheInputOrientation) {
+  const auto P = noisy_plane(0, 0, 0, 10, 10, 300, 0.01, false, 6);
+  const std::vector<Vector3d> down(P.size(), -Vector3d::UnitZ());
+  DenoiseOptions o;
+  o.k = 16;
+  for (const auto& n : mls_denoise(P, down, o).normals) EXPECT_LT(n.z(), -0.9);
+  o.set_normals = false;
+  EXPECT_TRUE(mls_denoise(P, down, o).normals.empty());
+}
+
+TEST(Denoise, DegenerateNeighbourhoodsKeepThePoints) {
+  std::vector<Vector3d> P;
+  for (int i = 0; i < 30; ++i) P.emplace_back(0.1 * i, 0.2 * i, 1);  // collinear
+  DenoiseOptions o;
+  o.k = 10;
+  const DenoiseResult r = mls_denoise(P, {}, o);
+  EXPECT_EQ(r.kept, P.size());
+  EXPECT_EQ(r.points, P);
+  for (const auto& n : r.normals) EXPECT_EQ(n, Vector3d::UnitZ());
+  // fewer than 6 points: nothing to fit
+  const std::vector<Vector3d> few{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0.1}};
+  EXPECT_EQ(mls_denoise(few, {}, o).points, few);
+}
+
+TEST(Denoise, BadInputIsAnError) {
+  DenoiseOptions o;
+  auto message = [&](const std::vector<Vector3d>& P, const std::vector<Vector3d>& N,
+                     const DenoiseOptions& opt) -> std::string {
+    try {
+      mls_denoise(P, N, opt);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "no exception";
+  };
+  EXPECT_EQ(message({}, {}, o), "the cloud is empty");
+  const std::vector<Vector3d> P(10, Vector3d(1, 2, 3));
+  EXPECT_EQ(message(P, std::vector<Vector3d>(3, Vector3d::UnitZ()), o),
+            "the cloud has 10 points but 3 normals");
+  std::vector<Vector3d> bad = P;
+  bad[4].y() = std::nan("");
+  EXPECT_EQ(message(bad, {}, o), "point 4 has a NaN or infinite coordinate");
+  DenoiseOptions small = o;
+  small.k = 4;
+  EXPECT_EQ(message(P, {}, small), "k must be 0 (automatic) or at least 5 (got 4)");
+  DenoiseOptions automatic = o;
+  automatic.k = 0;
+  automatic.tolerance = 0;
+  EXPECT_EQ(message(P, {}, automatic), "tolerance must be finite and > 0 (got 0.000000)");
+}
+
+// Points on z = q(x, y), a quadric with curvatures ~0.1 / mm, over [0, 20]^2.
+std::vector<Vector3d> quadric_patch(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 20.0);
+  std::vector<Vector3d> P(n);
+  for (auto& p : P) {
+    const double x = u(rng), y = u(rng);
+    p = {x, y, 1 + 0.1 * x - 0.05 * y + 0.04 * x * x - 0.02 * x * y + 0.05 * y * y};
+  }
+  return P;
+}
+
+TEST(DenoiseAuto, ExactQuadricIsLeftUnchanged) {
+  const auto P = quadric_patch(2000, 8);
+  // Not 0: in the fitting frame, tilted by up to 65 degrees here, the surface is not exactly a
+  // height quadric; that fitting error stays far below the default tolerance of 0.002 mm.
+  EXPECT_LT(estimate_noise_sigma(P), 1e-3);
+  DenoiseOptions o;
+  o.k = 0;
+  const DenoiseResult r = mls_denoise(P, {}, o);
+  EXPECT_TRUE(r.skipped);
+  EXPECT_EQ(r.k, 0);
+  EXPECT_EQ(r.points, P);
+  EXPECT_TRUE(r.normals.empty());  // the input's: none
+  EXPECT_EQ(r.moved_rms, 0);
+  EXPECT_LT(r.noise_sigma, o.tolerance);
+}
+
+TEST(DenoiseAuto, EstimatesTheNoiseOfAPlane) {
+  // isotropic noise: sigma along the normal too
+  for (const double sigma : {0.003, 0.01, 0.05}) {
+    const auto P = noisy_plane(0.3, -0.5, 2, 30, 30, 4000, sigma, false, 9);
+    EXPECT_NEAR(estimate_noise_sigma(P), sigma, 0.15 * sigma) << sigma;
+  }
+  // all points when there are fewer than `samples`; too few points to fit: 0
+  const auto Q = noisy_plane(0, 0, 0, 10, 10, 500, 0.02, true, 10);
+  EXPECT_NEAR(estimate_noise_sigma(Q, 32, 100000), 0.02, 0.003);
+  EXPECT_EQ(estimate_noise_sigma(std::vector<Vector3d>(Q.begin(), Q.begin() + 10)), 0);
+}
+
+TEST(DenoiseAuto, MoreNoisePicksALargerK) {
+  EXPECT_EQ(choose_denoise_k(0.001, 0.002), 32);
+  EXPECT_EQ(choose_denoise_k(0.02, 0.002), 300);
+  EXPECT_EQ(choose_denoise_k(1.0, 0.002), 512);
+  DenoiseOptions o;
+  o.k = 0;
+  std::vector<int> ks;
+  for (const double sigma : {0.008, 0.016}) {
+    const auto P = noisy_plane(0.2, 0.1, 0, 30, 30, 2000, sigma, false, 11);
+    const DenoiseResult r = mls_denoise(P, {}, o);
+    EXPECT_FALSE(r.skipped);
+    EXPECT_NEAR(r.noise_sigma, sigma, 0.15 * sigma);
+    EXPECT_EQ(r.k, choose_denoise_k(r.noise_sigma, o.tolerance));
+    EXPECT_NEAR(r.moved_rms, sigma, 0.2 * sigma);  // the noise is what moved
+    EXPECT_LT(rms_plane_distance(r.points, 0.2, 0.1, 0), sigma / 2.5);
+    ks.push_back(r.k);
+  }
+  EXPECT_GT(ks[0], 32);
+  EXPECT_GT(ks[1], 3 * ks[0]);
+  // given neighbourhoods cap k
+  const auto P = noisy_plane(0.2, 0.1, 0, 30, 30, 1000, 0.016, false, 12);
+  const Neighborhoods nb = compute_knn(P, 40);
+  EXPECT_EQ(mls_denoise(P, {}, o, &nb).k, 40);
+}
+
+}  // namespace
+}  // namespace scallop
+
+// ---- the node ----
+namespace scallop {
+NodeDecl make_denoise_node();
+namespace {
+
+std::map<std::string, ValuePtr> run_node(const NodeDecl& d, const nlohmann::json& params,
+                                         std::map<std::string, ValuePtr> inputs) {
+  nlohmann::json p = nlohmann::json::object();
+  for (const auto& pd : d.params) p[pd.name] = pd.default_value;
+  for (const auto& [key, value] : params.items()) p[key] = value;
+  NodeContext ctx(d, "n", "part", p, std::move(inputs), nullptr);
+  d.run(ctx);
+  return ctx.take_outputs();
+}
+
+TEST(DenoiseNode, Declaration) {
+  const NodeDecl d = make_denoise_node();
+  EXPECT_EQ(d.type, "cloud.denoise");
+  ASSERT_EQ(d.inputs.size(), 2u);
+  EXPECT_EQ(d.inputs[0].type, "Cloud");
+  EXPECT_TRUE(d.inputs[0].required);
+  EXPECT_EQ(d.inputs[1].type, "Neighbors");
+  EXPECT_FALSE(d.inputs[1].required);
+  ASSERT_EQ(d.outputs.size(), 2u);
+  EXPECT_EQ(d.outputs[0].name, "cloud");
+  EXPECT_EQ(d.outputs[0].type, "Cloud");
+  EXPECT_EQ(d.outputs[1].name, "report");
+  EXPECT_EQ(d.outputs[1].type, "Report");
+  for (const char* p : {"k", "tolerance", "radius", "iterations", "normals"})
+    EXPECT_TRUE(d.find_param(p)) << p;
+  EXPECT_EQ(d.find_param("k")->default_value, 0);
+  EXPECT_EQ(d.find_param("tolerance")->default_value, 0.002);
+}
+
+TEST(DenoiseNode, AutomaticModeReports) {
+  const NodeDecl d = make_denoise_node();
+  // clean: the very same cloud comes back
+  auto clean = std::make_shared<PointCloud>();
+  clean->points = quadric_patch(1500, 13);
+  auto out = run_node(d, {}, {{"cloud", clean}});
+  EXPECT_EQ(out.at("cloud"), clean);
+  auto report = std::dynamic_pointer_cast<const Report>(out.at("report"));
+  ASSERT_TRUE(report);
+  EXPECT_EQ(report->data.at("skipped"), true);
+  EXPECT_EQ(report->data.at("k"), 0);
+  EXPECT_EQ(report->data.at("moved_rms"), 0.0);
+  EXPECT_LT(report->data.at("noise_sigma").get<double>(), 1e-3);
+  // noisy
+  auto noisy = std::make_shared<PointCloud>();
+  noisy->points = noisy_plane(0, 0, 0, 20, 20, 1500, 0.01, true, 14);
+  out = run_node(d, {{"tolerance", 0.004}}, {{"cloud", noisy}});
+  report = std::dynamic_pointer_cast<const Report>(out.at("report"));
+  ASSERT_TRUE(report);
+  EXPECT_EQ(report->data.at("skipped"), false);
+  const double sigma = report->data.at("noise_sigma");
+  EXPECT_NEAR(sigma, 0.01, 0.0015);
+  EXPECT_EQ(report->data.at("k"), choose_denoise_k(sigma, 0.004));
+  EXPECT_GT(report->data.at("moved_rms").get<double>(), 0.007);
+  // explicit k: no estimate
+  out = run_node(d, {{"k", 16}}, {{"cloud", noisy}});
+  report = std::dynamic_pointer_cast<const Report>(out.at("report"));
+  EXPECT_EQ(report->data.at("noise_sigma"), -1.0);
+  EXPECT_EQ(report->data.at("k"), 16);
+}
+
+TEST(DenoiseNode, DenoisesWithOrWithoutNeighbours) {
+  const NodeDecl d = make_denoise_node();
+  auto cloud = std::make_shared<PointCloud>();
+  cloud->points = noisy_plane(0.2, 0.1, 1, 20, 20, 1000, 0.03, false, 7);
+  auto nb = std::make_shared<Neighborhoods>(compute_knn(cloud->points, 128));
+  auto a = std::dynamic_pointer_cast<const PointCloud>(
+      run_node(d, {{"k", 128}}, {{"cloud", cloud}}).at("cloud"));
+  auto b = std::dynamic_pointer_cast<const PointCloud>(
+      run_node(d, {{"k", 128}}, {{"cloud", cloud}, {"neighbors", nb}}).at("cloud"));
+  ASSERT_TRUE(a && b);
+  ASSERT_TRUE(a->has_normals());
+  EXPECT_EQ(a->points, b->points);
+  EXPECT_LT(rms_plane_distance(a->points, 0.2, 0.1, 1),
+            rms_plane_distance(cloud->points, 0.2, 0.1, 1) / 3);
+  // normals off: the input's (none here) are kept
+  auto c = std::dynamic_pointer_cast<const PointCloud>(
+      run_node(d, {{"k", 128}, {"normals", false}}, {{"cloud", cloud}}).at("cloud"));
+  EXPECT_FALSE(c->has_normals());
+  EXPECT_EQ(c->points, a->points);
+}
+
+TEST(DenoiseNode, EmptyCloudIsANodeError) {
+  const NodeDecl d = make_denoise_node();
+  try {
+    run_node(d, {}, {{"cloud", std::make_shared<PointCloud>()}});
+    FAIL() << "no exception";
+  } catch (const NodeError& e) {
+    EXPECT_EQ(std::string(e.what()), "the cloud is empty");
+  }
+}
+
+}  // namespace
+}  // namespace scallop
