@@ -21,6 +21,15 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kTwoPi = 2 * M_PI;
+// Bounds on the work: beyond these the map or the cloud is broken (a degenerate map makes the
+// steps vanish), and the planner stops with a clear error instead of running on for hours.
+constexpr std::size_t kMaxPassPoints = 200000;
+
+std::string fmt(double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
 
 // (s, t) pass coordinates -> uv; see the header.
 struct Coords {
@@ -216,6 +225,16 @@ class Planner {
       t = last ? co_.T : t + dt;
       x = x1;
       push(t, x);
+      const std::size_t cap = std::min<std::size_t>(kMaxPassPoints, o_.max_points);
+      if (P.t.size() > cap)
+        throw std::invalid_argument(
+            "a pass (s = " + fmt(s) + ") needs more than " + std::to_string(cap) +
+            " points: the forward step fell to " + fmt(len) +
+            " mm; the UV map is degenerate there or the cloud too noisy for chord_error " +
+            fmt(o_.chord_error) + " mm (smooth or clean the cloud, or raise chord_error)");
+      if (o_.progress && P.t.size() % 5000 == 0)
+        o_.progress(std::min(0.99, s / co_.S),
+                    "pass at s = " + fmt(s) + ": " + std::to_string(P.t.size()) + " points so far");
     }
     return P;
   }
@@ -433,12 +452,6 @@ nlohmann::json concave_regions(const std::vector<Eigen::Vector3d>& pts,
   return {{"count", regions.size()}, {"points", n}, {"regions", list}};
 }
 
-std::string fmt(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%g", x);
-  return buf;
-}
-
 void check_options(const IsoparametricOptions& o) {
   auto positive = [](double v, const char* what) {
     if (!(v > 0) || !std::isfinite(v))
@@ -524,6 +537,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   const double hlim = planner.h();
 
   double s = 0;
+  std::size_t total_points = passes.back().t.size();
   while (s < co.S) {
     const Pass& A = passes.back();
     info.push_back(planner.infos(A));
@@ -570,7 +584,16 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     interval_max = std::max(interval_max, chk.interval_max);
     if (chk.scallop_max > scallop_max) scallop_max = chk.scallop_max, scallop_where = chk.where;
     s = B.s;
+    total_points += B.t.size();
     passes.push_back(std::move(B));
+    if (passes.size() > o.max_passes || total_points > o.max_points)
+      throw std::invalid_argument(
+          "the path needs more than " +
+          (passes.size() > o.max_passes ? std::to_string(o.max_passes) + " passes"
+                                        : std::to_string(o.max_points) + " points") +
+          " (stopped at s = " + fmt(s) + " of " + fmt(co.S) + ", side steps down to " +
+          fmt(ds_min) + "): the UV map is degenerate or the cloud too noisy for these limits "
+          "(check the map report, smooth or clean the cloud, or raise scallop_height)");
     if (o.progress) o.progress(s / co.S, "pass " + std::to_string(passes.size()));
   }
   info.push_back(planner.infos(passes.back()));

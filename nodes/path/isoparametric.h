@@ -26,6 +26,7 @@
 // the pass rebuilt.
 #pragma once
 
+#include <cstddef>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -45,6 +46,11 @@ struct IsoparametricOptions {
   double conformal_tolerance = 5.0;  // degrees: |angle(r_s, r_t) - 90| above this uses formula (4)
   double max_segment = 5.0;          // longest forward step (mm), > 0
   int interpolation_k = 20;          // neighbours per local fit (see uv_interpolation.h)
+  // Bounds on the work (a degenerate map or a noisy cloud makes the steps vanish): more passes
+  // or points than these, or more than min(200000, max_points) points in one pass, stop the
+  // planner with std::invalid_argument saying where and why.
+  std::size_t max_passes = 20000;
+  std::size_t max_points = 5000000;
   std::function<void(double, const std::string&)> progress;  // optional
 };
 

@@ -34,7 +34,9 @@ std::vector<CentreSegment> feed_centres(const Toolpath& path);
 std::vector<CentreSegment> feed_centres(const LinkedPath& path, double& rapid_length);
 
 // Height-field model of a cloud seen from +z: z(x, y) and the upward normal from a weighted
-// quadratic least-squares fit of the k nearest cloud points in xy.
+// quadratic least-squares fit of the k nearest cloud points in xy; where the surface is steeper
+// than ~37 degrees, from a quadratic fitted in the local tangent frame to the k nearest points
+// in 3-D (a fit of z over xy is ill-posed there when the points crowd together in xy).
 class HeightField {
  public:
   // P  #P by 3 cloud points (mm), at least 10. k  neighbours per fit.

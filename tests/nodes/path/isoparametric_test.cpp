@@ -300,3 +300,33 @@ TEST(Isoparametric, NodeRunsAndReportsErrors) {
                  "(use pattern 'contour', or map the boundary to a rectangle)");
   }
 }
+
+// A degenerate map (or a noisy cloud) makes the steps vanish: the planner must stop with a clear
+// error rather than run on, and report progress while it works.
+TEST(Isoparametric, StopsWithAClearErrorWhenThePathNeedsTooManyPasses) {
+  const Input in = flat();
+  IsoparametricOptions o;
+  o.tool_radius = 3;
+  o.scallop_height = 0.01;
+  o.chord_error = 0.005;
+  int calls = 0;
+  o.progress = [&](double f, const std::string&) {
+    EXPECT_GE(f, 0);
+    EXPECT_LE(f, 1);
+    ++calls;
+  };
+  o.max_passes = 5;  // the flat patch needs 31
+  const std::string e = error_of(in, o);
+  EXPECT_NE(e.find("the path needs more than 5 passes (stopped at s = "), std::string::npos) << e;
+  EXPECT_NE(e.find("the UV map is degenerate or the cloud too noisy"), std::string::npos) << e;
+  EXPECT_GT(calls, 0);
+
+  o.max_passes = 20000;
+  o.max_points = 50;  // 31 passes of 5 points
+  const std::string e2 = error_of(in, o);
+  EXPECT_NE(e2.find("the path needs more than 50 points"), std::string::npos) << e2;
+
+  o.max_points = 3;  // one pass of 5 points is already too long
+  const std::string e3 = error_of(in, o);
+  EXPECT_NE(e3.find("a pass (s = 0) needs more than 3 points"), std::string::npos) << e3;
+}
