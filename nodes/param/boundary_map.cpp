@@ -1,9 +1,10 @@
 #include "nodes/param/boundary_map.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <memory>
-#include <cmath>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
@@ -74,12 +75,10 @@ std::vector<Eigen::Vector3d> smoothed_loop(const std::vector<Eigen::Vector3d>& P
   return Q;
 }
 
-std::vector<std::pair<int, Eigen::Vector2d>> outer_band_values(const std::vector<Eigen::Vector3d>& P,
-                                                               const std::vector<Eigen::Vector3d>& N,
-                                                               const std::vector<std::uint8_t>& is_boundary,
-                                                               const std::vector<std::vector<int>>& loops,
-                                                               const UVMap& map) {
-  const auto& outer = map.outer_loop;
+std::vector<BandPoint> outer_band(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
+                                  const std::vector<std::uint8_t>& is_boundary,
+                                  const std::vector<std::vector<int>>& loops, const std::vector<int>& outer,
+                                  const std::vector<int>& corners) {
   check_loop(P, outer);
   if (is_boundary.size() != P.size())
     throw std::invalid_argument("the boundary flags are for " + std::to_string(is_boundary.size()) +
@@ -87,9 +86,6 @@ std::vector<std::pair<int, Eigen::Vector2d>> outer_band_values(const std::vector
   if (!N.empty() && N.size() != P.size())
     throw std::invalid_argument("the cloud has " + std::to_string(N.size()) + " normals for " +
                                 std::to_string(P.size()) + " points");
-  if (map.boundary_uv.size() != outer.size())
-    throw std::invalid_argument("the boundary map has " + std::to_string(outer.size()) + " loop points and " +
-                                std::to_string(map.boundary_uv.size()) + " boundary positions");
   const int n = static_cast<int>(outer.size());
   // 1: on the outer loop; 2: on a hole loop.
   std::vector<char> loop_of(P.size(), 0);
@@ -97,69 +93,182 @@ std::vector<std::pair<int, Eigen::Vector2d>> outer_band_values(const std::vector
   for (std::size_t l = 1; l < loops.size(); ++l)
     for (int i : loops[l])
       if (i >= 0 && static_cast<std::size_t>(i) < P.size()) loop_of[i] = 2, holes.push_back(P[i]);
-  for (int i : outer) loop_of[i] = 1;
+  std::vector<int> position(P.size(), -1);
+  for (int j = 0; j < n; ++j) loop_of[outer[j]] = 1, position[outer[j]] = j;
   Eigen::Vector3d plane_c, plane_n;
   if (N.empty()) best_fit_plane(P, N, plane_c, plane_n);
 
   const std::vector<Eigen::Vector3d> Q = smoothed_loop(P, outer);
+  const int w = std::clamp(kLoopSmoothing, 1, std::max(1, (n - 1) / 2));
   // Local sampling step: the raw loop's segment lengths averaged like the positions.
   std::vector<double> step(n);
-  {
-    const int w = std::clamp(kLoopSmoothing, 0, (n - 1) / 2);
-    for (int i = 0; i < n; ++i) {
-      double s = 0;
-      for (int j = -w; j <= w; ++j) {
-        int a = ((i + j) % n + n) % n;
-        s += (P[outer[(a + 1) % n]] - P[outer[a]]).norm();
-      }
-      step[i] = s / (2 * w + 1);
+  for (int i = 0; i < n; ++i) {
+    double s = 0;
+    for (int j = -w; j <= w; ++j) {
+      int a = ((i + j) % n + n) % n;
+      s += (P[outer[(a + 1) % n]] - P[outer[a]]).norm();
     }
+    step[i] = s / (2 * w + 1);
+  }
+  // Radius of curvature of the smoothed loop at each vertex (circle through the vertices w
+  // before and after it).
+  std::vector<double> rho(n, std::numeric_limits<double>::infinity());
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector3d a = Q[((i - w) % n + n) % n] - Q[i], b = Q[(i + w) % n] - Q[i];
+    double cross = a.cross(b).norm();
+    if (cross > 0) rho[i] = a.norm() * b.norm() * (a - b).norm() / (2 * cross);
+  }
+  std::vector<char> near_corner(n, 0);
+  for (int c : corners) {
+    if (c < 0 || c >= n)
+      throw std::invalid_argument("corner " + std::to_string(c) + " is outside the outer loop's positions");
+    for (int j = -w; j <= w; ++j) near_corner[((c + j) % n + n) % n] = 1;
   }
   KnnIndex on_outer(Q);
   std::unique_ptr<KnnIndex> on_holes = holes.empty() ? nullptr : std::make_unique<KnnIndex>(holes);
-  std::vector<std::pair<int, Eigen::Vector2d>> out;
+  std::vector<BandPoint> out;
   std::vector<int> idx;
   std::vector<double> sq;
   for (std::size_t i = 0; i < P.size(); ++i) {
-    if (loop_of[i] != 1 && (!is_boundary[i] || loop_of[i] == 2)) continue;
+    if (loop_of[i] == 2) continue;
     // Nearest point on the smoothed loop: the segments next to the few nearest vertices.
     on_outer.query(P[i], std::min(4, n), idx, sq);
     double best = std::numeric_limits<double>::infinity(), best_t = 0;
-    int best_seg = -1;
+    int seg = -1;
     for (int v : idx)
-      for (int seg : {(v + n - 1) % n, v}) {
-        const Eigen::Vector3d& a = Q[seg];
-        Eigen::Vector3d ab = Q[(seg + 1) % n] - a;
+      for (int sg : {(v + n - 1) % n, v}) {
+        Eigen::Vector3d ab = Q[(sg + 1) % n] - Q[sg];
         double len2 = ab.squaredNorm();
-        double t = len2 > 0 ? std::clamp((P[i] - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-        double d = (P[i] - (a + t * ab)).norm();
-        if (d < best) best = d, best_t = t, best_seg = seg;
+        double t = len2 > 0 ? std::clamp((P[i] - Q[sg]).dot(ab) / len2, 0.0, 1.0) : 0.0;
+        double d = (P[i] - (Q[sg] + t * ab)).norm();
+        if (d < best) best = d, best_t = t, seg = sg;
       }
-    if (best_seg < 0) continue;
-    if (loop_of[i] != 1) {
-      if (best > kBandWidth * step[best_seg]) continue;  // a false boundary point inside the patch
-      if (on_holes) {
-        on_holes->query(P[i], 1, idx, sq);
-        if (!idx.empty() && std::sqrt(sq[0]) < best) continue;  // a hole's band: stays free
-      }
+    if (seg < 0) continue;
+    // A loop point near a rectangle corner keeps its own place in the loop (its chord-length
+    // parameter): projected on the rounded-off corner, points could swap sides across it.
+    if (loop_of[i] == 1 && near_corner[position[i]]) seg = position[i], best_t = 0;
+    const bool band = loop_of[i] == 1 || (is_boundary[i] && best <= kBandWidth * step[seg]);
+    const bool probe = !band && best >= kBandWidth * step[seg] && best <= 3 * kBandWidth * step[seg];
+    if (!band && !probe) continue;
+    if (loop_of[i] != 1 && on_holes) {
+      on_holes->query(P[i], 1, idx, sq);
+      if (!idx.empty() && std::sqrt(sq[0]) < best) continue;  // a hole's band: stays free
     }
-    const Eigen::Vector3d& qa = Q[best_seg];
-    const Eigen::Vector3d& qb = Q[(best_seg + 1) % n];
-    const Eigen::Vector2d& ua = map.boundary_uv[best_seg];
-    const Eigen::Vector2d& ub = map.boundary_uv[(best_seg + 1) % n];
-    Eigen::Vector2d uv = (1 - best_t) * ua + best_t * ub;
-    // Inward offset: the loop runs with the patch on its left seen from the normal, and so does
-    // the domain boundary in (u,v); a point d inside the smoothed loop goes d inside the domain.
-    Eigen::Vector3d T = (qb - qa).normalized();
+    // Signed depth inside the smoothed loop, in the point's tangent plane: the loop runs with the
+    // patch on its left seen from the normal.
+    Eigen::Vector3d T = (loop_of[i] == 1 && near_corner[position[i]] ? Q[(seg + 1) % n] - Q[(seg + n - 1) % n] : Q[(seg + 1) % n] - Q[seg]).normalized();
     Eigen::Vector3d inward = (N.empty() ? plane_n : N[i]).cross(T);
-    Eigen::Vector2d duv = ub - ua;
-    if (inward.norm() > 1e-6 && duv.norm() > 0 && T.allFinite()) {
-      double d = std::max(0.0, (P[i] - ((1 - best_t) * qa + best_t * qb)).dot(inward.normalized()));
-      uv += d * Eigen::Vector2d(-duv.y(), duv.x()).normalized();
+    double depth = 0;
+    if (T.allFinite() && inward.norm() > 1e-6)
+      depth = (P[i] - ((1 - best_t) * Q[seg] + best_t * Q[(seg + 1) % n])).dot(inward.normalized());
+    if (probe && !(depth > 0)) continue;
+    out.push_back({static_cast<int>(i), seg, best_t, depth, std::min(rho[seg], rho[(seg + 1) % n]), band,
+                   loop_of[i] == 1});
+  }
+  // Depths are measured from the band's outer envelope, not from the smoothed loop (its mean
+  // line): the band's outermost points within kScaleWindow segments get depth 0, the others keep
+  // their distances to them. (Clamping the points outside the mean line to depth 0 would put
+  // them all on the domain's edge, and the thin fan triangles between them flip at random.)
+  std::vector<double> outermost(n, 0.0), envelope(n, 0.0);
+  for (const BandPoint& b : out)
+    if (b.fixed) outermost[b.segment] = std::min(outermost[b.segment], b.depth);
+  const int ws = std::min(kScaleWindow, (n - 1) / 2);
+  for (int i = 0; i < n; ++i)
+    for (int j = -ws; j <= ws; ++j) envelope[i] = std::min(envelope[i], outermost[((i + j) % n + n) % n]);
+  for (BandPoint& b : out) b.depth = std::max(0.0, b.depth - envelope[b.segment]);
+  return out;
+}
+
+namespace {
+
+// The boundary map's position at a band point's projection, and the domain's inward unit normal
+// there (normal to the (u,v) chord of its segment; zero for a degenerate chord).
+void band_base(const BandPoint& b, const UVMap& map, Eigen::Vector2d& base, Eigen::Vector2d& normal) {
+  const std::size_t n = map.boundary_uv.size();
+  const Eigen::Vector2d& ua = map.boundary_uv[b.segment];
+  const Eigen::Vector2d& ub = map.boundary_uv[(b.segment + 1) % n];
+  base = (1 - b.t) * ua + b.t * ub;
+  Eigen::Vector2d c = ub - ua;
+  normal = c.norm() > 0 ? Eigen::Vector2d(-c.y(), c.x()).normalized() : Eigen::Vector2d::Zero();
+}
+
+void check_band(const std::vector<BandPoint>& band, const UVMap& map) {
+  for (const BandPoint& b : band)
+    if (b.segment < 0 || static_cast<std::size_t>(b.segment) >= map.boundary_uv.size())
+      throw std::invalid_argument("a band point's loop segment " + std::to_string(b.segment) +
+                                  " is outside the boundary map's " + std::to_string(map.boundary_uv.size()) +
+                                  " loop points");
+}
+
+}  // namespace
+
+std::vector<std::pair<int, Eigen::Vector2d>> band_values(const std::vector<BandPoint>& band, const UVMap& map,
+                                                         const std::vector<Eigen::Vector2d>& slope) {
+  check_band(band, map);
+  if (!slope.empty() && slope.size() != map.boundary_uv.size())
+    throw std::invalid_argument("the depth slope has " + std::to_string(slope.size()) + " values for " +
+                                std::to_string(map.boundary_uv.size()) + " loop points");
+  std::vector<Eigen::Vector2d> corner_uv;
+  if (map.domain == "rectangle")
+    corner_uv = {{0, 0}, {map.width, 0}, {map.width, map.height}, {0, map.height}};
+  std::vector<std::pair<int, Eigen::Vector2d>> out;
+  for (const BandPoint& b : band) {
+    if (!b.fixed) continue;
+    Eigen::Vector2d base, normal;
+    band_base(b, map, base, normal);
+    const Eigen::Vector2d tangent(normal.y(), -normal.x());
+    const Eigen::Vector2d sl = slope.empty() ? Eigen::Vector2d(1, 0) : slope[b.segment];
+    // (arc length, depth) coordinates are one-to-one only below the loop's radius of curvature
+    // and, in (u,v), short of the rectangle's corners: past either limit band points off the
+    // loop stay free (the harmonic map fans out there by itself) and loop points are held short
+    // of it (a loop point left on the domain's edge while its neighbours go inside would fold).
+    double d = b.depth;
+    double reach = std::numeric_limits<double>::infinity();
+    if (sl.x() > 0)
+      for (const Eigen::Vector2d& c : corner_uv) reach = std::min(reach, (base - c).norm() / sl.x());
+    if (d > 0 && d >= kCornerReach * reach) {
+      if (!b.on_loop) continue;
+      d = kCornerReach * reach;
     }
-    out.emplace_back(static_cast<int>(i), uv);
+    if (d > b.max_depth) {
+      if (!b.on_loop) continue;
+      d = b.max_depth;
+    }
+    out.emplace_back(b.index, base + d * (sl.x() * normal + sl.y() * tangent));
   }
   return out;
+}
+
+std::vector<Eigen::Vector2d> band_depth_slope(const std::vector<BandPoint>& band, const UVMap& map,
+                                              const std::vector<Eigen::Vector2d>& uv) {
+  check_band(band, map);
+  const int n = static_cast<int>(map.boundary_uv.size());
+  std::vector<Eigen::Vector2d> sum(n, Eigen::Vector2d::Zero());
+  std::vector<double> count(n, 0.0);
+  for (const BandPoint& b : band) {
+    if (b.fixed || !(b.depth > 0)) continue;
+    if (b.index < 0 || static_cast<std::size_t>(b.index) >= uv.size())
+      throw std::invalid_argument("a band point's index is outside the map's " + std::to_string(uv.size()) +
+                                  " points");
+    Eigen::Vector2d base, normal;
+    band_base(b, map, base, normal);
+    const Eigen::Vector2d tangent(normal.y(), -normal.x()), g = (uv[b.index] - base) / b.depth;
+    sum[b.segment] += Eigen::Vector2d(g.dot(normal), g.dot(tangent));
+    count[b.segment] += 1;
+  }
+  // Averaged over a window of loop segments; no probe nearby (a sliver of the patch): zero.
+  const int w = std::min(kScaleWindow, (n - 1) / 2);
+  std::vector<Eigen::Vector2d> slope(n, Eigen::Vector2d::Zero());
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector2d s = Eigen::Vector2d::Zero();
+    double c = 0;
+    for (int j = -w; j <= w; ++j) {
+      int a = ((i + j) % n + n) % n;
+      s += sum[a], c += count[a];
+    }
+    if (c > 0) slope[i] = Eigen::Vector2d(std::clamp(s.x() / c, 0.0, kMaxSlope), std::clamp(s.y() / c, -kMaxSlope, kMaxSlope));
+  }
+  return slope;
 }
 
 std::vector<int> parse_corners(const std::string& text, std::size_t loop_size) {
@@ -191,21 +300,34 @@ std::vector<int> parse_corners(const std::string& text, std::size_t loop_size) {
   return c;
 }
 
-std::vector<int> detect_corners(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& loop) {
+std::vector<int> detect_corners(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& loop,
+                                int half_window) {
   check_loop(P, loop);
   const std::size_t n = loop.size();
   if (n < 4) throw std::invalid_argument("a rectangle map needs an outer loop of at least 4 points");
-  const std::vector<Eigen::Vector3d> Q = smoothed_loop(P, loop);
+  const std::vector<Eigen::Vector3d> Q = smoothed_loop(P, loop, half_window);
   std::vector<double> cum = cumulative_lengths(Q);
   const double L = cum[n];
   if (!(L > 0)) throw std::invalid_argument("the outer loop has zero length");
   const double h = L / 48, sep = L / 16;
+  // The loop's own orientation: the normal of its least-squares plane, turned so that the loop
+  // runs counter-clockwise around it.
+  Eigen::Vector3d c, up;
+  best_fit_plane(Q, {}, c, up);
+  {
+    Eigen::Vector3d area = Eigen::Vector3d::Zero();
+    for (std::size_t i = 0; i < n; ++i) area += (Q[i] - c).cross(Q[(i + 1) % n] - c);
+    if (area.dot(up) < 0) up = -up;
+  }
   std::vector<double> turn(n);
   for (std::size_t i = 0; i < n; ++i) {
     Eigen::Vector3d a = Q[i] - point_at(Q, cum, cum[i] - h);
     Eigen::Vector3d b = point_at(Q, cum, cum[i] + h) - Q[i];
     double na = a.norm(), nb = b.norm();
     turn[i] = (na > 0 && nb > 0) ? std::acos(std::clamp(a.dot(b) / (na * nb), -1.0, 1.0)) : 0.0;
+    // A reflex turn (a notch) is no corner: a rectangle's corners are convex, and one put at a
+    // notch crushes the map there.
+    if (a.cross(b).dot(up) < 0) turn[i] = 0;
   }
   std::vector<int> order(n);
   for (std::size_t i = 0; i < n; ++i) order[i] = static_cast<int>(i);
@@ -242,10 +364,10 @@ std::vector<int> detect_corners(const std::vector<Eigen::Vector3d>& P, const std
 }
 
 UVMap map_boundary(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& outer,
-                   BoundaryDomain domain, std::vector<int> corners) {
+                   BoundaryDomain domain, std::vector<int> corners, int half_window) {
   check_loop(P, outer);
   const std::size_t n = outer.size();
-  std::vector<double> cum = cumulative_lengths(smoothed_loop(P, outer));
+  std::vector<double> cum = cumulative_lengths(smoothed_loop(P, outer, half_window));
   const double L = cum[n];
   if (!(L > 0)) throw std::invalid_argument("the outer loop has zero length");
   UVMap m;
@@ -262,7 +384,7 @@ UVMap map_boundary(const std::vector<Eigen::Vector3d>& P, const std::vector<int>
   }
 
   m.domain = "rectangle";
-  if (corners.empty()) corners = detect_corners(P, outer);
+  if (corners.empty()) corners = detect_corners(P, outer, half_window);
   if (corners.size() != 4) throw std::invalid_argument("a rectangle map needs exactly 4 corners");
   for (int c : corners)
     if (c < 0 || static_cast<std::size_t>(c) >= n)

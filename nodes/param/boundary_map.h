@@ -21,10 +21,6 @@ enum class BoundaryDomain { Disk, Rectangle };
 // while rounding a corner over only ~3 sampling steps.
 constexpr int kLoopSmoothing = 3;
 
-// Flagged points farther than this many local loop steps from the smoothed outer loop are false
-// boundary points inside the patch (sampling voids), not part of the outer band.
-constexpr double kBandWidth = 3.0;
-
 // "disk", "rectangle"; throws std::invalid_argument otherwise.
 BoundaryDomain parse_boundary_domain(const std::string& name);
 
@@ -40,11 +36,14 @@ BoundaryDomain parse_boundary_domain(const std::string& name);
 //   rectangle: corners sorted ascending, c0 -> (0,0), c1 -> (W,0), c2 -> (W,H), c3 -> (0,H) with
 //         W = (L1 + L3) / 2, H = (L2 + L4) / 2, L1..L4 the chord lengths of the four sides
 //         c0..c1, c1..c2, c2..c3, c3..c0; each side mapped by chord length along its edge.
-// Chord lengths are measured along smoothed_loop(P, outer), not through the raw loop points.
+// Chord lengths are measured along smoothed_loop(P, outer, half_window), not through the raw
+// loop points.
 // Throws std::invalid_argument for a short loop, a bad index, a zero-length loop or side, or bad
 // corners.
+// half_window  the smoothing of the loop before its chord length is measured (smoothed_loop);
+//        0 measures through the loop points themselves (an exact polygon)
 UVMap map_boundary(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& outer,
-                   BoundaryDomain domain, std::vector<int> corners = {});
+                   BoundaryDomain domain, std::vector<int> corners = {}, int half_window = kLoopSmoothing);
 
 // Q[i] = mean of the positions of loop[i - w .. i + w] (indices around the closed loop),
 // w = min(half_window, (#loop - 1) / 2). Throws std::invalid_argument for a loop of < 3 points
@@ -52,34 +51,86 @@ UVMap map_boundary(const std::vector<Eigen::Vector3d>& P, const std::vector<int>
 std::vector<Eigen::Vector3d> smoothed_loop(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& loop,
                                            int half_window = kLoopSmoothing);
 
-// Dirichlet values for the whole outer boundary band (paper section 2.2 fixes the boundary; our
-// detected boundary is a band one or two points thick, and the loop zig-zags through it).
-// N            #P unit normals, or empty (the cloud's least-squares plane normal is used)
-// is_boundary  #P flags (detect_boundary);  loops  all loops (order_boundary_loops)
-// map          the boundary map of loops[0] (map_boundary)
-// The band: the outer loop's points, and every flagged point on no loop within kBandWidth local
-// loop steps of the smoothed outer loop and nearer to it than to any hole loop point (hole bands
-// stay free: natural boundaries). Each band point is projected on the smoothed outer loop
-// (smoothed_loop); its value interpolates boundary_uv of that segment's two loop points, moved
-// into the domain (normal to the segment's (u,v) chord) by the point's distance d >= 0 inside the
-// smoothed loop, measured in its tangent plane (points outside it get d = 0). The map of the band
-// then follows its geometry: a loop point that zig-zags inwards lands inside the domain, not on
-// its edge, and band points off the loop are no free unknowns that could land outside the domain.
-// Returns (point index, uv) pairs, ascending index, outer-loop points included.
-// Throws std::invalid_argument for mismatched sizes.
-std::vector<std::pair<int, Eigen::Vector2d>> outer_band_values(const std::vector<Eigen::Vector3d>& P,
-                                                               const std::vector<Eigen::Vector3d>& N,
-                                                               const std::vector<std::uint8_t>& is_boundary,
-                                                               const std::vector<std::vector<int>>& loops,
-                                                               const UVMap& map);
+// The outer boundary band. Paper section 2.2 fixes the boundary points; our detected boundary is
+// a band one or two points thick and the ordered loop zig-zags through it. Fixing the loop
+// points on the domain's edge squashes that zig-zag flat, and the flagged band points off the
+// loop, left free, can land outside the domain: both fold the map at the edge. So every band
+// point is fixed at its projection on the smoothed loop, moved into the domain by its depth
+// inside that loop times the map's derivative along that depth (band_values), which a first
+// solve with all depths zero measures on free "probe" points just inside the band
+// (band_depth_slope).
+struct BandPoint {
+  int index = 0;         // point index
+  int segment = 0;       // segment of the smoothed outer loop it projects on: Q[segment] -> Q[segment+1]
+  double t = 0;          // position on that segment, 0..1
+  double depth = 0;      // distance inside the band's outer envelope (mm, >= 0), in the point's tangent plane
+  double max_depth = 0;  // the smoothed loop's radius of curvature there (mm)
+  bool fixed = false;    // true: a band point (Dirichlet); false: a probe (free)
+  bool on_loop = false;  // on the outer loop itself
+};
 
-// The 4 sharpest turning points of a closed loop, as positions in `loop`, ascending.
-// Measured on smoothed_loop(P, loop): the turning angle at a point is the angle between the
-// chords to the loop points an arc length h = L / 48 before and after it (interpolated), which averages boundary noise over several
-// samples; corners are taken greedily by decreasing angle at least L / 16 of arc apart. When
-// fewer than 4 points turn by 30 degrees or more (a smooth outline has no corners), the corners
-// are the sharpest point and the 3 points a quarter, half and three quarters of L after it.
-std::vector<int> detect_corners(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& loop);
+// Loop steps: flagged points within kBandWidth local loop steps of the smoothed loop form the
+// band (farther ones are false boundary points inside the patch, at sampling voids); probes lie
+// kBandWidth to 3 kBandWidth steps inside. kScaleWindow: half width (loop segments) over which
+// the probes' depth slope is averaged (and the outer envelope taken); kMaxSlope: its clamp.
+constexpr double kBandWidth = 3.0;
+constexpr int kScaleWindow = 8;
+constexpr double kMaxSlope = 2.0;
+// Band points are offset at most this fraction of the way to a rectangle corner in (u,v).
+constexpr double kCornerReach = 0.8;
+
+// P            #P by 3 positions (mm);  N  #P unit normals, or empty (least-squares plane normal)
+// is_boundary  #P flags (detect_boundary);  loops  all loops (order_boundary_loops)
+// outer        the outer loop (loops[0])
+// Band points: the outer loop's points and every flagged point on no loop within kBandWidth
+// steps of the smoothed loop and nearer to it than to any hole loop point (hole bands stay free:
+// natural boundaries). Probes: other points kBandWidth..3 kBandWidth steps inside, not nearer to
+// a hole. Each is projected on the nearest segment of smoothed_loop(P, outer), except the loop
+// points within kLoopSmoothing positions of a rectangle corner (corners: positions in outer, as
+// UVMap::corners), which keep their place (segment = their position, t = 0); its depth is
+// its distance inside that loop (in its tangent plane, along the loop's left normal) less the
+// smallest such signed distance of the band points projecting within kScaleWindow segments.
+// Returns band points and probes, ascending index. Throws std::invalid_argument for mismatched
+// sizes or a bad loop.
+std::vector<BandPoint> outer_band(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
+                                  const std::vector<std::uint8_t>& is_boundary,
+                                  const std::vector<std::vector<int>>& loops, const std::vector<int>& outer,
+                                  const std::vector<int>& corners = {});
+
+// Dirichlet values of the band points (not the probes) for the boundary map `map` of the same
+// outer loop: boundary_uv interpolated at the projection ("base"), plus depth times the map's
+// derivative along the inward depth direction, slope[segment] = (a, b): a along the domain's
+// inward normal (normal to the segment's (u,v) chord), b along the boundary's direction of
+// travel (slope empty: (1, 0), an isometric offset). The depth is capped at max_depth and, for a
+// rectangle, at kCornerReach of the depth whose offset would reach the nearest corner in (u,v),
+// as (arc length, depth) stop being one-to-one there; band points off the loop deeper than the
+// cap are left out (free), deeper loop points are held at the cap.
+// Returns (point index, uv) pairs, ascending index.
+std::vector<std::pair<int, Eigen::Vector2d>> band_values(const std::vector<BandPoint>& band, const UVMap& map,
+                                                         const std::vector<Eigen::Vector2d>& slope = {});
+
+// The derivative of a map along the inward depth direction near its outer loop, measured on the
+// probes: for each loop segment, the mean over the probes projecting within kScaleWindow segments
+// of (uv - base) / depth in (inward normal, tangent) components, clamped to [0, kMaxSlope] and
+// [-kMaxSlope, kMaxSlope];
+// zero where there is no probe. uv: #P positions of a map solved with every band point at its
+// base (band_values with zero slopes). Near a corner of the outline that the domain does not
+// have (a rectangle's corner on a disk, a spike) the map is far from isometric: the normal
+// component drops well below 1 and the tangential one shears, and the band must follow that.
+std::vector<Eigen::Vector2d> band_depth_slope(const std::vector<BandPoint>& band, const UVMap& map,
+                                              const std::vector<Eigen::Vector2d>& uv);
+
+// The 4 sharpest convex turning points of a closed loop, as positions in `loop`, ascending.
+// Measured on smoothed_loop(P, loop, half_window): the turning angle at a point is the angle between the
+// chords to the loop points an arc length h = L / 48 before and after it (interpolated), which
+// averages boundary noise over several samples. Only left turns about the loop's least-squares
+// plane normal (oriented so that the loop runs counter-clockwise around it) count: a notch is no
+// corner of a rectangle. Corners are taken greedily by decreasing angle at least L / 16 of arc
+// apart. When fewer than 4 points turn by 30 degrees or more (a smooth outline has no corners),
+// the corners are the sharpest point and the 3 points a quarter, half and three quarters of L
+// after it.
+std::vector<int> detect_corners(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& loop,
+                                int half_window = kLoopSmoothing);
 
 // Parses "i,j,k,l" (positions in a loop of `loop_size` points); empty text gives an empty vector.
 // Throws std::invalid_argument naming the problem (not 4 numbers, out of range, repeated).

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <unsupported/Eigen/IterativeSolvers>
 
+#include "nodes/param/boundary_map.h"
+
 namespace scallop {
 
 HarmonicSolver parse_harmonic_solver(const std::string& name) {
@@ -161,6 +163,20 @@ UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, cons
   for (std::size_t j = 0; j < outer.size(); ++j) out.boundary_uv[j] = uv[outer[j]];
   out.uv = std::move(uv);
   return out;
+}
+
+UVMap solve_harmonic_band(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L,
+                          const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
+                          const std::vector<std::uint8_t>& is_boundary,
+                          const std::vector<std::vector<int>>& loops, const UVMap& boundary,
+                          HarmonicSolver solver) {
+  if (static_cast<std::size_t>(L.rows()) != P.size())
+    throw std::invalid_argument("the Laplacian has " + std::to_string(L.rows()) + " rows but the cloud has " +
+                                std::to_string(P.size()) + " points");
+  const std::vector<BandPoint> band = outer_band(P, N, is_boundary, loops, boundary.outer_loop, boundary.corners);
+  const std::vector<Eigen::Vector2d> zero(boundary.outer_loop.size(), Eigen::Vector2d::Zero());
+  UVMap first = solve_harmonic(L, boundary, solver, band_values(band, boundary, zero));
+  return solve_harmonic(L, boundary, solver, band_values(band, boundary, band_depth_slope(band, boundary, first.uv)));
 }
 
 }  // namespace scallop

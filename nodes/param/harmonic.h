@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -30,7 +31,7 @@ HarmonicSolver parse_harmonic_solver(const std::string& name);
 // meshless setting their one-sided neighbourhood row is the natural-boundary discretisation.
 // Outer-loop points keep boundary_uv exactly.
 // fixed     Dirichlet values (point index, uv) of further points, or replacing boundary_uv of
-//           outer-loop points (outer_band_values gives both for the whole boundary band); these
+//           outer-loop points (band_values gives both for the whole boundary band); these
 //           points keep their uv exactly. The returned boundary_uv holds the values used.
 // Throws std::invalid_argument for mismatched sizes, and std::runtime_error when the solve fails
 // (singular system: points not connected to the outer loop through neighbours) or its relative
@@ -38,5 +39,18 @@ HarmonicSolver parse_harmonic_solver(const std::string& name);
 UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, const UVMap& boundary,
                      HarmonicSolver solver = HarmonicSolver::Direct,
                      const std::vector<std::pair<int, Eigen::Vector2d>>& fixed = {});
+
+// The harmonic map with the whole outer boundary band fixed (boundary_map.h, BandPoint): a first
+// solve with every band point on the domain's edge measures the map's derivative along the depth
+// near the loop (band_depth_slope); the second fixes each band point at its depth inside the
+// smoothed loop times that derivative (band_values), so the band keeps its geometry in (u,v) and neither the loop's
+// zig-zag nor free band points fold the map at the edge.
+// P, N, is_boundary, loops  as for outer_band; boundary  map_boundary of loops[0].
+// Same errors as solve_harmonic and outer_band.
+UVMap solve_harmonic_band(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L,
+                          const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
+                          const std::vector<std::uint8_t>& is_boundary,
+                          const std::vector<std::vector<int>>& loops, const UVMap& boundary,
+                          HarmonicSolver solver = HarmonicSolver::Direct);
 
 }  // namespace scallop

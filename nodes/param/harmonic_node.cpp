@@ -21,8 +21,8 @@ NodeDecl make_harmonic_node() {
       .param_choice("solver", "direct", {"direct", "bicgstab", "gmres"},
                     "direct: UMFPACK sparse LU; bicgstab / gmres: Eigen iterative with incomplete LU")
       .param_bool("fix_band", true,
-                  "fix the whole outer boundary band by its projection on the smoothed loop and its depth "
-                  "inside it (else only the loop points, on the domain's edge)");
+                  "fix the whole outer boundary band at its projection on the smoothed loop and its depth "
+                  "inside it, scaled like the map (else only the loop points, on the domain's edge)");
   d.run = [](NodeContext& ctx) {
     auto lap = ctx.input<Laplacian>("laplacian");
     auto bmap = ctx.input<UVMap>("map");
@@ -34,9 +34,12 @@ NodeDecl make_harmonic_node() {
     if (loops->loops.empty() || loops->loops[0] != bmap->outer_loop)
       throw NodeError("the boundary map was not made from the outer loop of these loops");
     try {
-      std::vector<std::pair<int, Eigen::Vector2d>> band;
-      if (ctx.flag("fix_band")) band = outer_band_values(cloud->points, cloud->normals, loops->is_boundary, loops->loops, *bmap);
-      ctx.set("map", solve_harmonic(lap->L, *bmap, parse_harmonic_solver(ctx.text("solver")), band));
+      const HarmonicSolver solver = parse_harmonic_solver(ctx.text("solver"));
+      if (ctx.flag("fix_band"))
+        ctx.set("map", solve_harmonic_band(lap->L, cloud->points, cloud->normals, loops->is_boundary, loops->loops,
+                                           *bmap, solver));
+      else
+        ctx.set("map", solve_harmonic(lap->L, *bmap, solver));
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     } catch (const std::runtime_error& e) {

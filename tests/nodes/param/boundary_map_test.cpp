@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
+#include <random>
 
 #include "tests/nodes/param/param_test_util.h"
 
@@ -33,7 +36,7 @@ std::vector<int> iota_loop(std::size_t n) {
 TEST(BoundaryMap, DiskByChordLength) {
   auto P = uneven_square();
   auto loop = iota_loop(P.size());
-  UVMap m = map_boundary(P, loop, BoundaryDomain::Disk);
+  UVMap m = map_boundary(P, loop, BoundaryDomain::Disk, {}, 0);  // the exact polygon, unsmoothed
   EXPECT_EQ(m.domain, "disk");
   EXPECT_NEAR(m.radius, 80 / (2 * std::numbers::pi), 1e-12);
   ASSERT_EQ(m.boundary_uv.size(), P.size());
@@ -53,7 +56,7 @@ TEST(BoundaryMap, RectangleSidesByChordLength) {
   // Stretch x by 2: sides 40, 20, 40, 20.
   for (auto& p : P) p.x() *= 2;
   auto loop = iota_loop(P.size());
-  UVMap m = map_boundary(P, loop, BoundaryDomain::Rectangle);
+  UVMap m = map_boundary(P, loop, BoundaryDomain::Rectangle, {}, 0);
   EXPECT_EQ(m.domain, "rectangle");
   EXPECT_EQ(m.corners, (std::vector<int>{0, 3, 10, 15}));
   EXPECT_NEAR(m.width, 40, 1e-12);
@@ -65,7 +68,7 @@ TEST(BoundaryMap, ExplicitCornersAndUnequalSides) {
   auto P = uneven_square();
   auto loop = iota_loop(P.size());
   // Corners at positions 1, 3, 10, 15: side 1 is 20 - 6.67, side 4 is 20 + 6.67.
-  UVMap m = map_boundary(P, loop, BoundaryDomain::Rectangle, parse_corners("15, 1,3,10", P.size()));
+  UVMap m = map_boundary(P, loop, BoundaryDomain::Rectangle, parse_corners("15, 1,3,10", P.size()), 0);
   EXPECT_EQ(m.corners, (std::vector<int>{1, 3, 10, 15}));
   EXPECT_NEAR(m.width, (40.0 / 3 + 20) / 2, 1e-12);
   EXPECT_NEAR(m.height, (20 + 20 + 20.0 / 3) / 2, 1e-12);
@@ -95,6 +98,114 @@ TEST(BoundaryMap, CornersOfANoisySquarePatchAreItsCorners) {
   }
   EXPECT_NEAR(m.width, 20, 1.0);
   EXPECT_NEAR(m.height, 20, 1.0);
+}
+
+TEST(BoundaryMap, SmoothedLoopIsAMovingAverage) {
+  std::vector<Eigen::Vector3d> P = {{0, 0, 0}, {1, 1, 0}, {2, 0, 0}, {3, 1, 0}, {4, 0, 0}, {5, 1, 0}, {6, 0, 0}};
+  std::vector<int> loop = iota_loop(P.size());
+  auto Q = smoothed_loop(P, loop, 1);
+  ASSERT_EQ(Q.size(), P.size());
+  EXPECT_LT((Q[3] - Eigen::Vector3d(3, 1.0 / 3, 0)).norm(), 1e-12);
+  EXPECT_LT((Q[0] - (P[6] + P[0] + P[1]) / 3).norm(), 1e-12);  // wraps around the closed loop
+  auto Q0 = smoothed_loop(P, loop, 0);
+  for (std::size_t i = 0; i < P.size(); ++i) EXPECT_EQ(Q0[i], P[i]);
+  // The window never exceeds the loop: w = (7 - 1) / 2 = 3 averages every point.
+  auto Qall = smoothed_loop(P, loop, 50);
+  for (const auto& q : Qall) EXPECT_LT((q - Eigen::Vector3d(3, 3.0 / 7, 0)).norm(), 1e-12);
+}
+
+TEST(BoundaryMap, RandomSquarePatchHasItsTrueSize) {
+  // Uniform random points on a 40 x 30 rectangle (spacing ~0.3 mm): the detected boundary is a
+  // band a point or two thick and the ordered loop zig-zags through it (its raw chord length is
+  // ~15 % too long); the chord length of the smoothed loop gives W, H within 3 % of the true
+  // sides. (It runs short by about two spacings per side: the band lies a little inside the
+  // edge and the smoothing rounds the corners.)
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> ux(0, 40), uy(0, 30);
+  PointCloud c;
+  for (int i = 0; i < 12000; ++i) c.points.emplace_back(ux(rng), uy(rng), 0.0);
+  c.normals.assign(c.size(), Eigen::Vector3d::UnitZ());
+  auto nb = compute_knn(c.points, 16);
+  auto is_b = detect_boundary(c.points, c.normals, nb, std::numbers::pi / 2);
+  auto loops = order_boundary_loops(c.points, c.normals, nb, is_b);
+  ASSERT_EQ(loops.size(), 1u);
+  UVMap m = map_boundary(c.points, loops[0], BoundaryDomain::Rectangle);
+  UVMap raw = map_boundary(c.points, loops[0], BoundaryDomain::Rectangle, {}, 0);
+  double w = std::max(m.width, m.height), h = std::min(m.width, m.height);
+  std::printf("[ random 40 x 30 ] W %.2f H %.2f; unsmoothed perimeter %.1f (true 140)\n", w, h,
+              2 * (raw.width + raw.height));
+  EXPECT_NEAR(w, 40, 0.03 * 40);
+  EXPECT_NEAR(h, 30, 0.03 * 30);
+  EXPECT_GT(2 * (raw.width + raw.height), 1.05 * 140);  // the zig-zag the smoothing removes
+  UVMap d = map_boundary(c.points, loops[0], BoundaryDomain::Disk);
+  EXPECT_NEAR(d.radius, 140 / (2 * std::numbers::pi), 0.03 * 140 / (2 * std::numbers::pi));
+}
+
+TEST(BoundaryMap, NotchIsNoCorner) {
+  // A 30 x 20 rectangle with a deep V-notch in its top side: the notch turns more sharply than
+  // the corners, but it turns the wrong way (reflex), so the 4 corners are the rectangle's.
+  std::vector<Eigen::Vector3d> P;
+  auto side = [&](Eigen::Vector3d a, Eigen::Vector3d b, int n) {
+    for (int i = 0; i < n; ++i) P.push_back(a + (b - a) * (double(i) / n));
+  };
+  side({0, 0, 0}, {30, 0, 0}, 60);
+  side({30, 0, 0}, {30, 20, 0}, 40);
+  side({30, 20, 0}, {16, 20, 0}, 28);
+  side({16, 20, 0}, {15, 8, 0}, 24);
+  side({15, 8, 0}, {14, 20, 0}, 24);
+  side({14, 20, 0}, {0, 20, 0}, 28);
+  side({0, 20, 0}, {0, 0, 0}, 40);
+  auto corners = detect_corners(P, iota_loop(P.size()));
+  std::vector<Eigen::Vector2d> want = {{0, 0}, {30, 0}, {30, 20}, {0, 20}};
+  for (const auto& w : want) {
+    double best = 1e9;
+    for (int pos : corners) best = std::min(best, (P[pos].head<2>() - w).norm());
+    EXPECT_LT(best, 1.0) << "corner " << w.transpose();
+  }
+}
+
+TEST(BoundaryMap, BandPointsAreProjectedAndOffsetInward) {
+  // A flat random rectangle: every band point gets a value inside the domain, at its depth
+  // inside the band's outer envelope (slope (1, 0): isometric), on the side it projects to.
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> ux(0, 30), uy(0, 20);
+  PointCloud c;
+  for (int i = 0; i < 3000; ++i) c.points.emplace_back(ux(rng), uy(rng), 0.0);
+  c.normals.assign(c.size(), Eigen::Vector3d::UnitZ());
+  auto nb = compute_knn(c.points, 16);
+  auto is_b = detect_boundary(c.points, c.normals, nb, std::numbers::pi / 2);
+  auto loops = order_boundary_loops(c.points, c.normals, nb, is_b);
+  UVMap m = map_boundary(c.points, loops[0], BoundaryDomain::Rectangle);
+  auto band = outer_band(c.points, c.normals, is_b, loops, loops[0]);
+  std::size_t fixed = 0, probes = 0;
+  for (const auto& b : band) {
+    EXPECT_GE(b.depth, 0);
+    (b.fixed ? fixed : probes)++;
+  }
+  EXPECT_GE(fixed, loops[0].size());
+  EXPECT_GT(probes, fixed);
+  auto values = band_values(band, m);
+  EXPECT_GE(values.size(), loops[0].size() * 9 / 10);
+  for (const auto& [i, uv] : values) {
+    EXPECT_GE(uv.x(), -1e-9);
+    EXPECT_GE(uv.y(), -1e-9);
+    EXPECT_LE(uv.x(), m.width + 1e-9);
+    EXPECT_LE(uv.y(), m.height + 1e-9);
+    // Near the edge of the domain, as the point is near the edge of the patch (2 mm).
+    double edge = std::min({uv.x(), uv.y(), m.width - uv.x(), m.height - uv.y()});
+    EXPECT_LT(edge, 2.0) << i;
+  }
+  // The slope measured on the map of a flat patch is close to isometric.
+  auto L = build_laplacian(c.points, c.normals, nb, LaplacianScheme::Optimal);
+  std::vector<Eigen::Vector2d> zero(loops[0].size(), Eigen::Vector2d::Zero());
+  auto first = solve_harmonic(L, m, HarmonicSolver::Direct, band_values(band, m, zero));
+  auto slope = band_depth_slope(band, m, first.uv);
+  std::vector<double> a;
+  for (const auto& s : slope) a.push_back(s.x());
+  std::sort(a.begin(), a.end());
+  EXPECT_NEAR(a[a.size() / 2], 1.0, 0.15);
+  EXPECT_THROW(band_values(band, m, std::vector<Eigen::Vector2d>(3)), std::invalid_argument);
+  EXPECT_THROW(outer_band(c.points, c.normals, std::vector<std::uint8_t>(5), loops, loops[0]), std::invalid_argument);
 }
 
 TEST(BoundaryMap, Errors) {

@@ -56,10 +56,9 @@ TEST(MapCheck, NonUniformDensityHasNoFoldovers) {
     if (acc(rng) <= (1 + 4 * (30 - x) / 30) / 5) c.points.emplace_back(x, y, 0.3 * std::sin(x / 5));
   }
   for (const auto& p : c.points) c.normals.push_back(Eigen::Vector3d(-0.3 / 5 * std::cos(p.x() / 5), 0, 1).normalized());
-  // k = 16: with k = 12 the boundary band of the dense end is two points thick and the loop's
-  // zig-zag there leaves one fold-over right at the edge (see the report of the param engineer).
-  // (The disk domain, far from conformal on this rectangle, folds at 1 point of the sparse edge.)
-  for (auto domain : {BoundaryDomain::Rectangle}) {
+  // k = 16, both domains: the band of the dense end is two points thick; fixed as a whole at its
+  // depth, its zig-zag no longer folds the map at the edge.
+  for (auto domain : {BoundaryDomain::Rectangle, BoundaryDomain::Disk}) {
     auto p = test::parameterize(c, 16, domain);
     ASSERT_EQ(p.loops.size(), 1u);
     MapCheck m = check_map(c.points, c.normals, p.nbrs, p.map.uv);
@@ -81,6 +80,40 @@ TEST(MapCheck, AnisotropicGridHasNoFoldovers) {
   std::printf("[ grid 5:1 ] sigma1/sigma2 p50 %.3f p95 %.3f, width %.2f height %.2f\n",
               m.report["conformality"]["p50"].get<double>(), m.report["conformality"]["p95"].get<double>(),
               p.map.width, p.map.height);
+}
+
+TEST(MapCheck, AnisotropicGridAtK16HasNoFoldovers) {
+  // The same 5:1 grid with k = 16, both domains.
+  PointCloud c = test::jittered_grid(30, 20, 1.0, 0.2, 0.1, 35);
+  for (auto domain : {BoundaryDomain::Rectangle, BoundaryDomain::Disk}) {
+    auto p = test::parameterize(c, 16, domain);
+    ASSERT_EQ(p.loops.size(), 1u);
+    MapCheck m = check_map(c.points, c.normals, p.nbrs, p.map.uv);
+    EXPECT_EQ(m.foldovers, 0u) << p.map.domain << ": " << (m.foldovers ? foldover_message(m, c.points) : "");
+  }
+}
+
+TEST(MapCheck, RandomDiskAndRectangleHaveNoFoldovers) {
+  // Uniform random samplings (the boundary is a band one or two points thick, the loop zig-zags
+  // through it), k = 16, each patch on both domains.
+  std::mt19937 rng(37);
+  std::uniform_real_distribution<double> ux(0, 40), uy(0, 25);
+  PointCloud rect;
+  for (int i = 0; i < 5000; ++i) {
+    double x = ux(rng), y = uy(rng);
+    rect.points.emplace_back(x, y, 2 * std::sin(x / 8) * std::cos(y / 10));
+  }
+  for (const auto& q : rect.points)
+    rect.normals.push_back(Eigen::Vector3d(-0.25 * std::cos(q.x() / 8) * std::cos(q.y() / 10),
+                                           0.2 * std::sin(q.x() / 8) * std::sin(q.y() / 10), 1)
+                               .normalized());
+  for (const PointCloud& c : {test::random_disk(5000, 20, 38), rect})
+    for (auto domain : {BoundaryDomain::Rectangle, BoundaryDomain::Disk}) {
+      auto p = test::parameterize(c, 16, domain);
+      ASSERT_EQ(p.loops.size(), 1u);
+      MapCheck m = check_map(c.points, c.normals, p.nbrs, p.map.uv);
+      EXPECT_EQ(m.foldovers, 0u) << p.map.domain << ": " << (m.foldovers ? foldover_message(m, c.points) : "");
+    }
 }
 
 TEST(MapCheck, Errors) {

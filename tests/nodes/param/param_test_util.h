@@ -56,7 +56,8 @@ struct Pipeline {
 };
 
 // cloud.knn -> cloud.boundary -> cloud.boundary_order -> param.boundary_map -> param.laplacian
-// -> param.harmonic, with the algorithm functions.
+// -> param.harmonic (with the boundary band fixed, as the node does by default), with the
+// algorithm functions.
 inline Pipeline parameterize(const PointCloud& c, int k, BoundaryDomain domain,
                              LaplacianScheme scheme = LaplacianScheme::Optimal,
                              HarmonicSolver solver = HarmonicSolver::Direct) {
@@ -66,7 +67,7 @@ inline Pipeline parameterize(const PointCloud& c, int k, BoundaryDomain domain,
   p.loops = order_boundary_loops(c.points, c.normals, p.nbrs, p.is_boundary);
   UVMap b = map_boundary(c.points, p.loops[0], domain);
   auto L = build_laplacian(c.points, c.normals, p.nbrs, scheme);
-  p.map = solve_harmonic(L, b, solver);
+  p.map = solve_harmonic_band(L, c.points, c.normals, p.is_boundary, p.loops, b, solver);
   return p;
 }
 
