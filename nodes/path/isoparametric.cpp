@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <nanoflann.hpp>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -51,7 +52,9 @@ struct Pass {
   double s = 0;
   bool closed = false;  // contour circles: the last vertex is the first one again
   std::vector<double> t;
-  std::vector<Eigen::Vector3d> p, n, c;  // contact, unit normal, ball centre
+  std::vector<Eigen::Vector3d> p, n, c;  // contact (lifted with the ball), unit normal, ball centre
+  std::vector<double> lift;               // how far the ball was lifted off the interpolant (mm)
+  std::vector<char> unchecked;            // per segment: the forward chord check did not hold
 };
 
 // Local geometry at a vertex of a pass, and the side step it allows.
@@ -73,10 +76,55 @@ struct StripCheck {
   double interval_min = kInf, interval_max = 0;  // contact of A to contact polyline of B (mm)
 };
 
+// Keeps the ball off the cloud: lifts a ball centre along the contact normal until no cloud
+// point lies inside the ball. Where the surface is concave with a radius below r (or kinked),
+// the ball placed at c = p + r n reaches into the surface beside the contact; lifting it leaves
+// material there (reported as a concave region) instead of gouging.
+class BallLifter {
+ public:
+  BallLifter(const std::vector<Eigen::Vector3d>& P, double r)
+      : adaptor_{P}, tree_(3, adaptor_, nanoflann::KDTreeSingleIndexAdaptorParams(10)), r_(r) {
+    tree_.buildIndex();
+  }
+  // The smallest d >= 0 such that every cloud point is at least r - tol from c + d n (n unit,
+  // 0 <= tol < r).
+  double lift(const Eigen::Vector3d& c, const Eigen::Vector3d& n, double tol) const {
+    const double rr = r_ - tol;
+    std::vector<std::pair<std::uint32_t, double>> hits;
+    tree_.radiusSearch(c.data(), rr * rr, hits, nanoflann::SearchParams(32, 0, false));
+    double d = 0;
+    for (const auto& [i, sq] : hits) {
+      // |c + d n - q| = rr  <=>  d^2 + 2 b d + (|c - q|^2 - rr^2) = 0, b = (c - q).n
+      const Eigen::Vector3d w = c - adaptor_.P[i];
+      const double b = w.dot(n), k = w.squaredNorm() - rr * rr;
+      if (k >= 0) continue;
+      d = std::max(d, -b + std::sqrt(b * b - k));
+    }
+    return d;
+  }
+
+ private:
+  struct Adaptor {
+    const std::vector<Eigen::Vector3d>& P;
+    std::size_t kdtree_get_point_count() const { return P.size(); }
+    double kdtree_get_pt(std::size_t i, std::size_t d) const { return P[i][static_cast<int>(d)]; }
+    template <class BBox>
+    bool kdtree_get_bbox(BBox&) const { return false; }
+  };
+  using Tree = nanoflann::KDTreeSingleIndexAdaptor<
+      nanoflann::L2_Simple_Adaptor<double, Adaptor, double, std::uint32_t>, Adaptor, 3,
+      std::uint32_t>;
+  Adaptor adaptor_;
+  Tree tree_;
+  double r_;
+};
+
 class Planner {
  public:
-  Planner(const UVInterpolator& f, Coords co, const IsoparametricOptions& o)
-      : f_(f), co_(co), o_(o), r_(o.tool_radius), h_(o.scallop_height * o.safety_factor),
+  Planner(const UVInterpolator& f, const BallLifter& lifter, Coords co,
+          const IsoparametricOptions& o)
+      : f_(f), lifter_(lifter), co_(co), o_(o), r_(o.tool_radius),
+        h_(o.scallop_height * o.safety_factor),
         // 2 % of e is left for the error of the interpolant itself (verify.py's gouge limit is e)
         e_over_(0.98 * o.chord_error), e_under_(std::min(0.98 * o.chord_error, 0.1 * h_)),
         hfd_(2 * f.uv_spacing()), ls0_(std::sqrt(8 * r_ * h_)) {}
@@ -165,10 +213,14 @@ class Planner {
     P.s = s;
     P.closed = co_.polar;
     auto push = [&](double t, const SurfaceSample& x) {
+      // The contact is moved up with the ball where the ball would reach into the cloud.
+      // A quarter of e is left to the cloud's noise and the interpolant's error.
+      const double d = lifter_.lift(centre(x), x.normal, 0.25 * o_.chord_error);
       P.t.push_back(t);
-      P.p.push_back(x.position);
+      P.p.push_back(x.position + d * x.normal);
       P.n.push_back(x.normal);
-      P.c.push_back(centre(x));
+      P.c.push_back(centre(x) + d * x.normal);
+      P.lift.push_back(d);
     };
     if (co_.degenerate(s)) {
       P.closed = false;
@@ -206,6 +258,7 @@ class Planner {
       if (last) dt = co_.T - t;
       else if (t + 1.5 * dt > co_.T) dt = (co_.T - t) / 2;  // no sliver of a last step
       SurfaceSample x1;
+      bool unchecked = folded;
       for (int iter = 0;; ++iter) {
         x1 = at(s, last ? co_.T : t + dt);
         if (folded) break;
@@ -213,6 +266,7 @@ class Planner {
         if (ratio <= 1) break;
         if (dt <= dt_floor || iter >= 40) {
           ++forward_floor_hits;
+          unchecked = true;
           break;
         }
         dt = std::max(dt_floor, dt * std::clamp(0.99 / std::sqrt(ratio), 0.2, 0.99));
@@ -224,6 +278,7 @@ class Planner {
       forward_max = std::max(forward_max, len);
       t = last ? co_.T : t + dt;
       x = x1;
+      P.unchecked.push_back(unchecked);
       push(t, x);
       const std::size_t cap = std::min<std::size_t>(kMaxPassPoints, o_.max_points);
       if (P.t.size() > cap)
@@ -236,7 +291,45 @@ class Planner {
         o_.progress(std::min(0.99, s / co_.S),
                     "pass at s = " + fmt(s) + ": " + std::to_string(P.t.size()) + " points so far");
     }
+    lift_segments(P);
     return P;
+  }
+
+  // The swept ball between two lifted vertices can still reach more than e into the cloud (a
+  // concave place narrower than the step): sample each centre segment about every r/16 and lift
+  // both of its ends by what the worst sample needs, a few rounds (lifting one segment moves
+  // its neighbours' ends).
+  void lift_segments(Pass& P) const {
+    const double step = r_ / 16;
+    for (int round = 0; round < 8; ++round) {
+      bool moved = false;
+      for (std::size_t k = 0; k + 1 < P.c.size(); ++k) {
+        // Only next to lifted vertices and where the forward chord check did not hold:
+        // elsewhere that check already bounds the overcut, and lifting for it would only add
+        // to the scallop.
+        if (P.lift[k] <= 0 && P.lift[k + 1] <= 0 && !P.unchecked[k]) continue;
+        const Eigen::Vector3d a = P.c[k], b = P.c[k + 1];
+        const Eigen::Vector3d n = (P.n[k] + P.n[k + 1]).normalized();
+        const int m = std::max(2, static_cast<int>(std::ceil((b - a).norm() / step)));
+        double d = 0;
+        // The chord may cut up to e below the centre curve (the forward step allows that); half
+        // of it is kept back for the cloud between the samples.
+        // (the ends too: lifting a vertex along its own normal can bring it nearer the cloud
+        // elsewhere)
+        for (int i = 0; i <= m; ++i)
+          d = std::max(d, lifter_.lift(a + (b - a) * (double(i) / m), n, 0.5 * o_.chord_error));
+        if (d <= 0) continue;
+        moved = true;
+        for (std::size_t j : {k, k + 1}) {
+          // lift along the vertex normal by enough to raise it d along n
+          const double dj = d / std::max(0.5, P.n[j].dot(n));
+          P.c[j] += dj * P.n[j];
+          P.p[j] += dj * P.n[j];
+          P.lift[j] += dj;
+        }
+      }
+      if (!moved) break;
+    }
   }
 
   // Calls fn(a, b) for the segments (or the single point) of polyline V of pass P that may lie
@@ -388,6 +481,7 @@ class Planner {
 
  private:
   const UVInterpolator& f_;
+  const BallLifter& lifter_;
   Coords co_;
   const IsoparametricOptions& o_;
   double r_, h_, e_over_, e_under_, hfd_, ls0_;
@@ -519,7 +613,8 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   }
 
   const UVInterpolator interp(cloud.points, cloud.normals, map.uv, domain, o.interpolation_k);
-  Planner planner(interp, co, o);
+  const BallLifter lifter(cloud.points, o.tool_radius);
+  Planner planner(interp, lifter, co, o);
   std::vector<double> nn;
   for (std::size_t i = 0; i < neighbors.size(); i += std::max<std::size_t>(1, neighbors.size() / 4096))
     if (neighbors.k > 0) nn.push_back(std::sqrt(neighbors.sq_dist(i, 0)));
@@ -616,10 +711,14 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   tp.scallop_height = o.scallop_height;
   tp.chord_error = o.chord_error;
   tp.pattern = o.pattern;
-  std::size_t points = 0;
-  double length = 0;
+  std::size_t points = 0, lifted = 0;
+  double length = 0, lift_max = 0;
   for (std::size_t i = 0; i < passes.size(); ++i) {
     const Pass& P = passes[i];
+    for (double d : P.lift) {
+      lift_max = std::max(lift_max, d);
+      if (d > 1e-3 * o.chord_error) ++lifted;
+    }
     ToolpathPass out;
     for (std::size_t k = 0; k < P.p.size(); ++k) {
       out.contact.push_back(P.p[k]);
@@ -666,6 +765,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
       {"predicted", {{"scallop_max", scallop_max}, {"scallop_max_at", vec(scallop_where)},
                      {"chord_overcut_max", planner.chord_overcut_max},
                      {"chord_undercut_max", planner.chord_undercut_max}}},
+      {"ball_lifted", {{"points", lifted}, {"max", lift_max}}},
       {"concave_regions", concave_regions(concave_pts, concave_r, link)},
       {"warnings", warnings},
   };

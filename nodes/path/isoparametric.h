@@ -24,6 +24,12 @@
 // swept balls, as ../shared/tools/verify.py defines it) along the strip; where it exceeds
 // h = safety_factor * scallop_height the step is shrunk (secant on sqrt(h), then bisection) and
 // the pass rebuilt.
+//
+// Every ball centre is then kept off the cloud: where a cloud point lies more than e/4 inside the
+// ball (a concave place of radius below r, a kink), the ball and its contact are lifted along
+// the normal; segments next to lifted vertices (or whose chord check failed) are sampled every
+// r/16 and their ends lifted until no cloud point is more than e/2 inside the swept ball. The
+// report's "ball_lifted" gives how many points were lifted and by how much at most (mm).
 #pragma once
 
 #include <cstddef>

@@ -2,6 +2,7 @@
 
 
 #include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -124,13 +125,21 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
     rhs3.noalias() += w * b.head<3>() * f;
   }
   Eigen::Matrix<double, 1, 6> value;
+  // Tangents of the fitted position (per unit of the scaled offsets): their cross product is
+  // the normal of the fitted surface itself, which is far more accurate than the interpolated
+  // point normals (PCA normals lean by O(spacing x curvature), and the ball centre r n moves
+  // r times that sideways).
+  Eigen::Vector3d tu = Eigen::Vector3d::Zero(), tv = Eigen::Vector3d::Zero();
   bool ok = false;
   if (used >= 6) {
     Eigen::LDLT<Mat6> ldlt(M);
     const auto dg = ldlt.vectorD().cwiseAbs();
     if (ldlt.info() == Eigen::Success && dg.minCoeff() > 1e-9 * dg.maxCoeff()) {
-      value = ldlt.solve(rhs).row(0);
-      ok = value.allFinite();
+      const Mat6 c = ldlt.solve(rhs);
+      value = c.row(0);
+      tu = c.row(1).head<3>().transpose();
+      tv = c.row(2).head<3>().transpose();
+      ok = c.allFinite();
     }
   }
   if (!ok && used >= 3) {
@@ -138,8 +147,11 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
     Eigen::LDLT<Eigen::Matrix3d> ldlt(M3);
     const auto dg = ldlt.vectorD().cwiseAbs();
     if (ldlt.info() == Eigen::Success && dg.minCoeff() > 1e-9 * dg.maxCoeff()) {
-      value = ldlt.solve(rhs3).row(0);
-      ok = value.allFinite();
+      const Eigen::Matrix<double, 3, 6> c = ldlt.solve(rhs3);
+      value = c.row(0);
+      tu = c.row(1).head<3>().transpose();
+      tv = c.row(2).head<3>().transpose();
+      ok = c.allFinite();
     }
   }
   if (!ok) {  // degenerate neighbourhood: the nearest point
@@ -150,6 +162,23 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
   Eigen::Vector3d n = value.tail<3>().transpose();
   const double nn = n.norm();
   s.normal = nn > 1e-12 ? Eigen::Vector3d(n / nn) : impl_->N[idx[0]];
+  // The fitted surface's own normal, oriented like the interpolated one. Near the domain's edge
+  // the fit extrapolates and its tangents are poor, so there it is blended into the point
+  // normals (weight 0 within D/4 of the edge, 1 beyond 3D/4, D the fit radius); it is also
+  // dropped where the tangents are degenerate or it disagrees with the point normals by more
+  // than 10 degrees (a folded fit).
+  const Eigen::Vector3d m = tu.cross(tv);
+  const double mn = m.norm();
+  if (ok && mn > 1e-9 * tu.squaredNorm() + 1e-300) {
+    Eigen::Vector3d g = m / mn;
+    if (g.dot(s.normal) < 0) g = -g;
+    const double edge = domain_.kind == UVDomain::Kind::Rectangle
+                            ? std::min({q.x(), domain_.width - q.x(), q.y(), domain_.height - q.y()})
+                            : domain_.radius - q.norm();
+    const double a = std::clamp((edge * inv_D - 0.25) / 0.5, 0.0, 1.0);
+    if (a > 0 && g.dot(s.normal) > std::cos(M_PI / 18))
+      s.normal = (a * g + (1 - a) * s.normal).normalized();
+  }
   return s;
 }
 

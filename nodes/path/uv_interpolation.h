@@ -7,7 +7,10 @@
 // functions exactly, so curvatures taken from it by finite differences are exact on quadrics
 // (the paper's scheme is exact only on planes). Each weight (1 - d^2/D^2)^2 vanishes at D, the
 // distance to the (k+1)-th neighbour, so the interpolant is continuous in (u, v) even where the
-// neighbour set changes.
+// neighbour set changes. The normal returned is that of the fitted position surface (the cross
+// product of its u and v tangents), oriented like the point normals; the fitted point normals
+// are blended in near the domain's edge (where the fit extrapolates) and used where that fit is
+// degenerate or disagrees with them by more than 10 degrees.
 #pragma once
 
 #include <Eigen/Core>

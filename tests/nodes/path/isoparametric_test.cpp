@@ -225,6 +225,38 @@ TEST(Isoparametric, ReportsConcaveRegionsTighterThanTheTool) {
   EXPECT_TRUE(warned);
 }
 
+TEST(Isoparametric, LiftsTheBallWhereItWouldGougeAConcavePlace) {
+  // The trough again (radius 2 < r = 3 at the bottom): a ball set on its contact there reaches
+  // into the flanks; the planner lifts it, so no cloud point lies deeper than e inside a ball
+  // swept along any pass.
+  const Input in = rect_patch(
+      4, 6, 0.15, [](double, double y) { return (y - 3) * (y - 3) / 4; },
+      [](double, double y) { return Eigen::Vector2d(0, (y - 3) / 2); });
+  IsoparametricOptions o;
+  o.tool_radius = 3;
+  o.scallop_height = 0.01;
+  o.chord_error = 0.005;
+  const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  EXPECT_GT(res.report["ball_lifted"]["points"].get<int>(), 0);
+  EXPECT_GT(res.report["ball_lifted"]["max"].get<double>(), 0.01);
+  double deepest = 0;
+  for (const auto& pass : res.toolpath.passes)
+    for (std::size_t k = 0; k < pass.contact.size(); ++k) {
+      const Eigen::Vector3d a = pass.contact[k] + o.tool_radius * pass.normal[k];
+      const Eigen::Vector3d b =
+          k + 1 < pass.contact.size()
+              ? Eigen::Vector3d(pass.contact[k + 1] + o.tool_radius * pass.normal[k + 1])
+              : a;
+      const Eigen::Vector3d ab = b - a;
+      for (const Eigen::Vector3d& q : in.cloud.points) {
+        const double y =
+            ab.squaredNorm() > 0 ? std::clamp((q - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+        deepest = std::max(deepest, o.tool_radius - (q - a - y * ab).norm());
+      }
+    }
+  EXPECT_LE(deepest, o.chord_error);
+}
+
 TEST(Isoparametric, PatternMustMatchTheMapDomain) {
   const Input disk = disk_patch(5, 0.5, [](double, double) { return 0.0; },
                                 [](double, double) { return Eigen::Vector2d(0, 0); });

@@ -63,6 +63,28 @@ TEST(UVInterpolation, ReproducesAQuadricInside) {
   }
 }
 
+TEST(UVInterpolation, NormalIsThatOfTheFittedSurfaceNotOfBiasedPointNormals) {
+  // Point normals tilted by 0.01 rad (as PCA normals lean on a curved surface): the returned
+  // normal comes from the fitted quadric, exact inside; the ball centre r n would otherwise
+  // move r x 0.01 sideways.
+  auto z = [](double x, double y) { return 0.05 * x * x - 0.02 * x * y + 0.03 * y * y; };
+  auto g = [](double x, double y) { return Eigen::Vector2d(0.1 * x - 0.02 * y, -0.02 * x + 0.06 * y); };
+  Patch p = make_patch(z, g);
+  const Eigen::AngleAxisd tilt(0.01, Eigen::Vector3d::UnitX());
+  for (auto& n : p.N) n = tilt * n;
+  const UVInterpolator f(p.P, p.N, p.UV, rect());
+  for (const Eigen::Vector2d& q : {Eigen::Vector2d(3.3, 4.1), Eigen::Vector2d(6.07, 2.2)}) {
+    const Eigen::Vector2d gr = g(q.x(), q.y());
+    const Eigen::Vector3d exact = Eigen::Vector3d(-gr.x(), -gr.y(), 1).normalized();
+    EXPECT_NEAR((f(q).normal - exact).norm(), 0, 1e-9);
+  }
+  // On the edge the fit extrapolates: there the point normals are used.
+  const Eigen::Vector2d e(5, 0);
+  const Eigen::Vector2d gr = g(e.x(), e.y());
+  const Eigen::Vector3d biased = tilt * Eigen::Vector3d(-gr.x(), -gr.y(), 1).normalized();
+  EXPECT_NEAR((f(e).normal - biased).norm(), 0, 2e-3);
+}
+
 TEST(UVInterpolation, ClampsOutsideTheDomain) {
   auto z = [](double x, double y) { return std::sin(x) + y * y * 0.1; };
   auto g = [](double x, double y) { return Eigen::Vector2d(std::cos(x), 0.2 * y); };
