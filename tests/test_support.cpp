@@ -108,6 +108,18 @@ Registry make_test_registry() {
   return r;
 }
 
+std::map<std::string, ValuePtr> run_node(const NodeDecl& decl, const nlohmann::json& params,
+                                         std::map<std::string, ValuePtr> inputs, std::string* last_progress) {
+  nlohmann::json p = nlohmann::json::object();
+  for (const auto& pd : decl.params) p[pd.name] = pd.default_value;
+  for (const auto& [key, value] : params.items()) p[key] = value;
+  NodeContext ctx(decl, "n", "part", p, std::move(inputs), [&](double, const std::string& m) {
+    if (last_progress) *last_progress = m;
+  });
+  decl.run(ctx);
+  return ctx.take_outputs();
+}
+
 void write_file(const fs::path& path, const std::string& text) {
   fs::create_directories(path.parent_path());
   std::ofstream(path, std::ios::binary) << text;

@@ -6,6 +6,8 @@
 #include <map>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "engine/node.h"
 
 namespace scallop::test {
@@ -33,6 +35,12 @@ std::map<std::string, int>& executions();
 // Test nodes: test.const (param value -> out), test.add (a + b -> out), test.fail (throws),
 // test.barrier (in -> out; waits until `parties` barrier nodes are running at once, or fails after 20 s).
 Registry make_test_registry();
+
+// Runs a node declaration outside the engine, with its default parameters overridden by
+// `params`; `last_progress`, when given, receives the last progress message.
+std::map<std::string, ValuePtr> run_node(const NodeDecl& decl, const nlohmann::json& params,
+                                         std::map<std::string, ValuePtr> inputs,
+                                         std::string* last_progress = nullptr);
 
 // Writes text to a file.
 void write_file(const std::filesystem::path& path, const std::string& text);

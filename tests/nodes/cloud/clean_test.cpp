@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/test_support.h"
+
 #include <cmath>
 #include <limits>
 #include <map>
@@ -133,18 +135,7 @@ namespace scallop {
 NodeDecl make_clean_node();
 namespace {
 
-std::map<std::string, ValuePtr> run_node(const NodeDecl& d, const nlohmann::json& params,
-                                         std::map<std::string, ValuePtr> inputs,
-                                         std::string* last_progress = nullptr) {
-  nlohmann::json p = nlohmann::json::object();
-  for (const auto& pd : d.params) p[pd.name] = pd.default_value;
-  for (const auto& [key, value] : params.items()) p[key] = value;
-  NodeContext ctx(d, "n", "part", p, std::move(inputs), [&](double, const std::string& m) {
-    if (last_progress) *last_progress = m;
-  });
-  d.run(ctx);
-  return ctx.take_outputs();
-}
+using test::run_node;
 
 std::string node_error(const nlohmann::json& params, std::shared_ptr<PointCloud> cloud) {
   try {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/test_support.h"
+
 #include <cmath>
 #include <numbers>
 #include <map>
@@ -202,15 +204,7 @@ namespace scallop {
 NodeDecl make_normals_node();
 namespace {
 
-std::map<std::string, ValuePtr> run_node(const NodeDecl& d, const nlohmann::json& params,
-                                         std::map<std::string, ValuePtr> inputs) {
-  nlohmann::json p = nlohmann::json::object();
-  for (const auto& pd : d.params) p[pd.name] = pd.default_value;
-  for (const auto& [key, value] : params.items()) p[key] = value;
-  NodeContext ctx(d, "n", "part", p, std::move(inputs), nullptr);
-  d.run(ctx);
-  return ctx.take_outputs();
-}
+using test::run_node;
 
 TEST(NormalsNode, SetsNormalsOnACopyOfThePoints) {
   const NodeDecl d = make_normals_node();
