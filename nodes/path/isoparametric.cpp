@@ -125,8 +125,10 @@ class Planner {
           const IsoparametricOptions& o)
       : f_(f), lifter_(lifter), co_(co), o_(o), r_(o.tool_radius),
         h_(o.scallop_height * o.safety_factor),
-        // 2 % of e is left for the error of the interpolant itself (verify.py's gouge limit is e)
-        e_over_(0.98 * o.chord_error), e_under_(std::min(0.98 * o.chord_error, 0.1 * h_)),
+        // 10 % of e is left for the error of the surface estimate itself: on the noisy bundled
+        // example the certificate's own fit differs from the planner's by ~0.001 mm, and an
+        // overcut there is a gouge (the limit is e)
+        e_over_(0.9 * o.chord_error), e_under_(std::min(0.98 * o.chord_error, 0.1 * h_)),
         hfd_(2 * f.uv_spacing()), ls0_(std::sqrt(8 * r_ * h_)) {}
 
   double chord_overcut_max = 0, chord_undercut_max = 0;

@@ -12,7 +12,7 @@ namespace scallop {
 NodeDecl make_isoparametric_node() {
   NodeDecl d;
   d.type = "path.isoparametric";
-  d.version = 1;
+  d.version = 2;
   d.description =
       "iso-parametric finishing passes from a UV-mapped cloud: zig-zag on a rectangle map, "
       "concentric on a disk map; forward step from the chord error, side step from the scallop "
