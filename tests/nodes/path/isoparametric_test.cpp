@@ -156,7 +156,7 @@ TEST(Isoparametric, ForwardStepOnACylinderKeepsTheChordDeviation) {
       worst = std::max(worst, Rcen - std::sqrt(Rcen * Rcen - L * L / 4));
     }
   EXPECT_LE(worst, e * 1.001);
-  EXPECT_GE(worst, 0.9 * e);
+  EXPECT_GE(worst, 0.8 * e);  // the planner keeps 10 % of e for the surface estimate
   // Formula (2) on the contact circle, mapped to the centre circle, is where the steps start.
   const double lf_contact = std::sqrt(8 * e * Rc - 4 * e * e);
   EXPECT_LT(res.report["forward_interval"]["max"].get<double>(), 1.05 * lf_contact);
