@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -451,6 +452,15 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
   if (feed.empty()) throw std::invalid_argument("the path has no feed moves");
   for (const auto& s : feed)
     if (!s.a.allFinite() || !s.b.allFinite()) throw std::invalid_argument("the path has a non-finite point");
+  const bool use_loops = !o.loops.empty();
+  if (use_loops) {
+    if (o.loops[0].size() < 3)
+      throw std::invalid_argument("the outer loop has " + std::to_string(o.loops[0].size()) +
+                                  " points; an outline needs at least 3");
+    for (const auto& L : o.loops)
+      for (const auto& q : L)
+        if (!q.allFinite()) throw std::invalid_argument("a loop has a non-finite point");
+  }
   const double stepover = std::sqrt(8 * r * H);
   const double margin = o.margin > 0 ? o.margin : stepover;
   const double gouge_tol = std::max(o.chord, 1e-3);
@@ -479,6 +489,33 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
   // Which grid nodes fall on the patch; holes in the cloud (not connected to the outside of the
   // grid through other missing nodes) are part of the patch too.
   std::vector<std::uint8_t> inside(std::size_t(nu) * nu, 0);
+  if (use_loops) {
+    // Scanline fill with the even-odd rule over all loops at once (inside the outer loop and
+    // outside the holes): per grid row, the u where each polygon edge crosses the row's v,
+    // sorted; grid nodes between the 1st and 2nd, 3rd and 4th ... crossing are inside.
+    std::vector<std::array<double, 4>> edges;  // (u0, v0, u1, v1) in grid coordinates
+    for (const auto& L : o.loops)
+      for (std::size_t k = 0; k < L.size(); ++k) {
+        const Eigen::Vector2d a = L[k] - Eigen::Vector2d(cx, cy), b = L[(k + 1) % L.size()] - Eigen::Vector2d(cx, cy);
+        edges.push_back({ca * a.x() + sa * a.y(), -sa * a.x() + ca * a.y(), ca * b.x() + sa * b.y(), -sa * b.x() + ca * b.y()});
+      }
+    tbb::parallel_for(tbb::blocked_range<int>(0, nu), [&](const tbb::blocked_range<int>& rg) {
+      std::vector<double> cross;
+      for (int j = rg.begin(); j < rg.end(); ++j) {
+        const double v = grid_v(j);
+        cross.clear();
+        for (const auto& e : edges)
+          if ((e[1] <= v) != (e[3] <= v)) cross.push_back(e[0] + (v - e[1]) / (e[3] - e[1]) * (e[2] - e[0]));
+        std::sort(cross.begin(), cross.end());
+        for (std::size_t c = 0; c + 1 < cross.size(); c += 2) {
+          // grid_u(i) = -Rg + (i + kPhaseU) spacing; nodes with cross[c] <= u < cross[c+1]
+          const int i0 = std::max(0, static_cast<int>(std::ceil((cross[c] + Rg) / spacing - kPhaseU)));
+          const int i1 = std::min(nu - 1, static_cast<int>(std::ceil((cross[c + 1] + Rg) / spacing - kPhaseU)) - 1);
+          for (int i = i0; i <= i1; ++i) inside[std::size_t(j) * nu + i] = 1;
+        }
+      }
+    });
+  } else {
   tbb::parallel_for(tbb::blocked_range<int>(0, nu), [&](const tbb::blocked_range<int>& rg) {
     for (int j = rg.begin(); j < rg.end(); ++j)
       for (int i = 0; i < nu; ++i) {
@@ -508,6 +545,7 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
       }
     }
     for (std::size_t id = 0; id < inside.size(); ++id) inside[id] = !outside[id];
+  }
   }
 
   std::vector<std::vector<Raw>> rows(nu);
@@ -556,17 +594,35 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
         }
       if (near) outline.push_back(to_xy(grid_u(i), grid_v(j)));
     }
-  PointsAdaptor<2> outline_adaptor{outline};
+  // With loops the margin is measured from their edges, resampled every quarter spacing (the
+  // nearest resampled point is at most an eighth of a spacing farther than the edge).
+  std::vector<Eigen::Vector2d> edge_points;
+  if (use_loops)
+    for (const auto& L : o.loops)
+      for (std::size_t k = 0; k < L.size(); ++k) {
+        const Eigen::Vector2d a = L[k], b = L[(k + 1) % L.size()];
+        const int m = std::max(1, static_cast<int>(std::ceil((b - a).norm() / (0.25 * spacing))));
+        for (int t = 0; t < m; ++t) edge_points.push_back(a + (b - a) * (double(t) / m));
+      }
+  const std::vector<Eigen::Vector2d>& edge_set = use_loops ? edge_points : outline;
+  PointsAdaptor<2> outline_adaptor{edge_set};
   KdTree<2> outline_tree(2, outline_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   outline_tree.buildIndex();
   // The outline nodes lie up to a spacing outside the patch: measure from half a spacing in.
+  const double edge_offset = use_loops ? 0.0 : 0.5 * spacing;
   auto is_interior = [&](double x, double y) {
-    if (outline.empty()) return true;
+    if (edge_set.empty()) return true;
     std::uint32_t i;
     double d2;
     double q[2] = {x, y};
     outline_tree.knnSearch(q, 1, &i, &d2);
-    return std::sqrt(d2) - 0.5 * spacing > margin;
+    return std::sqrt(d2) - edge_offset > margin;
+  };
+  // With loops, a refinement sample is on the patch when its nearest grid node is.
+  auto on_patch_grid = [&](double x, double y) {
+    const double dx = x - cx, dy = y - cy, u = ca * dx + sa * dy, v = -sa * dx + ca * dy;
+    const long i = std::lround((u + Rg) / spacing - kPhaseU), j = std::lround((v + Rg) / spacing - kPhaseV);
+    return i >= 0 && j >= 0 && i < nu && j < nu && inside[std::size_t(j) * nu + std::size_t(i)];
   };
 
   std::vector<double> lengths;
@@ -632,7 +688,7 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
             double x = c.x + ca * du - sa * dv, y = c.y + sa * du + ca * dv, z;
             Eigen::Vector3d n;
             std::size_t slot = (si * (2 * m + 1) + (a + m)) * (2 * m + 1) + (b + m);
-            if (!surf.eval(x, y, z, n)) continue;
+            if (use_loops ? !(on_patch_grid(x, y) && surf.eval(x, y, z, n, true)) : !surf.eval(x, y, z, n)) continue;
             SimSample& out = extra[slot];
             out.x = x, out.y = y, out.z = z, out.weight = 0;
             index.trace({x, y, z}, n, r, T, out.gouge, out.scallop, cand);

@@ -72,6 +72,11 @@ struct SimulateOptions {
   double margin = 0;        // interior margin from the outline (mm); 0: sqrt(8 r h)
   std::size_t max_samples = 1500000;  // the spacing is raised to stay below this
   int fit_neighbors = 20;
+  // The patch's outline as closed xy polygons (mm): loops[0] the outer one, the others holes.
+  // Given, a sample is on the patch iff it is inside the outer polygon and outside every hole,
+  // and the interior margin is measured from the polygons' edges. Empty: the outline is guessed
+  // from the cloud (HeightField::inside), which on sparse clouds reaches past the real rim.
+  std::vector<std::vector<Eigen::Vector2d>> loops;
 };
 
 // One surface sample and what the path left there.
@@ -96,7 +101,8 @@ struct SimulationResult {
 // cut_length, rapid_length, samples, samples_interior, samples_refined, spacing, margin,
 // surface_area, tool_radius, scallop_limit, chord_limit, pass, fail_reasons, worst (up to 10
 // places {x, y, z, kind: "gouge" | "uncut" | "scallop", value}, worst first).
-// Throws std::invalid_argument for r ≤ 0, h ≤ 0, an empty path or a non-finite centre.
+// Throws std::invalid_argument for r ≤ 0, h ≤ 0, an empty path, a non-finite centre, or loops
+// whose outer polygon has fewer than 3 points or that have a non-finite point.
 SimulationResult simulate_cut(const HeightField& surface, const std::vector<CentreSegment>& feed,
                               double rapid_length, const SimulateOptions& options,
                               const std::function<void(double)>& progress = {});

@@ -5,17 +5,21 @@
 #include "nodes/post/simulate.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
+#include "nodes/types/param.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
 NodeDecl make_simulate_node() {
   NodeDecl d;
   d.type = "post.simulate";
-  d.version = 1;
+  d.version = 2;
   d.description = "cutting simulation over the cloud's surface: scallop, gouge and uncut area (the certificate)";
   d.input("path", "Toolpath", "planned passes (give this or 'linked')", false)
       .input("linked", "LinkedPath", "linked machine moves (give this or 'path')", false)
       .input("cloud", "Cloud", "the surface, seen from +z")
+      .input("loops", "Loops", "the patch's boundary loops (outer first, then holes; indices into 'cloud'): "
+             "the patch is what lies inside them in xy, and the margin is measured from them; "
+             "absent: the outline is guessed from the cloud", false)
       .output("report", "Report", "scallop/gouge/uncut statistics, pass and fail reasons, the 10 worst places")
       .output("heatmap", "Image", "top view of the scallop left, colour bar 0..1.01 h")
       .param_float("scallop", 0, 0, 100, "mm", "scallop limit h; 0: the path's own")
@@ -46,6 +50,20 @@ NodeDecl make_simulate_node() {
     o.spacing = ctx.number("spacing");
     o.margin = ctx.number("margin");
     o.max_samples = static_cast<std::size_t>(ctx.integer("max_samples"));
+    if (ctx.has_input("loops")) {
+      auto loops = ctx.input<BoundaryLoops>("loops");
+      if (loops->loops.empty()) throw NodeError("the input 'loops' has no loop");
+      const int n = static_cast<int>(cloud->points.size());
+      for (const auto& L : loops->loops) {
+        auto& poly = o.loops.emplace_back();
+        for (int i : L) {
+          if (i < 0 || i >= n)
+            throw NodeError("a loop refers to point " + std::to_string(i) + " but the cloud has " + std::to_string(n) +
+                            " points; give 'loops' computed on the same cloud");
+          poly.emplace_back(cloud->points[i].x(), cloud->points[i].y());
+        }
+      }
+    }
     try {
       HeightField surf(cloud->points);
       auto res = simulate_cut(surf, feed, rapid, o, [&](double f) { ctx.progress(f, "simulating"); });
