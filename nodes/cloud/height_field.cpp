@@ -14,6 +14,7 @@
 #include <string>
 
 #include "nodes/cloud/knn.h"
+#include "nodes/cloud/kd_tree.h"
 
 namespace scallop {
 
@@ -22,17 +23,8 @@ namespace {
 constexpr double kDeg = std::numbers::pi / 180.0;
 
 // nanoflann over the xy coordinates of the points, read in place.
-struct XyAdaptor {
-  const std::vector<Eigen::Vector3d>& P;
-  std::size_t kdtree_get_point_count() const { return P.size(); }
-  double kdtree_get_pt(std::size_t i, std::size_t d) const { return P[i][static_cast<int>(d)]; }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox&) const {
-    return false;
-  }
-};
-using XyMetric = nanoflann::L2_Simple_Adaptor<double, XyAdaptor, double, std::uint32_t>;
-using XyTree = nanoflann::KDTreeSingleIndexAdaptor<XyMetric, XyAdaptor, 2, std::uint32_t>;
+using XyAdaptor = PointsAdaptor<Eigen::Vector3d>;
+using XyTree = KdTree<Eigen::Vector3d, 2>;
 
 // Visits every point within the search radius (in xy) of point i and keeps, among those that
 // are above i and on another layer, the clearest one (largest separation).

@@ -10,22 +10,15 @@
 #include <nanoflann.hpp>
 #include <stdexcept>
 #include <string>
+#include "nodes/cloud/kd_tree.h"
 
 namespace scallop {
 
 namespace {
 
 // nanoflann reads the points in place: no copy of the cloud.
-struct CloudAdaptor {
-  const std::vector<Eigen::Vector3d>& P;
-  std::size_t kdtree_get_point_count() const { return P.size(); }
-  double kdtree_get_pt(std::size_t i, std::size_t d) const { return P[i][static_cast<int>(d)]; }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox&) const { return false; }
-};
-
-using Metric = nanoflann::L2_Simple_Adaptor<double, CloudAdaptor, double, std::uint32_t>;
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<Metric, CloudAdaptor, 3, std::uint32_t>;
+using CloudAdaptor = PointsAdaptor<Eigen::Vector3d>;
+using Tree = KdTree<Eigen::Vector3d, 3>;
 
 // A k-best result set ordered by (distance, index), which skips one index (the query point
 // itself). nanoflann's own KNNResultSet orders only by distance and rejects a candidate whose
@@ -108,7 +101,7 @@ KnnIndex::KnnIndex(const std::vector<Eigen::Vector3d>& P) {
 
 KnnIndex::~KnnIndex() = default;
 
-std::size_t KnnIndex::size() const { return impl_->adaptor.P.size(); }
+std::size_t KnnIndex::size() const { return impl_->adaptor.pts.size(); }
 
 void KnnIndex::query(const Eigen::Vector3d& q, int k, std::vector<int>& idx,
                      std::vector<double>& sq_dist, int skip) const {

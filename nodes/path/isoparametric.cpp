@@ -15,6 +15,7 @@
 
 #include "nodes/path/step_size.h"
 #include "nodes/path/uv_interpolation.h"
+#include "nodes/cloud/kd_tree.h"
 
 namespace scallop {
 
@@ -95,7 +96,7 @@ class BallLifter {
     double d = 0;
     for (const auto& [i, sq] : hits) {
       // |c + d n - q| = rr  <=>  d^2 + 2 b d + (|c - q|^2 - rr^2) = 0, b = (c - q).n
-      const Eigen::Vector3d w = c - adaptor_.P[i];
+      const Eigen::Vector3d w = c - adaptor_.pts[i];
       const double b = w.dot(n), k = w.squaredNorm() - rr * rr;
       if (k >= 0) continue;
       d = std::max(d, -b + std::sqrt(b * b - k));
@@ -104,16 +105,8 @@ class BallLifter {
   }
 
  private:
-  struct Adaptor {
-    const std::vector<Eigen::Vector3d>& P;
-    std::size_t kdtree_get_point_count() const { return P.size(); }
-    double kdtree_get_pt(std::size_t i, std::size_t d) const { return P[i][static_cast<int>(d)]; }
-    template <class BBox>
-    bool kdtree_get_bbox(BBox&) const { return false; }
-  };
-  using Tree = nanoflann::KDTreeSingleIndexAdaptor<
-      nanoflann::L2_Simple_Adaptor<double, Adaptor, double, std::uint32_t>, Adaptor, 3,
-      std::uint32_t>;
+  using Adaptor = PointsAdaptor<Eigen::Vector3d>;
+  using Tree = KdTree<Eigen::Vector3d, 3>;
   Adaptor adaptor_;
   Tree tree_;
   double r_;

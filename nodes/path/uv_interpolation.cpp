@@ -9,21 +9,14 @@
 #include <nanoflann.hpp>
 #include <stdexcept>
 #include <string>
+#include "nodes/cloud/kd_tree.h"
 
 namespace scallop {
 
 namespace {
 
-struct UVAdaptor {
-  const std::vector<Eigen::Vector2d>& UV;
-  std::size_t kdtree_get_point_count() const { return UV.size(); }
-  double kdtree_get_pt(std::size_t i, std::size_t d) const { return UV[i][static_cast<int>(d)]; }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox&) const { return false; }
-};
-
-using Metric = nanoflann::L2_Simple_Adaptor<double, UVAdaptor, double, std::uint32_t>;
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<Metric, UVAdaptor, 2, std::uint32_t>;
+using UVAdaptor = PointsAdaptor<Eigen::Vector2d>;
+using Tree = KdTree<Eigen::Vector2d, 2>;
 
 constexpr int kMaxK = 64;
 
@@ -114,7 +107,7 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
     const double w = w0 * w0;
     if (w <= 0) continue;
     ++used;
-    const Eigen::Vector2d o = (impl_->adaptor.UV[idx[j]] - q) * inv_D;
+    const Eigen::Vector2d o = (impl_->adaptor.pts[idx[j]] - q) * inv_D;
     Eigen::Matrix<double, 6, 1> b;
     b << 1, o.x(), o.y(), o.x() * o.x(), o.x() * o.y(), o.y() * o.y();
     Eigen::Matrix<double, 1, 6> f;

@@ -5,18 +5,13 @@
 #include <memory>
 #include <nanoflann.hpp>
 #include <stdexcept>
+#include "nodes/cloud/kd_tree.h"
 
 namespace scallop {
 namespace {
 
-struct XY {
-  const std::vector<Eigen::Vector3d>& pts;
-  std::size_t kdtree_get_point_count() const { return pts.size(); }
-  double kdtree_get_pt(std::size_t i, std::size_t d) const { return pts[i][d]; }
-  template <class B>
-  bool kdtree_get_bbox(B&) const { return false; }
-};
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, XY>, XY, 2, std::uint32_t>;
+using XY = PointsAdaptor<Eigen::Vector3d>;  // searched by xy
+using Tree = KdTree<Eigen::Vector3d, 2>;
 
 double seg_dist(const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   Eigen::Vector3d e = b - a;

@@ -13,6 +13,7 @@
 #include <nanoflann.hpp>
 #include <numeric>
 #include <stdexcept>
+#include "nodes/cloud/kd_tree.h"
 
 namespace scallop {
 namespace {
@@ -21,18 +22,6 @@ constexpr double kAngle = 0.3;                 // grid rotation (rad), as verify
 constexpr double kPhaseU = 0.37, kPhaseV = 0.71;  // ... and its shift, in spacings
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// nanoflann adaptor over a vector of fixed-size Eigen points.
-template <int D>
-struct PointsAdaptor {
-  const std::vector<Eigen::Matrix<double, D, 1>>& pts;
-  std::size_t kdtree_get_point_count() const { return pts.size(); }
-  double kdtree_get_pt(std::size_t i, std::size_t d) const { return pts[i][d]; }
-  template <class B>
-  bool kdtree_get_bbox(B&) const { return false; }
-};
-template <int D>
-using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, PointsAdaptor<D>>,
-                                                   PointsAdaptor<D>, D, std::uint32_t>;
 
 // Every index within a radius, unsorted (cheaper than nanoflann's sorted radiusSearch).
 struct CollectAll {
@@ -99,8 +88,8 @@ double segment_distance(const Eigen::Vector3d& q, const Eigen::Vector3d& a, cons
 struct PieceIndex {
   std::vector<Eigen::Vector3d> a, b, mid;
   double half = 0;
-  std::unique_ptr<PointsAdaptor<3>> adaptor;
-  std::unique_ptr<KdTree<3>> tree;
+  std::unique_ptr<PointsAdaptor<Eigen::Vector3d>> adaptor;
+  std::unique_ptr<KdTree<Eigen::Vector3d, 3>> tree;
 
   PieceIndex(const std::vector<CentreSegment>& segs, double piece) {
     for (const auto& s : segs) {
@@ -113,8 +102,8 @@ struct PieceIndex {
         half = std::max(half, 0.5 * L / k);
       }
     }
-    adaptor = std::make_unique<PointsAdaptor<3>>(PointsAdaptor<3>{mid});
-    tree = std::make_unique<KdTree<3>>(3, *adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    adaptor = std::make_unique<PointsAdaptor<Eigen::Vector3d>>(PointsAdaptor<Eigen::Vector3d>{mid});
+    tree = std::make_unique<KdTree<Eigen::Vector3d, 3>>(3, *adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
     tree->buildIndex();
   }
 
@@ -203,10 +192,10 @@ struct HeightField::Impl {
   std::vector<Eigen::Vector2d> xy;
   std::vector<double> z;
   std::vector<Eigen::Vector3d> p;  // the points in 3-D, for the local-frame fit
-  std::unique_ptr<PointsAdaptor<2>> adaptor;
-  std::unique_ptr<KdTree<2>> tree;
-  std::unique_ptr<PointsAdaptor<3>> adaptor3;
-  std::unique_ptr<KdTree<3>> tree3;
+  std::unique_ptr<PointsAdaptor<Eigen::Vector2d>> adaptor;
+  std::unique_ptr<KdTree<Eigen::Vector2d, 2>> tree;
+  std::unique_ptr<PointsAdaptor<Eigen::Vector3d>> adaptor3;
+  std::unique_ptr<KdTree<Eigen::Vector3d, 3>> tree3;
 
   bool local_fit(double x, double y, const std::uint32_t* idx, std::size_t got, int k, double& z,
                  Eigen::Vector3d& normal) const;
@@ -365,11 +354,11 @@ HeightField::HeightField(const std::vector<Eigen::Vector3d>& P, int k) : impl_(n
     hi_ = hi_.cwiseMax(impl_->xy.back());
     zmax_ = std::max(zmax_, p.z());
   }
-  impl_->adaptor = std::make_unique<PointsAdaptor<2>>(PointsAdaptor<2>{impl_->xy});
-  impl_->tree = std::make_unique<KdTree<2>>(2, *impl_->adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  impl_->adaptor = std::make_unique<PointsAdaptor<Eigen::Vector2d>>(PointsAdaptor<Eigen::Vector2d>{impl_->xy});
+  impl_->tree = std::make_unique<KdTree<Eigen::Vector2d, 2>>(2, *impl_->adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   impl_->tree->buildIndex();
-  impl_->adaptor3 = std::make_unique<PointsAdaptor<3>>(PointsAdaptor<3>{impl_->p});
-  impl_->tree3 = std::make_unique<KdTree<3>>(3, *impl_->adaptor3, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  impl_->adaptor3 = std::make_unique<PointsAdaptor<Eigen::Vector3d>>(PointsAdaptor<Eigen::Vector3d>{impl_->p});
+  impl_->tree3 = std::make_unique<KdTree<Eigen::Vector3d, 3>>(3, *impl_->adaptor3, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   impl_->tree3->buildIndex();
   // Mean spacing from the 8th-neighbour distance: in a uniform sample of density ρ, π ρ r₈² ≈ 8.
   const std::size_t n = P.size(), stride = std::max<std::size_t>(1, n / 2000);
@@ -605,8 +594,8 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
         for (int t = 0; t < m; ++t) edge_points.push_back(a + (b - a) * (double(t) / m));
       }
   const std::vector<Eigen::Vector2d>& edge_set = use_loops ? edge_points : outline;
-  PointsAdaptor<2> outline_adaptor{edge_set};
-  KdTree<2> outline_tree(2, outline_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  PointsAdaptor<Eigen::Vector2d> outline_adaptor{edge_set};
+  KdTree<Eigen::Vector2d, 2> outline_tree(2, outline_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   outline_tree.buildIndex();
   // The outline nodes lie up to a spacing outside the patch: measure from half a spacing in.
   const double edge_offset = use_loops ? 0.0 : 0.5 * spacing;

@@ -1,0 +1,29 @@
+// nanoflann k-d trees over vectors of fixed-size Eigen points, read in place (no copy).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <nanoflann.hpp>
+#include <vector>
+
+namespace scallop {
+
+// Adaptor over a vector of Eigen points. A tree of dimension Dim searches the first Dim
+// coordinates, so KdTree<Eigen::Vector3d, 2> searches 3-D points by their xy.
+template <class Point>
+struct PointsAdaptor {
+  const std::vector<Point>& pts;
+  std::size_t kdtree_get_point_count() const { return pts.size(); }
+  double kdtree_get_pt(std::size_t i, std::size_t d) const { return pts[i][static_cast<int>(d)]; }
+  template <class BBox>
+  bool kdtree_get_bbox(BBox&) const {
+    return false;
+  }
+};
+
+template <class Point, int Dim>
+using KdTree = nanoflann::KDTreeSingleIndexAdaptor<
+    nanoflann::L2_Simple_Adaptor<double, PointsAdaptor<Point>, double, std::uint32_t>, PointsAdaptor<Point>, Dim,
+    std::uint32_t>;
+
+}  // namespace scallop
