@@ -29,6 +29,9 @@ using json = nlohmann::json;
 std::string explain_miss(const std::optional<json>& last, const json& now) {
   if (!last) return "no earlier run recorded";
   if (last->value("key", "") == now["key"]) return "entry missing";
+  if (last->value("value_format", 1) != now["value_format"])
+    return "the cache's value format changed (" + std::to_string(last->value("value_format", 1)) +
+           " -> " + now["value_format"].dump() + ")";
   if (last->value("version", 0) != now["version"])
     return "node version changed (" + std::to_string(last->value("version", 0)) + " -> " +
            now["version"].dump() + ")";
@@ -78,7 +81,11 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
   std::vector<json> manifests(n);
   for (int i : plan.order) {
     const PlanNode& pn = plan.nodes[i];
-    json m{{"type", pn.decl->type}, {"version", pn.decl->version}, {"params", pn.params}, {"inputs", json::object()}};
+    json m{{"type", pn.decl->type},
+           {"version", pn.decl->version},
+           {"value_format", kValueFormat},
+           {"params", pn.params},
+           {"inputs", json::object()}};
     for (const auto& [port, src] : pn.inputs)
       m["inputs"][port] = src.node < 0 ? input_keys[src.port] : hash_bytes(keys[src.node] + "." + src.port);
     keys[i] = hash_bytes(m.dump());

@@ -16,6 +16,11 @@
 
 namespace scallop {
 
+// The binary layout of the values as a whole, part of every cache key: raised whenever a value
+// type's serialize() changes, so that old disk-cache entries miss instead of being misread.
+// 2: Cloud carries per-point uncertainty.
+inline constexpr int kValueFormat = 2;
+
 class Value {
  public:
   virtual ~Value() = default;

@@ -37,17 +37,30 @@ struct DenoiseOptions {
                            // the cloud's boundary keeps the interior's radius)
   int iterations = 1;      // projections in sequence, each on the result of the previous one
   bool set_normals = true; // output normals from the quadric's gradient
+  bool equalize_rim = true; // refit points whose standard error is above 1.15 times the median
+                            // (one-sided neighbourhoods near the rim) from 2, 3, 4 k neighbours
 };
 
 struct DenoiseResult {
   std::vector<Eigen::Vector3d> points;   // #P moved positions (mm)
   std::vector<Eigen::Vector3d> normals;  // #P unit normals, or empty when !set_normals
   std::size_t kept = 0;  // points left in place in the last iteration (degenerate neighbourhood)
+  std::size_t refitted = 0;  // rim points refitted from a wider neighbourhood (all iterations)
   int k = 0;               // neighbours per fit actually used (0 when skipped)
-  double noise_sigma = -1; // mm; estimated noise (estimate_noise_sigma), -1 unless k was automatic
+  double noise_sigma = -1; // mm; estimated noise (estimate_noise_sigma)
   bool skipped = false;    // automatic mode found noise_sigma < tolerance: points left as they are
   double moved_rms = 0;    // mm; RMS distance between the input and the output points
+  // mm, #P (empty when skipped): the standard error of each output point along its normal,
+  // noise_sigma * sqrt(e0^T A^-1 B A^-1 e0) of its (last) fit; noise_sigma itself for a point
+  // left in place
+  std::vector<double> standard_error;
 };
+
+// How many standard errors a denoised point may lie off the real surface: the bound stored as
+// the cloud's per-point uncertainty. Measured on 50k-point clouds of the plane, waves and dome
+// surfaces with sigma = 0.02 mm (k = 301): the largest |error| / standard error over all 150k
+// points was 3.98, at the rim 3.6.
+inline constexpr double kUncertaintyFactor = 4.0;
 
 // Noise level of a sampled surface: for up to `samples` points (evenly spaced in index order; all
 // when #P <= samples), a Gaussian-weighted quadric is fitted to the point and its `k` nearest

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdio>
 #include <stdexcept>
 
@@ -11,7 +12,7 @@ namespace scallop {
 NodeDecl make_denoise_node() {
   NodeDecl d;
   d.type = "cloud.denoise";
-  d.version = 2;  // 2: automatic k (default), tolerance, report output
+  d.version = 3;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty
   d.description =
       "moving-least-squares denoising: each point projected along its local normal onto a "
       "weighted quadric fitted to its neighbours (parallel)";
@@ -19,11 +20,14 @@ NodeDecl make_denoise_node() {
       .input("neighbors", "Neighbors",
              "neighbours of each point (its first k are used); computed here when absent", false)
       .output("cloud", "Cloud",
-              "the projected points, with normals from the fitted quadrics (the input cloud "
-              "itself when automatic mode finds it already smooth enough)")
+              "the projected points (the input points when automatic mode finds them smooth "
+              "enough), with normals from the fitted quadrics and a per-point uncertainty: "
+              "4 standard errors of the fit (or of the estimated noise), which path planners "
+              "keep as a margin")
       .output("report", "Report",
-              "{noise_sigma (mm, estimated; -1 unless k = 0), k (used; 0 when skipped), "
-              "moved_rms (mm), skipped}")
+              "{noise_sigma (mm, estimated), k (used; 0 when skipped), moved_rms (mm), skipped, "
+              "rim_refitted (points refitted from a wider neighbourhood), uncertainty {median, "
+              "max, max_at, factor}: how far the points may still be off the real surface}")
       .param_int("k", 0, 0, 512, "",
                  "neighbours in each fit; more averages more noise away (noise in the normal "
                  "direction falls roughly as 1/sqrt(k)) but smooths more of the shape. 0: "
@@ -61,11 +65,28 @@ NodeDecl make_denoise_node() {
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }
+    // What each point may still be off the real surface: kUncertaintyFactor standard errors of
+    // its fit, or of its own noise when the cloud was left as it is.
+    std::vector<double> uncertainty(cloud->size(), kUncertaintyFactor * r.noise_sigma);
+    if (!r.skipped)
+      for (std::size_t i = 0; i < uncertainty.size(); ++i)
+        uncertainty[i] = kUncertaintyFactor * r.standard_error[i];
+    std::size_t worst = 0;
+    for (std::size_t i = 0; i < uncertainty.size(); ++i)
+      if (uncertainty[i] > uncertainty[worst]) worst = i;
+    std::vector<double> sorted = uncertainty;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    const Eigen::Vector3d& at = r.skipped ? cloud->points[worst] : r.points[worst];
     Report report;
     report.data = {{"noise_sigma", r.noise_sigma},
                    {"k", r.k},
                    {"moved_rms", r.moved_rms},
-                   {"skipped", r.skipped}};
+                   {"skipped", r.skipped},
+                   {"rim_refitted", r.refitted},
+                   {"uncertainty", {{"median", sorted[sorted.size() / 2]},
+                                    {"max", uncertainty[worst]},
+                                    {"max_at", {at.x(), at.y(), at.z()}},
+                                    {"factor", kUncertaintyFactor}}}};
     ctx.set("report", std::move(report));
     if (r.skipped) {
       char msg[160];
@@ -73,12 +94,15 @@ NodeDecl make_denoise_node() {
                     "estimated noise %.2g mm is below the tolerance %.2g mm: cloud unchanged",
                     r.noise_sigma, o.tolerance);
       ctx.progress(1.0, msg);
-      ctx.set_output("cloud", cloud);
+      PointCloud out = *cloud;
+      out.uncertainty = std::move(uncertainty);
+      ctx.set("cloud", std::move(out));
       return;
     }
     PointCloud out;
     out.points = std::move(r.points);
     out.normals = o.set_normals ? std::move(r.normals) : cloud->normals;
+    out.uncertainty = std::move(uncertainty);
     ctx.set("cloud", std::move(out));
   };
   return d;

@@ -16,6 +16,7 @@ void write_ply(const std::string& path, const PointCloud& cloud, bool binary) {
     throw std::runtime_error("cannot write '" + path + "': the cloud has " + std::to_string(cloud.normals.size()) +
                              " normals for " + std::to_string(cloud.points.size()) + " points");
   const bool normals = cloud.has_normals();
+  const bool uncertainty = cloud.has_uncertainty();
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) throw std::runtime_error("cannot write '" + path + "': " + std::strerror(errno));
 
@@ -24,9 +25,10 @@ void write_ply(const std::string& path, const PointCloud& cloud, bool binary) {
       << "element vertex " << cloud.points.size() << "\n"
       << "property double x\nproperty double y\nproperty double z\n";
   if (normals) out << "property double nx\nproperty double ny\nproperty double nz\n";
+  if (uncertainty) out << "property double uncertainty\n";
   out << "end_header\n";
 
-  const std::size_t per = normals ? 6 : 3;
+  const std::size_t per = 3 + (normals ? 3 : 0) + (uncertainty ? 1 : 0);
   if (binary) {
     // Buffer a block of points at a time; PLY wants little-endian whatever the machine.
     std::vector<std::uint64_t> buf;
@@ -44,6 +46,7 @@ void write_ply(const std::string& path, const PointCloud& cloud, bool binary) {
       for (int k = 0; k < 3; ++k) put(cloud.points[i][k]);
       if (normals)
         for (int k = 0; k < 3; ++k) put(cloud.normals[i][k]);
+      if (uncertainty) put(cloud.uncertainty[i]);
       if (buf.size() >= per * 4096 || i + 1 == cloud.points.size()) {
         out.write(reinterpret_cast<const char*>(buf.data()), static_cast<std::streamsize>(buf.size() * 8));
         buf.clear();
@@ -60,9 +63,11 @@ void write_ply(const std::string& path, const PointCloud& cloud, bool binary) {
     };
     for (std::size_t i = 0; i < cloud.points.size(); ++i) {
       line.clear();
-      for (int k = 0; k < 3; ++k) put(cloud.points[i][k], k == 2 && !normals ? '\n' : ' ');
+      for (int k = 0; k < 3; ++k) put(cloud.points[i][k], ' ');
       if (normals)
-        for (int k = 0; k < 3; ++k) put(cloud.normals[i][k], k == 2 ? '\n' : ' ');
+        for (int k = 0; k < 3; ++k) put(cloud.normals[i][k], ' ');
+      if (uncertainty) put(cloud.uncertainty[i], ' ');
+      line.back() = '\n';
       out << line;
     }
   }

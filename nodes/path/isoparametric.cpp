@@ -55,6 +55,7 @@ struct Pass {
   std::vector<double> t;
   std::vector<Eigen::Vector3d> p, n, c;  // contact (lifted with the ball), unit normal, ball centre
   std::vector<double> lift;               // how far the ball was lifted off the interpolant (mm)
+  std::vector<double> delta;              // how far the surface may be off there (Margins)
   std::vector<char> unchecked;            // per segment: the forward chord check did not hold
 };
 
@@ -88,7 +89,7 @@ class BallLifter {
     tree_.buildIndex();
   }
   // The smallest d >= 0 such that every cloud point is at least r - tol from c + d n (n unit,
-  // 0 <= tol < r).
+  // tol < r; a negative tol keeps the points |tol| outside the ball).
   double lift(const Eigen::Vector3d& c, const Eigen::Vector3d& n, double tol) const {
     const double rr = r_ - tol;
     std::vector<std::pair<std::uint32_t, double>> hits;
@@ -112,24 +113,60 @@ class BallLifter {
   double r_;
 };
 
+// The surface the planner sees (the cloud, through the (u,v) interpolant) may lie up to
+// delta off the real one, either way: delta = the larger of the surface_error option and the
+// cloud's own per-point uncertainty there (set by cloud.denoise). Then
+//   real scallop <= scallop on the estimate + delta, so the passes keep that <= h;
+//   real gouge   <= chord overcut + delta - stock,  where the ball is kept `stock` above the
+//                                                   estimate so that this stays <= 0.9 e.
+// With delta = 0: 90 % of e for the chord overcut (10 % is left for the interpolant's own error:
+// on the noisy bundled example the certificate's fit differs from the planner's by ~0.001 mm)
+// and no stock. With delta > 0 the overcut budget shrinks first (down to e/4, which only costs
+// forward points), and only the rest becomes stock (which costs side step).
+struct Margins {
+  double delta;     // mm, how far the estimate may be off here
+  double scallop;   // mm, the limit for the scallop on the estimate (stock included): h - delta
+  double overcut;   // mm, the chord overcut allowed
+  double stock;     // mm, how far the ball is kept above the estimate
+};
+Margins margins(const IsoparametricOptions& o, double uncertainty) {
+  Margins m;
+  m.delta = std::max(o.surface_error, uncertainty);
+  m.scallop = o.scallop_height * o.safety_factor - m.delta;
+  m.overcut = std::max(0.25 * o.chord_error, 0.9 * o.chord_error - m.delta);
+  m.stock = std::max(0.0, m.overcut + m.delta - 0.9 * o.chord_error);
+  return m;
+}
+// Too uncertain to plan for: less than a fifth of h would be left for the scallop itself.
+bool too_uncertain(const IsoparametricOptions& o, const Margins& m) {
+  return m.scallop - m.stock < 0.2 * o.scallop_height * o.safety_factor;
+}
+
 class Planner {
  public:
   Planner(const UVInterpolator& f, const BallLifter& lifter, Coords co,
           const IsoparametricOptions& o)
       : f_(f), lifter_(lifter), co_(co), o_(o), r_(o.tool_radius),
         h_(o.scallop_height * o.safety_factor),
-        // 10 % of e is left for the error of the surface estimate itself: on the noisy bundled
-        // example the certificate's own fit differs from the planner's by ~0.001 mm, and an
-        // overcut there is a gouge (the limit is e)
-        e_over_(0.9 * o.chord_error), e_under_(std::min(0.98 * o.chord_error, 0.1 * h_)),
-        hfd_(2 * f.uv_spacing()), ls0_(std::sqrt(8 * r_ * h_)) {}
+        e_under_(std::min(0.98 * o.chord_error, 0.1 * h_)), hfd_(2 * f.uv_spacing()),
+        ls0_(std::sqrt(8 * r_ * h_)) {}
 
   double chord_overcut_max = 0, chord_undercut_max = 0;
   double forward_min = kInf, forward_max = 0;
   int forward_floor_hits = 0;
 
   SurfaceSample at(double s, double t) const { return f_(co_.uv(s, t)); }
-  Eigen::Vector3d centre(const SurfaceSample& x) const { return x.position + r_ * x.normal; }
+  Margins margin(const SurfaceSample& x) const { return margins(o_, x.uncertainty); }
+  // How far a cloud point may reach into the ball before it is lifted: `fraction` of e, and no
+  // more than the real gouge allows when the point itself may be delta too low (0.9 e - delta,
+  // which is negative, i.e. a clearance, where delta > 0.9 e).
+  double lift_tolerance(double delta, double fraction) const {
+    return std::min(fraction * o_.chord_error, 0.9 * o_.chord_error - delta);
+  }
+  // The ball centre over the estimated surface, the stock above it (see Margins).
+  Eigen::Vector3d centre(const SurfaceSample& x) const {
+    return x.position + (r_ + margin(x).stock) * x.normal;
+  }
 
   // r and its first and second derivatives in (s, t) by central differences through the
   // interpolant (paper section 3.1). The stencil centre is moved inside the domain by one step
@@ -170,7 +207,9 @@ class Planner {
     // (perpendicular to r_t on the surface, parameter direction (1, -F/G)).
     const double kappa_s = v.formula4 ? normal_curvature(ff, 1, -ff.F / ff.G)
                                       : normal_curvature(ff, 1, 0);
-    v.interval = side_interval(h_, r_, kappa_s);
+    // the margin for the estimate's error, and the stock, come off the scallop allowed
+    const Margins m = margin(at(s, t));
+    v.interval = side_interval(std::max(m.scallop - m.stock, 0.1 * h_), r_, kappa_s);
     const double rsn = std::sqrt(ff.E);
     v.ds = v.formula4 ? side_step_corrected(v.interval, rsn, theta)
                       : side_step_conformal(v.interval, rsn);
@@ -194,7 +233,8 @@ class Planner {
       const double over = std::max(0.0, -up), under = std::max(0.0, up);
       // Sideways the chord may stray up to e as well (it shifts the pass, not the depth).
       const double total = (c0 + y * seg - cm).norm();
-      ratio = std::max({ratio, over / e_over_, under / e_under_, total / e_over_});
+      ratio = std::max(
+          {ratio, over / margin(m).overcut, under / e_under_, total / (0.9 * o_.chord_error)});
       if (record) {
         chord_overcut_max = std::max(chord_overcut_max, over);
         chord_undercut_max = std::max(chord_undercut_max, under);
@@ -210,12 +250,14 @@ class Planner {
     auto push = [&](double t, const SurfaceSample& x) {
       // The contact is moved up with the ball where the ball would reach into the cloud.
       // A quarter of e is left to the cloud's noise and the interpolant's error.
-      const double d = lifter_.lift(centre(x), x.normal, 0.25 * o_.chord_error);
+      const Margins m = margin(x);
+      const double d = m.stock + lifter_.lift(centre(x), x.normal, lift_tolerance(m.delta, 0.25));
       P.t.push_back(t);
       P.p.push_back(x.position + d * x.normal);
       P.n.push_back(x.normal);
-      P.c.push_back(centre(x) + d * x.normal);
-      P.lift.push_back(d);
+      P.c.push_back(x.position + (r_ + d) * x.normal);
+      P.lift.push_back(d - m.stock);
+      P.delta.push_back(m.delta);
     };
     if (co_.degenerate(s)) {
       P.closed = false;
@@ -244,7 +286,8 @@ class Planner {
       // that of a contact curve of curvature kappa (1 + r kappa_n).
       const double kappa_n = -rtt.dot(x.normal) / (rtn * rtn);
       const double lf = std::min(
-          forward_interval(convex ? e_over_ : e_under_, kappa * std::abs(1 + r_ * kappa_n)),
+          forward_interval(convex ? margin(x).overcut : e_under_,
+                           kappa * std::abs(1 + r_ * kappa_n)),
           o_.max_segment);
       double dt = lf / rtn;
       if (co_.polar) dt = std::min(dt, M_PI / 8);
@@ -311,8 +354,9 @@ class Planner {
         // of it is kept back for the cloud between the samples.
         // (the ends too: lifting a vertex along its own normal can bring it nearer the cloud
         // elsewhere)
+        const double tol = lift_tolerance(std::max(P.delta[k], P.delta[k + 1]), 0.5);
         for (int i = 0; i <= m; ++i)
-          d = std::max(d, lifter_.lift(a + (b - a) * (double(i) / m), n, 0.5 * o_.chord_error));
+          d = std::max(d, lifter_.lift(a + (b - a) * (double(i) / m), n, tol));
         if (d <= 0) continue;
         moved = true;
         for (std::size_t j : {k, k + 1}) {
@@ -435,9 +479,10 @@ class Planner {
             if (v > gmax) gmax = v, fmax = fm;
           }
         }
+        // on the real surface the scallop may be up to delta higher
         Eigen::Vector3d w;
         g(fmax, &w);
-        best[i] = gmax;
+        best[i] = gmax + margin(at(sA + fmax * (sB - sA), t)).delta;
         where[i] = w;
       }
     });
@@ -479,7 +524,7 @@ class Planner {
   const BallLifter& lifter_;
   Coords co_;
   const IsoparametricOptions& o_;
-  double r_, h_, e_over_, e_under_, hfd_, ls0_;
+  double r_, h_, e_under_, hfd_, ls0_;
 };
 
 // Concave places the ball cannot reach, grouped into regions: points closer than `link` are
@@ -556,6 +601,13 @@ void check_options(const IsoparametricOptions& o) {
                                 " mm)");
   if (!(o.safety_factor > 0 && o.safety_factor <= 1))
     throw std::invalid_argument("safety_factor must be in (0, 1] (got " + fmt(o.safety_factor) + ")");
+  if (!(o.surface_error >= 0) || !std::isfinite(o.surface_error))
+    throw std::invalid_argument("surface_error must be >= 0 (got " + fmt(o.surface_error) + ")");
+  if (too_uncertain(o, margins(o, 0)))
+    throw std::invalid_argument(
+        "surface_error " + fmt(o.surface_error) + " mm leaves too little of the scallop height " +
+        fmt(o.scallop_height) + " mm (times safety_factor " + fmt(o.safety_factor) +
+        ") to plan for: raise scallop_height or lower surface_error");
   if (!(o.conformal_tolerance >= 0 && o.conformal_tolerance < 90))
     throw std::invalid_argument("conformal_tolerance must be in [0, 90) degrees (got " +
                                 fmt(o.conformal_tolerance) + ")");
@@ -607,7 +659,27 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     co.T = kTwoPi;
   }
 
-  const UVInterpolator interp(cloud.points, cloud.normals, map.uv, domain, o.interpolation_k);
+  if (!cloud.uncertainty.empty() && !cloud.has_uncertainty())
+    throw std::invalid_argument("the cloud has " + std::to_string(cloud.size()) + " points but " +
+                                std::to_string(cloud.uncertainty.size()) + " uncertainties");
+  // How well the surface is known: the planner keeps a margin of delta wherever it plans.
+  std::vector<double> deltas;
+  std::size_t uncertain = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Margins m = margins(o, cloud.has_uncertainty() ? cloud.uncertainty[i] : 0.0);
+    deltas.push_back(m.delta);
+    if (too_uncertain(o, m)) ++uncertain;
+  }
+  std::nth_element(deltas.begin(), deltas.begin() + deltas.size() / 2, deltas.end());
+  const double delta_median = deltas[deltas.size() / 2];
+  const double delta_max = *std::max_element(deltas.begin(), deltas.end());
+  if (too_uncertain(o, margins(o, delta_median)))
+    throw std::invalid_argument(
+        "the cloud's surface is known only to +-" + fmt(delta_median) + " mm (median; cloud.denoise's "
+        "uncertainty), too much of the scallop height " + fmt(o.scallop_height) +
+        " mm to promise it: denoise with more neighbours, scan more finely or raise scallop_height");
+  const UVInterpolator interp(cloud.points, cloud.normals, map.uv, domain, o.interpolation_k,
+                              cloud.has_uncertainty() ? &cloud.uncertainty : nullptr);
   const BallLifter lifter(cloud.points, o.tool_radius);
   Planner planner(interp, lifter, co, o);
   std::vector<double> nn;
@@ -733,6 +805,11 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     warnings.push_back(std::to_string(planner.forward_floor_hits) +
                        " forward steps reached the smallest step with the chord still too far "
                        "off (a kink in the surface or the map?)");
+  if (uncertain > 0)
+    warnings.push_back(std::to_string(uncertain) + " cloud points (" +
+                       fmt(100.0 * uncertain / cloud.size()) + " %) are known only to +-" +
+                       fmt(delta_max) + " mm at worst: too little of the scallop height is left "
+                       "there, so the side step is cut to a tenth and the limit may not hold");
   if (!concave_pts.empty())
     warnings.push_back(std::to_string(concave_pts.size()) +
                        " path points lie where the surface is concave with a radius below the "
@@ -745,6 +822,12 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
       {"scallop_height", o.scallop_height},
       {"chord_error", o.chord_error},
       {"planned_scallop_height", hlim},
+      {"surface_error", {{"option", o.surface_error},
+                         {"median", delta_median},
+                         {"max", delta_max},
+                         {"stock_at_median", margins(o, delta_median).stock},
+                         {"stock_at_max", margins(o, delta_max).stock},
+                         {"too_uncertain_points", uncertain}}},
       {"passes", passes.size()},
       {"points", points},
       {"contact_length", length},

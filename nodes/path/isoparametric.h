@@ -49,6 +49,9 @@ struct IsoparametricOptions {
   double scallop_height = 0.01;      // h (mm), 0 < h < r
   double chord_error = 0.005;        // e (mm), > 0
   double safety_factor = 1.0;        // plan for h * safety_factor, in (0, 1]
+  double surface_error = 0;          // delta (mm), >= 0: the cloud's surface is known to +-delta;
+                                     // passes are planned for h * safety_factor - delta, and the
+                                     // ball kept up to delta above the estimate (see stock())
   double conformal_tolerance = 5.0;  // degrees: |angle(r_s, r_t) - 90| above this uses formula (4)
   double max_segment = 5.0;          // longest forward step (mm), > 0
   int interpolation_k = 20;          // neighbours per local fit (see uv_interpolation.h)

@@ -12,12 +12,13 @@ namespace scallop {
 NodeDecl make_isoparametric_node() {
   NodeDecl d;
   d.type = "path.isoparametric";
-  d.version = 2;
+  d.version = 3;  // 3: margins for the cloud's uncertainty (surface_error)
   d.description =
       "iso-parametric finishing passes from a UV-mapped cloud: zig-zag on a rectangle map, "
       "concentric on a disk map; forward step from the chord error, side step from the scallop "
       "height, checked between every two passes";
-  d.input("cloud", "Cloud", "the points, with upward unit normals")
+  d.input("cloud", "Cloud",
+          "the points, with upward unit normals (and per-point uncertainty, kept as a margin)")
       .input("neighbors", "Neighbors", "k nearest neighbours of each point (sampling scale)")
       .input("map", "UVMap", "uv of every point: rectangle for zigzag, disk for contour")
       .output("toolpath", "Toolpath", "the passes: contact points, normals, uv, in cutting order")
@@ -32,6 +33,12 @@ NodeDecl make_isoparametric_node() {
       .param_float("chord_error", 0.005, 1e-6, 1e2, "mm", "largest chord deviation e allowed")
       .param_float("safety_factor", 1.0, 0.05, 1.0, "",
                    "plan for safety_factor * h (margin for the cloud's own error)")
+      .param_float("surface_error", 0.0, 0.0, 1e2, "mm",
+                   "the cloud's surface is known to +- this (e.g. the scanner's accuracy); where "
+                   "the cloud's own per-point uncertainty (from cloud.denoise) is larger, that "
+                   "is used. The scallop is planned for h minus it, and the ball kept above the "
+                   "estimate by what the chord budget cannot absorb, so the limits hold on the "
+                   "real surface")
       .param_float("conformal_tolerance", 5.0, 0.0, 89.0, "deg",
                    "where r_u and r_v are further than this from orthogonal, the side step uses "
                    "the corrected formula (4) instead of (3)")
@@ -47,6 +54,7 @@ NodeDecl make_isoparametric_node() {
     o.scallop_height = ctx.number("scallop_height");
     o.chord_error = ctx.number("chord_error");
     o.safety_factor = ctx.number("safety_factor");
+    o.surface_error = ctx.number("surface_error");
     o.conformal_tolerance = ctx.number("conformal_tolerance");
     o.max_segment = ctx.number("max_segment");
     o.interpolation_k = static_cast<int>(ctx.integer("interpolation_k"));

@@ -32,12 +32,13 @@ Eigen::Vector2d UVDomain::clamp(const Eigen::Vector2d& uv) const {
 struct UVInterpolator::Impl {
   const std::vector<Eigen::Vector3d>& P;
   const std::vector<Eigen::Vector3d>& N;
+  const std::vector<double>* U;  // per-point uncertainty, or null
   UVAdaptor adaptor;
   Tree tree;
   int k;
   Impl(const std::vector<Eigen::Vector3d>& P_, const std::vector<Eigen::Vector3d>& N_,
-       const std::vector<Eigen::Vector2d>& UV, int k_)
-      : P(P_), N(N_), adaptor{UV}, tree(2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10)),
+       const std::vector<Eigen::Vector2d>& UV, int k_, const std::vector<double>* U_)
+      : P(P_), N(N_), U(U_), adaptor{UV}, tree(2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10)),
         k(k_) {
     tree.buildIndex();
   }
@@ -45,8 +46,12 @@ struct UVInterpolator::Impl {
 
 UVInterpolator::UVInterpolator(const std::vector<Eigen::Vector3d>& P,
                                const std::vector<Eigen::Vector3d>& N,
-                               const std::vector<Eigen::Vector2d>& UV, UVDomain domain, int k)
+                               const std::vector<Eigen::Vector2d>& UV, UVDomain domain, int k,
+                               const std::vector<double>* uncertainty)
     : domain_(domain) {
+  if (uncertainty && uncertainty->size() != P.size())
+    throw std::invalid_argument("the cloud has " + std::to_string(P.size()) + " points but " +
+                                std::to_string(uncertainty->size()) + " uncertainties");
   if (N.size() != P.size() || UV.size() != P.size())
     throw std::invalid_argument("positions, normals and uv differ in count (" +
                                 std::to_string(P.size()) + ", " + std::to_string(N.size()) +
@@ -62,7 +67,7 @@ UVInterpolator::UVInterpolator(const std::vector<Eigen::Vector3d>& P,
     if (!P[i].allFinite() || !N[i].allFinite() || !UV[i].allFinite())
       throw std::invalid_argument("point " + std::to_string(i) +
                                   " has a NaN or infinite position, normal or uv");
-  impl_ = std::make_unique<Impl>(P, N, UV, k);
+  impl_ = std::make_unique<Impl>(P, N, UV, k, uncertainty);
 
   // Sampling scale: median nearest-neighbour distance in uv (a subsample is plenty).
   const std::size_t stride = std::max<std::size_t>(1, P.size() / 4096);
@@ -102,11 +107,21 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
   Eigen::Matrix3d M3 = Eigen::Matrix3d::Zero();
   Eigen::Matrix<double, 3, 6> rhs3 = Eigen::Matrix<double, 3, 6>::Zero();
   int used = 0;
+  // A soft maximum of the neighbours' uncertainty: the weighted power mean of order 8 leans on
+  // the largest values yet stays continuous in uv (the weights vanish at D), so a stock taken
+  // from it puts no step into the ball-centre curve.
+  double uw = 0, usum = 0, uscale = 0;
+  if (impl_->U)
+    for (int j = 0; j < found - 1; ++j) uscale = std::max(uscale, (*impl_->U)[idx[j]]);
   for (int j = 0; j < found - 1; ++j) {
     const double w0 = 1 - sq[j] / D2;
     const double w = w0 * w0;
     if (w <= 0) continue;
     ++used;
+    if (impl_->U && uscale > 0) {
+      uw += w;
+      usum += w * std::pow((*impl_->U)[idx[j]] / uscale, 8);
+    }
     const Eigen::Vector2d o = (impl_->adaptor.pts[idx[j]] - q) * inv_D;
     Eigen::Matrix<double, 6, 1> b;
     b << 1, o.x(), o.y(), o.x() * o.x(), o.x() * o.y(), o.y() * o.y();
@@ -151,6 +166,7 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
     value << impl_->P[idx[0]].transpose(), impl_->N[idx[0]].transpose();
   }
   SurfaceSample s;
+  if (impl_->U) s.uncertainty = uw > 0 ? uscale * std::pow(usum / uw, 1.0 / 8) : (*impl_->U)[idx[0]];
   s.position = value.head<3>().transpose();
   Eigen::Vector3d n = value.tail<3>().transpose();
   const double nn = n.norm();

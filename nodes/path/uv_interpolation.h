@@ -35,6 +35,7 @@ struct UVDomain {
 struct SurfaceSample {
   Eigen::Vector3d position;  // mm
   Eigen::Vector3d normal;    // unit
+  double uncertainty = 0;    // mm: a soft maximum of the fitted points' uncertainty (0: none)
 };
 
 class UVInterpolator {
@@ -43,11 +44,17 @@ class UVInterpolator {
   // N   #P by 3 unit normals (oriented consistently, e.g. up)
   // UV  #P by 2 parameter positions, inside `domain`
   // k   neighbours per fit, 6 <= k < #P (20 is a good default)
-  // Keeps references to P, N and UV: they must outlive the interpolator and not change.
+  // uncertainty  optional #P per-point bounds (mm, PointCloud::uncertainty); their weighted
+  //              power mean of order 8 over the points of a fit (continuous, near their
+  //              largest value: a certificate that averages them over other neighbours, as
+  //              post.simulate does, stays below it) goes into SurfaceSample::uncertainty
+  // Keeps references to P, N, UV and uncertainty: they must outlive the interpolator and not
+  // change.
   // Throws std::invalid_argument for mismatched sizes, too few points, a bad k or a non-finite
   // coordinate.
   UVInterpolator(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
-                 const std::vector<Eigen::Vector2d>& UV, UVDomain domain, int k = 20);
+                 const std::vector<Eigen::Vector2d>& UV, UVDomain domain, int k = 20,
+                 const std::vector<double>* uncertainty = nullptr);
   ~UVInterpolator();
   UVInterpolator(const UVInterpolator&) = delete;
   UVInterpolator& operator=(const UVInterpolator&) = delete;

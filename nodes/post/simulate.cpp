@@ -107,11 +107,13 @@ struct PieceIndex {
     tree->buildIndex();
   }
 
-  // gouge and scallop (NaN: uncut) at p with normal n. Every piece that comes within r of the
-  // ray segment [p, p + T n] has its midpoint within r + T/2 + half of the ray's middle, so the
-  // candidates are complete and both values exact.
-  void trace(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double r, double T, double& gouge,
-             double& scallop, std::vector<std::uint32_t>& cand) const {
+  // gouge and scallop (NaN: uncut) at p with normal n, where the real surface may lie up to
+  // `delta` off p either way: the gouge is then at most r - d(p) + delta, the scallop at most
+  // its value at p plus delta (the ray from p - delta n reaches p after delta). Every piece that
+  // comes within r of the ray segment [p, p + T n] has its midpoint within r + T/2 + half of the
+  // ray's middle, so the candidates are complete and, for delta = 0, both values exact.
+  void trace(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double r, double T, double delta,
+             double& gouge, double& scallop, std::vector<std::uint32_t>& cand) const {
     Eigen::Vector3d m = p + 0.5 * T * n;
     double R = r + 0.5 * T + half;
     CollectAll rs{R * R, &cand};
@@ -119,14 +121,14 @@ struct PieceIndex {
     tree->findNeighbors(rs, m.data(), nanoflann::SearchParams(32, 0, false));
     double d = INFINITY;
     for (auto i : cand) d = std::min(d, segment_distance(p, a[i], b[i]));
-    gouge = d < r ? r - d : 0.0;
+    gouge = std::max(0.0, r - d + delta);
     if (d <= r) {
-      scallop = 0;
+      scallop = std::max(0.0, delta - (r - d));
       return;
     }
     double t = INFINITY;
     for (auto i : cand) t = std::min(t, capsule_entry(p, n, a[i], b[i], r));
-    scallop = t <= T ? t : kNaN;
+    scallop = t <= T ? t + delta : kNaN;
   }
 };
 
@@ -196,6 +198,7 @@ struct HeightField::Impl {
   std::unique_ptr<KdTree<Eigen::Vector2d, 2>> tree;
   std::unique_ptr<PointsAdaptor<Eigen::Vector3d>> adaptor3;
   std::unique_ptr<KdTree<Eigen::Vector3d, 3>> tree3;
+  std::vector<double> uncertainty;  // per point (mm), or empty
 
   bool local_fit(double x, double y, const std::uint32_t* idx, std::size_t got, int k, double& z,
                  Eigen::Vector3d& normal) const;
@@ -331,11 +334,22 @@ bool HeightField::Impl::local_fit(double x, double y, const std::uint32_t* idx_x
   return true;
 }
 
-HeightField::HeightField(const std::vector<Eigen::Vector3d>& P, int k) : impl_(new Impl), k_(k) {
+HeightField::HeightField(const std::vector<Eigen::Vector3d>& P, int k,
+                         const std::vector<double>* uncertainty)
+    : impl_(new Impl), k_(k) {
   if (P.size() < 10) {
     delete impl_;
     throw std::invalid_argument("the cloud has " + std::to_string(P.size()) +
                                 " points; the surface model needs at least 10");
+  }
+  if (uncertainty && uncertainty->size() != P.size()) {
+    delete impl_;
+    throw std::invalid_argument("the cloud has " + std::to_string(P.size()) + " points but " +
+                                std::to_string(uncertainty->size()) + " uncertainties");
+  }
+  if (uncertainty) {
+    impl_->uncertainty = *uncertainty;
+    for (double u : *uncertainty) uncertainty_max_ = std::max(uncertainty_max_, u);
   }
   k_ = std::min<int>(k, static_cast<int>(P.size()));
   impl_->xy.reserve(P.size());
@@ -375,6 +389,17 @@ HeightField::HeightField(const std::vector<Eigen::Vector3d>& P, int k) : impl_(n
 }
 
 HeightField::~HeightField() { delete impl_; }
+
+double HeightField::uncertainty(double x, double y) const {
+  if (impl_->uncertainty.empty()) return 0;
+  std::uint32_t idx[64];
+  double d2[64];
+  const double q[2] = {x, y};
+  const std::size_t got = impl_->tree->knnSearch(q, std::min(k_, 64), idx, d2);
+  double sum = 0;
+  for (std::size_t j = 0; j < got; ++j) sum += impl_->uncertainty[idx[j]];
+  return got ? sum / got : 0.0;
+}
 
 bool HeightField::inside(double x, double y) const {
   double z;
@@ -631,7 +656,8 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
       const Raw& s = raw[i];
       SimSample& out = res.samples[i];
       out.x = s.p.x(), out.y = s.p.y(), out.z = s.p.z(), out.weight = s.w;
-      index.trace(s.p, s.n, r, T, out.gouge, out.scallop, cand);
+      index.trace(s.p, s.n, r, T, surf.uncertainty(s.p.x(), s.p.y()), out.gouge, out.scallop,
+                  cand);
       out.interior = is_interior(s.p.x(), s.p.y());
     }
     std::size_t d = done.fetch_add(rg.size()) + rg.size();
@@ -680,7 +706,7 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
             if (use_loops ? !(on_patch_grid(x, y) && surf.eval(x, y, z, n, true)) : !surf.eval(x, y, z, n)) continue;
             SimSample& out = extra[slot];
             out.x = x, out.y = y, out.z = z, out.weight = 0;
-            index.trace({x, y, z}, n, r, T, out.gouge, out.scallop, cand);
+            index.trace({x, y, z}, n, r, T, surf.uncertainty(x, y), out.gouge, out.scallop, cand);
             out.interior = no_interior || is_interior(x, y);
             valid[slot] = 1;
           }
@@ -739,6 +765,8 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
   rep["uncut_fraction_interior"] = area_i > 0 ? uncut_i / area_i : 0.0;
   rep["cut_length"] = cut_length;
   rep["rapid_length"] = rapid_length;
+  // how far the cloud may be off the real surface: scallop and gouge above include it
+  rep["surface_uncertainty_max"] = surf.uncertainty_max();
 
   nlohmann::json reasons = nlohmann::json::array();
   char buf[160];

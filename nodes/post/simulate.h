@@ -8,6 +8,9 @@
 //   scallop = smallest t ≥ 0 with d(p + t·n) ≤ r   (exact: first entry of the ray into the
 //             union of capsules of radius r around the pieces of C, found analytically),
 //   uncut   when no such t ≤ 20·h.
+// Where the cloud carries an uncertainty delta (PointCloud::uncertainty: the real surface may lie
+// up to delta off it), both are bounds for the real surface: gouge = max(0, r − d(p) + delta),
+// scallop = its value at p + delta.
 // Fractions, percentiles and means are area-weighted. The 1000 highest values are refined with
 // local grids down to 1/16 of the spacing so the maxima do not depend on the grid.
 #pragma once
@@ -40,7 +43,9 @@ std::vector<CentreSegment> feed_centres(const LinkedPath& path, double& rapid_le
 class HeightField {
  public:
   // P  #P by 3 cloud points (mm), at least 10. k  neighbours per fit.
-  HeightField(const std::vector<Eigen::Vector3d>& P, int k = 20);
+  // uncertainty  optional #P bounds (mm) on how far each point may be off the real surface
+  HeightField(const std::vector<Eigen::Vector3d>& P, int k = 20,
+              const std::vector<double>* uncertainty = nullptr);
   ~HeightField();
   HeightField(const HeightField&) = delete;
   HeightField& operator=(const HeightField&) = delete;
@@ -49,6 +54,10 @@ class HeightField {
   // centroid farther than half their radius from (x, y)), unless `force`.
   bool eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force = false) const;
   bool inside(double x, double y) const;
+  // How far the surface at (x, y) may be off the real one (mm): the mean uncertainty of the k
+  // nearest points in xy; 0 without uncertainties.
+  double uncertainty(double x, double y) const;
+  double uncertainty_max() const { return uncertainty_max_; }
   double spacing() const { return spacing_; }  // mean cloud spacing in xy (mm)
   double min_x() const { return lo_.x(); }
   double min_y() const { return lo_.y(); }
@@ -60,7 +69,7 @@ class HeightField {
   struct Impl;
   Impl* impl_;
   int k_;
-  double spacing_ = 0, zmax_ = 0;
+  double spacing_ = 0, zmax_ = 0, uncertainty_max_ = 0;
   Eigen::Vector2d lo_, hi_;
 };
 
@@ -99,7 +108,8 @@ struct SimulationResult {
 // Report keys: scallop_max, scallop_max_interior, scallop_p99, scallop_p99_interior,
 // scallop_mean, scallop_mean_interior, gouge_max, uncut_fraction, uncut_fraction_interior,
 // cut_length, rapid_length, samples, samples_interior, samples_refined, spacing, margin,
-// surface_area, tool_radius, scallop_limit, chord_limit, pass, fail_reasons, worst (up to 10
+// surface_area, surface_uncertainty_max, tool_radius, scallop_limit, chord_limit, pass,
+// fail_reasons, worst (up to 10
 // places {x, y, z, kind: "gouge" | "uncut" | "scallop", value}, worst first).
 // Throws std::invalid_argument for r ≤ 0, h ≤ 0, an empty path, a non-finite centre, or loops
 // whose outer polygon has fewer than 3 points or that have a non-finite point.

@@ -12,11 +12,11 @@ namespace scallop {
 NodeDecl make_simulate_node() {
   NodeDecl d;
   d.type = "post.simulate";
-  d.version = 2;
+  d.version = 3;  // 3: scallop and gouge are bounds that include the cloud's uncertainty
   d.description = "cutting simulation over the cloud's surface: scallop, gouge and uncut area (the certificate)";
   d.input("path", "Toolpath", "planned passes (give this or 'linked')", false)
       .input("linked", "LinkedPath", "linked machine moves (give this or 'path')", false)
-      .input("cloud", "Cloud", "the surface, seen from +z")
+      .input("cloud", "Cloud", "the surface, seen from +z; with per-point uncertainty, scallop and gouge are bounds for the real surface (the estimate's plus the uncertainty)")
       .input("loops", "Loops", "the patch's boundary loops (outer first, then holes; indices into 'cloud'): "
              "the patch is what lies inside them in xy, and the margin is measured from them; "
              "absent: the outline is guessed from the cloud", false)
@@ -65,7 +65,7 @@ NodeDecl make_simulate_node() {
       }
     }
     try {
-      HeightField surf(cloud->points);
+      HeightField surf(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
       auto res = simulate_cut(surf, feed, rapid, o, [&](double f) { ctx.progress(f, "simulating"); });
       Image img;
       img.png = render_scallop_png(res, o.scallop, std::max(o.chord, 1e-3), static_cast<int>(ctx.integer("heatmap_width")));

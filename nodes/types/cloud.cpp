@@ -7,12 +7,14 @@ namespace scallop {
 void PointCloud::serialize(std::ostream& out) const {
   bin::write_vector(out, points);
   bin::write_vector(out, normals);
+  bin::write_vector(out, uncertainty);
 }
 
 ValuePtr PointCloud::deserialize(std::istream& in) {
   auto c = std::make_shared<PointCloud>();
   c->points = bin::read_vector<Eigen::Vector3d>(in);
   c->normals = bin::read_vector<Eigen::Vector3d>(in);
+  c->uncertainty = bin::read_vector<double>(in);
   return c;
 }
 

@@ -9,18 +9,24 @@
 
 namespace scallop {
 
-// P  #P by 3 positions (mm); N  #P by 3 unit normals, or empty when the cloud has none.
+// P  #P by 3 positions (mm); N  #P by 3 unit normals, or empty when the cloud has none;
+// U  #P bounds (mm) on how far each point may lie from the real surface along its normal, or
+// empty when unknown (set by cloud.denoise from the standard error of its fits).
 struct PointCloud final : Value {
   std::vector<Eigen::Vector3d> points;
   std::vector<Eigen::Vector3d> normals;  // empty, or one per point
+  std::vector<double> uncertainty;       // empty, or one per point (mm)
 
   std::size_t size() const { return points.size(); }
   bool has_normals() const { return !normals.empty() && normals.size() == points.size(); }
+  bool has_uncertainty() const {
+    return !uncertainty.empty() && uncertainty.size() == points.size();
+  }
 
   std::string type_name() const override { return "Cloud"; }
   void serialize(std::ostream& out) const override;
   static ValuePtr deserialize(std::istream& in);
-  // Writes binary little-endian PLY (x y z [nx ny nz] as double).
+  // Writes binary little-endian PLY (x y z [nx ny nz] [uncertainty] as double).
   void write_file(const std::string& path) const override;
 };
 

@@ -71,6 +71,54 @@ TEST(Denoise, NoisyPlaneBecomesPlanar) {
   EXPECT_LT(worst_angle, 0.05);
 }
 
+// The standard error of each projected point is a true bound's scale: on a noisy plane every
+// point lands within kUncertaintyFactor standard errors of the plane, at the rim too.
+TEST(Denoise, StandardErrorBoundsEveryPointsError) {
+  const double a = 0.1, b = 0.2, z0 = 1, sigma = 0.02;
+  const auto P = noisy_plane(a, b, z0, 40, 30, 6000, sigma, true, 21);
+  DenoiseOptions o;
+  o.k = 128;
+  const DenoiseResult r = mls_denoise(P, {}, o);
+  ASSERT_EQ(r.standard_error.size(), P.size());
+  // z noise of sigma is sigma * n_z along the normal
+  EXPECT_NEAR(r.noise_sigma, sigma / std::sqrt(1 + a * a + b * b), 0.15 * sigma);
+  double worst = 0;
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    ASSERT_GT(r.standard_error[i], 0);
+    worst = std::max(worst, std::abs(plane_distance(r.points[i], a, b, z0)) / r.standard_error[i]);
+  }
+  EXPECT_LT(worst, kUncertaintyFactor);
+  EXPECT_GT(worst, 1.5);  // and not a vacuous bound
+}
+
+// Near the rim a one-sided neighbourhood leaves a point 1.5 to 4 times less certain; refitting
+// those points from a wider neighbourhood brings most of them back near the interior's level.
+TEST(Denoise, RimRefitsEqualiseTheStandardError) {
+  const auto P = noisy_plane(0, 0, 0, 40, 30, 6000, 0.02, true, 22);
+  DenoiseOptions o;
+  o.k = 128;
+  o.equalize_rim = false;
+  const DenoiseResult before = mls_denoise(P, {}, o);
+  o.equalize_rim = true;
+  const DenoiseResult after = mls_denoise(P, {}, o);
+  EXPECT_EQ(before.refitted, 0u);
+  EXPECT_GT(after.refitted, 0u);
+  auto quantile = [](std::vector<double> v, double q) {
+    std::sort(v.begin(), v.end());
+    return v[static_cast<std::size_t>(q * (v.size() - 1))];
+  };
+  const double median = quantile(before.standard_error, 0.5);
+  EXPECT_NEAR(quantile(after.standard_error, 0.5), median, 0.02 * median);
+  // measured: p95 1.35 -> 1.14 times the median, p99 over 1.6 -> 1.47
+  EXPECT_GT(quantile(before.standard_error, 0.95), 1.3 * median);
+  EXPECT_GT(quantile(before.standard_error, 0.99), 1.6 * median);
+  EXPECT_LT(quantile(after.standard_error, 0.95), 1.2 * median);
+  EXPECT_LT(quantile(after.standard_error, 0.99), 1.55 * median);
+  double rms = 0;
+  for (const auto& p : after.points) rms += p.z() * p.z();
+  EXPECT_LT(std::sqrt(rms / P.size()), 0.3 * 0.02);
+}
+
 TEST(Denoise, ExactPlaneIsKeptExactly) {
   const double a = -0.4, b = 0.7, z0 = -3;
   const auto P = noisy_plane(a, b, z0, 20, 20, 800, 0, false, 2);
@@ -311,13 +359,18 @@ TEST(DenoiseNode, AutomaticModeReports) {
   auto clean = std::make_shared<PointCloud>();
   clean->points = quadric_patch(1500, 13);
   auto out = run_node(d, {}, {{"cloud", clean}});
-  EXPECT_EQ(out.at("cloud"), clean);
+  auto same = std::dynamic_pointer_cast<const PointCloud>(out.at("cloud"));
+  ASSERT_TRUE(same);
+  EXPECT_EQ(same->points, clean->points);  // unchanged, with the noise as its uncertainty
   auto report = std::dynamic_pointer_cast<const Report>(out.at("report"));
   ASSERT_TRUE(report);
   EXPECT_EQ(report->data.at("skipped"), true);
   EXPECT_EQ(report->data.at("k"), 0);
   EXPECT_EQ(report->data.at("moved_rms"), 0.0);
-  EXPECT_LT(report->data.at("noise_sigma").get<double>(), 1e-3);
+  const double clean_sigma = report->data.at("noise_sigma");
+  EXPECT_LT(clean_sigma, 1e-3);
+  ASSERT_TRUE(same->has_uncertainty());
+  for (double u : same->uncertainty) EXPECT_EQ(u, kUncertaintyFactor * clean_sigma);
   // noisy
   auto noisy = std::make_shared<PointCloud>();
   noisy->points = noisy_plane(0, 0, 0, 20, 20, 1500, 0.01, true, 14);
@@ -329,10 +382,19 @@ TEST(DenoiseNode, AutomaticModeReports) {
   EXPECT_NEAR(sigma, 0.01, 0.0015);
   EXPECT_EQ(report->data.at("k"), choose_denoise_k(sigma, 0.004));
   EXPECT_GT(report->data.at("moved_rms").get<double>(), 0.007);
-  // explicit k: no estimate
+  // every point carries its bound: kUncertaintyFactor standard errors of its fit
+  auto denoised = std::dynamic_pointer_cast<const PointCloud>(out.at("cloud"));
+  ASSERT_TRUE(denoised && denoised->has_uncertainty());
+  const auto& u = report->data.at("uncertainty");
+  EXPECT_EQ(u.at("factor"), kUncertaintyFactor);
+  EXPECT_EQ(u.at("max").get<double>(),
+            *std::max_element(denoised->uncertainty.begin(), denoised->uncertainty.end()));
+  EXPECT_GT(u.at("median").get<double>(), 0.0);
+  EXPECT_LT(u.at("median").get<double>(), kUncertaintyFactor * sigma);
+  // explicit k: the noise is still estimated (for the uncertainty)
   out = run_node(d, {{"k", 16}}, {{"cloud", noisy}});
   report = std::dynamic_pointer_cast<const Report>(out.at("report"));
-  EXPECT_EQ(report->data.at("noise_sigma"), -1.0);
+  EXPECT_NEAR(report->data.at("noise_sigma").get<double>(), 0.01, 0.0015);
   EXPECT_EQ(report->data.at("k"), 16);
 }
 

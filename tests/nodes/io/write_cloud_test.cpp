@@ -57,6 +57,21 @@ TEST_F(WriteCloud, AsciiTextIsExactShortestForm) {
             "0.1 -2 3e+10 0 0 1\nnan 0 -0 1 0 0\n");
 }
 
+TEST_F(WriteCloud, UncertaintyIsAnExtraPropertyThatReadsBack) {
+  PointCloud c = two_points(false);
+  c.points[1].x() = 1;
+  c.uncertainty = {0.004, 0.25};
+  write_ply(path("u.ply"), c, false);
+  EXPECT_EQ(slurp(path("u.ply")),
+            "ply\nformat ascii 1.0\ncomment written by scallop\nelement vertex 2\n"
+            "property double x\nproperty double y\nproperty double z\n"
+            "property double uncertainty\nend_header\n"
+            "0.1 -2 3e+10 0.004\n1 0 -0 0.25\n");
+  write_ply(path("u_bin.ply"), c, true);
+  const auto back = read_cloud(path("u_bin.ply"));
+  EXPECT_EQ(back.points, c.points);  // the extra property does not disturb the positions
+}
+
 TEST_F(WriteCloud, BinaryIsLittleEndianDoubles) {
   const PointCloud c = two_points(false);
   write_ply(path("b.ply"), c);

@@ -132,6 +132,57 @@ TEST(Isoparametric, FlatRectanglePassesAreStraightEvenAndCoverIt) {
   EXPECT_NEAR(r["side_interval"]["nominal_plane"].get<double>(), std::sqrt(8 * 3 * 0.01), 1e-12);
 }
 
+// A surface known only to +-delta: on a flat patch the margins have closed forms. With r = 3,
+// h = 0.01, e = 0.005 and delta = 0.004: the chord overcut allowed is max(e/4, 0.9 e - delta) =
+// 0.00125, the ball is kept stock = 0.00125 + delta - 0.9 e = 0.00075 above the estimate, and the
+// scallop on the estimate (stock included) may reach h - delta = 0.006: the passes are exactly
+// the cusp spacing of a scallop of 0.006 - 0.00075 = 0.00525 apart.
+TEST(Isoparametric, SurfaceUncertaintyIsKeptAsAMargin) {
+  const double delta = 0.004, stock = 0.00075, cusp = 0.00525;
+  IsoparametricOptions o;
+  o.tool_radius = 3;
+  o.scallop_height = 0.01;
+  o.chord_error = 0.005;
+  Input from_cloud = flat();
+  from_cloud.cloud.uncertainty.assign(from_cloud.cloud.size(), delta);
+  Input from_option = flat();
+  IsoparametricOptions o2 = o;
+  o2.surface_error = delta;
+  for (const auto& [in, opt] : {std::pair{&from_cloud, &o}, std::pair{&from_option, &o2}}) {
+    const IsoparametricResult res = plan_isoparametric(in->cloud, in->nb, in->map, *opt);
+    const Toolpath& tp = res.toolpath;
+    ASSERT_GE(tp.passes.size(), 3u);
+    for (const ToolpathPass& p : tp.passes)
+      for (const Eigen::Vector3d& c : p.contact) EXPECT_NEAR(c.z(), stock, 1e-9);
+    const double w_exact = 2 * std::sqrt(2 * 3 * cusp - cusp * cusp);
+    const double w = tp.passes[1].contact[0].x() - tp.passes[0].contact[0].x();
+    EXPECT_LE(w, w_exact);
+    EXPECT_GE(w, 0.99 * w_exact);
+    const auto& r = res.report;
+    EXPECT_NEAR(r["surface_error"]["median"].get<double>(), delta, 1e-15);
+    EXPECT_NEAR(r["surface_error"]["stock_at_median"].get<double>(), stock, 1e-12);
+    EXPECT_EQ(r["surface_error"]["too_uncertain_points"], 0);
+    // the predicted scallop is that on the real surface: the estimate's plus delta
+    EXPECT_LE(r["predicted"]["scallop_max"].get<double>(), 0.01);
+    EXPECT_GE(r["predicted"]["scallop_max"].get<double>(), 0.98 * 0.01);
+    EXPECT_LE(r["predicted"]["chord_overcut_max"].get<double>(), 0.00125 + 1e-12);
+  }
+  // Known to +-0.006: h - delta - stock = 0.004 - 0.00275 is under a fifth of h.
+  Input vague = flat();
+  vague.cloud.uncertainty.assign(vague.cloud.size(), 0.006);
+  EXPECT_EQ(error_of(vague, o),
+            "the cloud's surface is known only to +-0.006 mm (median; cloud.denoise's "
+            "uncertainty), too much of the scallop height 0.01 mm to promise it: denoise with "
+            "more neighbours, scan more finely or raise scallop_height");
+  o2.surface_error = 0.006;
+  EXPECT_EQ(error_of(flat(), o2),
+            "surface_error 0.006 mm leaves too little of the scallop height 0.01 mm (times "
+            "safety_factor 1) to plan for: raise scallop_height or lower surface_error");
+  Input odd = flat();
+  odd.cloud.uncertainty.assign(5, 0.001);
+  EXPECT_EQ(error_of(odd, o), "the cloud has 2501 points but 5 uncertainties");
+}
+
 TEST(Isoparametric, ForwardStepOnACylinderKeepsTheChordDeviation) {
   // Convex cylinder of radius 20 along x; passes at x = const run round it.
   const double Rc = 20, r = 3, e = 0.002;
@@ -301,7 +352,8 @@ TEST(Isoparametric, NodeRunsAndReportsErrors) {
   EXPECT_EQ(d.find_output("report")->type, "Report");
   nlohmann::json params = {{"pattern", "zigzag"},      {"tool_radius", 3.0},
                            {"scallop_height", 0.01},   {"chord_error", 0.005},
-                           {"safety_factor", 1.0},     {"conformal_tolerance", 5.0},
+                           {"safety_factor", 1.0},     {"surface_error", 0.0},
+                           {"conformal_tolerance", 5.0},
                            {"max_segment", 5.0},       {"interpolation_k", 20}};
   auto in = std::make_shared<Input>(flat(6, 4));
   std::map<std::string, ValuePtr> inputs = {

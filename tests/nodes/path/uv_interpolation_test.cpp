@@ -131,3 +131,33 @@ TEST(UVInterpolation, BadInput) {
     EXPECT_STREQ(e.what(), "the interpolation needs 6 to 64 neighbours per fit (got 4)");
   }
 }
+
+TEST(UVInterpolation, CarriesThePointsUncertainty) {
+  auto z = [](double x, double y) { return 0.1 * x * y; };
+  auto g = [](double x, double y) { return Eigen::Vector2d(0.1 * y, 0.1 * x); };
+  const Patch p = make_patch(z, g);
+  // uniform: the same bound everywhere, at the edge too
+  const std::vector<double> U(p.P.size(), 0.004);
+  const UVInterpolator f(p.P, p.N, p.UV, rect(), 20, &U);
+  for (const Eigen::Vector2d& q : {Eigen::Vector2d(3.3, 4.1), Eigen::Vector2d(0, 0)})
+    EXPECT_NEAR(f(q).uncertainty, 0.004, 1e-15);
+  // a soft maximum: continuous, and where half the fit has 0.003 near 0.003 * 0.5^(1/8)
+  std::vector<double> V(p.P.size());
+  for (std::size_t i = 0; i < V.size(); ++i) V[i] = p.P[i].x() < 5 ? 0.001 : 0.003;
+  const UVInterpolator h(p.P, p.N, p.UV, rect(), 20, &V);
+  EXPECT_NEAR(h(Eigen::Vector2d(1, 4)).uncertainty, 0.001, 1e-15);
+  EXPECT_NEAR(h(Eigen::Vector2d(9, 4)).uncertainty, 0.003, 1e-15);
+  const double mid = h(Eigen::Vector2d(5, 4)).uncertainty;
+  EXPECT_GT(mid, 0.0026);
+  EXPECT_LT(mid, 0.003);
+  EXPECT_NEAR(h(Eigen::Vector2d(5.0001, 4)).uncertainty, mid, 1e-6);
+  // without: zero
+  EXPECT_EQ(UVInterpolator(p.P, p.N, p.UV, rect())(Eigen::Vector2d(2, 2)).uncertainty, 0.0);
+  const std::vector<double> short_u(3, 0.0);
+  try {
+    UVInterpolator bad(p.P, p.N, p.UV, rect(), 20, &short_u);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "the cloud has 1353 points but 3 uncertainties");
+  }
+}

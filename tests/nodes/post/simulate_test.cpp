@@ -125,6 +125,38 @@ TEST(Simulate, RasterOnAPlaneLeavesTheClosedFormScallop) {
   EXPECT_EQ(j["worst"][0]["kind"], "scallop");
 }
 
+// A cloud known only to +-delta: the certificate's scallop and gouge are bounds for the real
+// surface, the estimate's values plus delta. A raster raised 0.004 mm off the plane leaves the
+// closed-form cusp + 0.004 on the estimate; with delta = 0.01 the bound is that + 0.01, and the
+// gouge bound is delta - 0.004 n_z (the real surface may be up to delta higher).
+TEST(Simulate, UncertainCloudGivesBoundsForTheRealSurface) {
+  const double r = 3, s = 0.7, dz = 0.004, delta = 0.01;
+  const auto cloud = plane_cloud();
+  const std::vector<double> U(cloud.size(), delta);
+  HeightField surf(cloud, 20, &U);
+  EXPECT_NEAR(surf.uncertainty(7, 5), delta, 1e-15);
+  EXPECT_EQ(surf.uncertainty_max(), delta);
+  EXPECT_EQ(HeightField(cloud).uncertainty(7, 5), 0.0);
+  SimulateOptions o;
+  o.tool_radius = r;
+  o.scallop = 0.05;
+  o.chord = 0.01;
+  o.spacing = 0.08;
+  const auto j = simulate_cut(surf, feed_centres(raster(r, s, dz)), 0.0, o).report;
+  const double w = line_gap(s), cusp = r - std::sqrt(r * r - w * w / 4);
+  EXPECT_NEAR(j["scallop_max_interior"].get<double>(), cusp + dz / 1.05 + delta, 0.01 * cusp);
+  EXPECT_NEAR(j["gouge_max"].get<double>(), delta - dz / 1.05, 1e-6);
+  EXPECT_EQ(j["surface_uncertainty_max"].get<double>(), delta);
+  const std::vector<double> short_u(3, 0.0);
+  try {
+    HeightField bad(cloud, 20, &short_u);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "the cloud has " + std::to_string(cloud.size()) + " points but 3 uncertainties");
+  }
+}
+
 TEST(Simulate, LoweredRasterGougesByTheNormalComponent) {
   const double r = 3, s = 0.7;
   auto res = run(raster(r, s, -0.1), 0.02);
