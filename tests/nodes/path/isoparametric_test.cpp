@@ -134,11 +134,11 @@ TEST(Isoparametric, FlatRectanglePassesAreStraightEvenAndCoverIt) {
 
 // A surface known only to +-delta: on a flat patch the margins have closed forms. With r = 3,
 // h = 0.01, e = 0.005 and delta = 0.004: the chord overcut allowed is max(e/4, 0.9 e - delta) =
-// 0.00125, the ball is kept stock = 0.00125 + delta - 0.9 e = 0.00075 above the estimate, and the
-// scallop on the estimate (stock included) may reach h - delta = 0.006: the passes are exactly
-// the cusp spacing of a scallop of 0.006 - 0.00075 = 0.00525 apart.
+// 0.00125, the ball is kept stock = 0.00125 + 1.5 delta - 0.9 e = 0.00275 above the estimate, and
+// the scallop on the estimate (stock included) may reach h - delta = 0.006: the passes are
+// exactly the cusp spacing of a scallop of 0.006 - 0.00275 = 0.00325 apart.
 TEST(Isoparametric, SurfaceUncertaintyIsKeptAsAMargin) {
-  const double delta = 0.004, stock = 0.00075, cusp = 0.00525;
+  const double delta = 0.004, stock = 0.00275, cusp = 0.00325;
   IsoparametricOptions o;
   o.tool_radius = 3;
   o.scallop_height = 0.01;
@@ -167,7 +167,7 @@ TEST(Isoparametric, SurfaceUncertaintyIsKeptAsAMargin) {
     EXPECT_GE(r["predicted"]["scallop_max"].get<double>(), 0.98 * 0.01);
     EXPECT_LE(r["predicted"]["chord_overcut_max"].get<double>(), 0.00125 + 1e-12);
   }
-  // Known to +-0.006: h - delta - stock = 0.004 - 0.00275 is under a fifth of h.
+  // Known to +-0.006: h - delta - stock = 0.004 - 0.00575 is under a fifth of h.
   Input vague = flat();
   vague.cloud.uncertainty.assign(vague.cloud.size(), 0.006);
   EXPECT_EQ(error_of(vague, o),
