@@ -1,7 +1,9 @@
+#include <algorithm>
 #include <stdexcept>
 
 #include "engine/node.h"
 #include "nodes/param/check.h"
+#include "nodes/param/untangle.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
 #include "nodes/types/param.h"
@@ -11,13 +13,20 @@ namespace scallop {
 NodeDecl make_map_check_node() {
   NodeDecl d;
   d.type = "param.check";
-  d.version = 1;
-  d.description = "diagnostics of a (u,v) map: angle distortion and fold-overs (an error unless allowed)";
+  d.version = 2;  // 2: a few fold-overs are untangled locally
+  d.description =
+      "diagnostics of a (u,v) map: angle distortion and fold-overs; a few fold-overs are "
+      "untangled locally, more are an error unless allowed";
   d.input("map", "UVMap", "the harmonic map")
       .input("cloud", "Cloud", "the points, with normals")
       .input("neighbors", "Neighbors", "k nearest neighbours of each point")
       .output("report", "Report", "conformality statistics (sigma1/sigma2) and fold-over count")
-      .output("map", "UVMap", "the input map, passed through once checked")
+      .output("map", "UVMap",
+              "the input map once checked (with the untangled points moved, if any)")
+      .param_int("untangle_rounds", 10, 0, 100, "",
+                 "where at most max(20, 0.5 %) of the points fold, move them and a growing ring "
+                 "of neighbours to their neighbours' mean (u,v), the outer loop fixed, for up to "
+                 "this many rounds; 0: never")
       .param_bool("allow_foldovers", false, "report fold-overs instead of failing");
   d.cache_on_disk = false;
   d.run = [](NodeContext& ctx) {
@@ -26,8 +35,12 @@ NodeDecl make_map_check_node() {
     auto nbrs = ctx.input<Neighborhoods>("neighbors");
     if (!cloud->has_normals()) throw NodeError("param.check needs normals: run cloud.normals first");
     MapCheck c;
+    UntangleResult u;
     try {
-      c = check_map(cloud->points, cloud->normals, *nbrs, map->uv);
+      const std::size_t max_folded = std::max<std::size_t>(20, cloud->size() / 200);
+      u = untangle_map(cloud->points, cloud->normals, *nbrs, map->uv, map->outer_loop,
+                       static_cast<int>(ctx.integer("untangle_rounds")), max_folded);
+      c = check_map(cloud->points, cloud->normals, *nbrs, u.uv);
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }
@@ -38,8 +51,19 @@ NodeDecl make_map_check_node() {
     r.data["residual"] = map->residual;
     if (map->domain == "disk") r.data["radius"] = map->radius;
     if (map->domain == "rectangle") r.data["size"] = {map->width, map->height};
+    r.data["untangled"] = {{"folded_before", u.folded_before},
+                           {"moved_points", u.moved},
+                           {"rounds", u.rounds}};
     ctx.set("report", std::move(r));
-    ctx.set_output("map", map);
+    if (u.moved == 0) {
+      ctx.set_output("map", map);
+      return;
+    }
+    ctx.progress(1.0, "untangled " + std::to_string(u.folded_before) + " fold-overs (" +
+                          std::to_string(u.moved) + " points moved)");
+    UVMap out = *map;
+    out.uv = std::move(u.uv);
+    ctx.set("map", std::move(out));
   };
   return d;
 }

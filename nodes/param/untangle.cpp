@@ -1,0 +1,52 @@
+#include "nodes/param/untangle.h"
+
+#include <stdexcept>
+#include <string>
+
+#include "nodes/param/check.h"
+
+namespace scallop {
+
+UntangleResult untangle_map(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
+                            const Neighborhoods& nbrs, const std::vector<Eigen::Vector2d>& uv,
+                            const std::vector<int>& outer_loop, int max_rounds, std::size_t max_folded) {
+  UntangleResult res;
+  res.uv = uv;
+  MapCheck c = check_map(P, N, nbrs, res.uv);
+  res.folded_before = res.folded_after = c.foldovers;
+  if (c.foldovers == 0 || c.foldovers > max_folded) return res;
+
+  const std::size_t n = P.size();
+  std::vector<char> pinned(n, 0);
+  for (int i : outer_loop) {
+    if (i < 0 || static_cast<std::size_t>(i) >= n)
+      throw std::invalid_argument("an outer loop index (" + std::to_string(i) + ") is outside the cloud");
+    pinned[i] = 1;
+  }
+  std::vector<char> region(n, 0), moved(n, 0);
+  for (std::size_t i = 0; i < n; ++i) region[i] = c.folded[i];
+  for (int round = 1; round <= max_rounds && c.foldovers > 0; ++round) {
+    // Grow the region by one ring of neighbours around every point still folded (and keep what
+    // earlier rounds took), then relax it: Gauss-Seidel sweeps of uv_i = mean of its neighbours.
+    std::vector<char> grown = region;
+    for (std::size_t i = 0; i < n; ++i)
+      if (c.folded[i] || region[i])
+        for (int j = 0; j < nbrs.k; ++j) grown[nbrs.index(i, j)] = 1;
+    region.swap(grown);
+    for (int sweep = 0; sweep < 20 * round; ++sweep)
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!region[i] || pinned[i]) continue;
+        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+        for (int j = 0; j < nbrs.k; ++j) mean += res.uv[nbrs.index(i, j)];
+        res.uv[i] = mean / nbrs.k;
+        moved[i] = 1;
+      }
+    c = check_map(P, N, nbrs, res.uv);
+    res.rounds = round;
+  }
+  res.folded_after = c.foldovers;
+  for (char m : moved) res.moved += m;
+  return res;
+}
+
+}  // namespace scallop

@@ -1,0 +1,36 @@
+// Local untangling of a (u,v) map that folds over at a few points.
+//
+// A discrete harmonic map can fold where the sampling is thin against the shape: a sharp spike
+// a few samples wide, a corner of the outline next to the boundary band. There a handful of
+// points land on the wrong side of their neighbours. Each such point (and the neighbours around
+// it) is moved to the mean (u,v) of its neighbours, a convex combination, which is what a
+// harmonic map with uniform weights asks of it and which cannot fold on its own (Tutte); the
+// region grows by one ring of neighbours each round until check_map finds no fold-over. Points of
+// the outer loop stay where the boundary map put them.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <vector>
+
+#include "nodes/types/cloud.h"
+
+namespace scallop {
+
+struct UntangleResult {
+  std::vector<Eigen::Vector2d> uv;  // #P, the untangled map (the input where nothing folded)
+  std::size_t folded_before = 0;    // fold-overs found by check_map on the input
+  std::size_t folded_after = 0;     // fold-overs left (0 on success)
+  std::size_t moved = 0;            // points whose (u,v) changed
+  int rounds = 0;                   // rounds used
+};
+
+// P, N, nbrs, uv  as for check_map; outer_loop  indices of the points held fixed (may be empty).
+// max_rounds >= 0: rounds of growing the region (0: only check). Nothing is moved when more than
+// max_folded points fold (a map that bad needs another parameterisation, not a repair).
+// Throws std::invalid_argument as check_map does, and for an outer_loop index out of range.
+UntangleResult untangle_map(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
+                            const Neighborhoods& nbrs, const std::vector<Eigen::Vector2d>& uv,
+                            const std::vector<int>& outer_loop, int max_rounds, std::size_t max_folded);
+
+}  // namespace scallop
