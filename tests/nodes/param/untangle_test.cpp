@@ -35,15 +35,6 @@ void fold(Grid& g, double x, double y) {
     if ((g.cloud.points[i].head<2>() - Eigen::Vector2d(x, y)).norm() < 1.2) g.uv[i].x() = 2 * x - g.uv[i].x();
 }
 
-std::size_t nearest(const Grid& g, double x, double y) {
-  std::size_t best = 0;
-  for (std::size_t i = 0; i < g.cloud.size(); ++i)
-    if ((g.cloud.points[i].head<2>() - Eigen::Vector2d(x, y)).norm() <
-        (g.cloud.points[best].head<2>() - Eigen::Vector2d(x, y)).norm())
-      best = i;
-  return best;
-}
-
 TEST(Untangle, ALocalFoldIsUntangledAndTheBorderStays) {
   Grid g = grid();
   // Two small mirrored patches: the map folds there.
