@@ -9,7 +9,9 @@ namespace scallop {
 
 UntangleResult untangle_map(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
                             const Neighborhoods& nbrs, const std::vector<Eigen::Vector2d>& uv,
-                            const std::vector<int>& outer_loop, int max_rounds, std::size_t max_folded) {
+                            const std::vector<int>& outer_loop, const std::vector<int>& fixed,
+                            const std::function<Eigen::Vector2d(const Eigen::Vector2d&)>& to_edge,
+                            int max_rounds, std::size_t max_folded) {
   UntangleResult res;
   res.uv = uv;
   MapCheck c = check_map(P, N, nbrs, res.uv);
@@ -17,12 +19,18 @@ UntangleResult untangle_map(const std::vector<Eigen::Vector3d>& P, const std::ve
   if (c.foldovers == 0 || c.foldovers > max_folded) return res;
 
   const std::size_t n = P.size();
-  std::vector<char> pinned(n, 0);
-  for (int i : outer_loop) {
+  // loop_pos[i]: position of point i in the outer loop, -1 off it
+  std::vector<int> loop_pos(n, -1);
+  for (std::size_t k = 0; k < outer_loop.size(); ++k) {
+    const int i = outer_loop[k];
     if (i < 0 || static_cast<std::size_t>(i) >= n)
       throw std::invalid_argument("an outer loop index (" + std::to_string(i) + ") is outside the cloud");
-    pinned[i] = 1;
+    loop_pos[i] = static_cast<int>(k);
   }
+  std::vector<char> pinned(n, 0);
+  for (int k : fixed)
+    if (k >= 0 && static_cast<std::size_t>(k) < outer_loop.size()) pinned[outer_loop[k]] = 1;
+  const int L = static_cast<int>(outer_loop.size());
   std::vector<char> region(n, 0), moved(n, 0);
   for (std::size_t i = 0; i < n; ++i) region[i] = c.folded[i];
   for (int round = 1; round <= max_rounds && c.foldovers > 0; ++round) {
@@ -36,6 +44,13 @@ UntangleResult untangle_map(const std::vector<Eigen::Vector3d>& P, const std::ve
     for (int sweep = 0; sweep < 20 * round; ++sweep)
       for (std::size_t i = 0; i < n; ++i) {
         if (!region[i] || pinned[i]) continue;
+        if (loop_pos[i] >= 0) {
+          if (!to_edge || L < 3) continue;
+          const int k = loop_pos[i];
+          res.uv[i] = to_edge(0.5 * (res.uv[outer_loop[(k + L - 1) % L]] + res.uv[outer_loop[(k + 1) % L]]));
+          moved[i] = 1;
+          continue;
+        }
         Eigen::Vector2d mean = Eigen::Vector2d::Zero();
         for (int j = 0; j < nbrs.k; ++j) mean += res.uv[nbrs.index(i, j)];
         res.uv[i] = mean / nbrs.k;

@@ -6,11 +6,14 @@
 // it) is moved to the mean (u,v) of its neighbours, a convex combination, which is what a
 // harmonic map with uniform weights asks of it and which cannot fold on its own (Tutte); the
 // region grows by one ring of neighbours each round until check_map finds no fold-over. Points of
-// the outer loop stay where the boundary map put them.
+// the outer loop in the region slide along the domain's edge instead: to the edge point nearest
+// the midpoint of their two loop neighbours (a loop whose order zig-zags at a sharp corner folds
+// there); the domain's corners stay.
 #pragma once
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "nodes/types/cloud.h"
@@ -25,12 +28,16 @@ struct UntangleResult {
   int rounds = 0;                   // rounds used
 };
 
-// P, N, nbrs, uv  as for check_map; outer_loop  indices of the points held fixed (may be empty).
+// P, N, nbrs, uv  as for check_map; outer_loop  the outer loop's point indices in order (may be
+// empty); fixed  positions in outer_loop that never move (a rectangle's corners);
+// to_edge  the nearest point of the domain's edge (empty: loop points never move).
 // max_rounds >= 0: rounds of growing the region (0: only check). Nothing is moved when more than
 // max_folded points fold (a map that bad needs another parameterisation, not a repair).
 // Throws std::invalid_argument as check_map does, and for an outer_loop index out of range.
 UntangleResult untangle_map(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
                             const Neighborhoods& nbrs, const std::vector<Eigen::Vector2d>& uv,
-                            const std::vector<int>& outer_loop, int max_rounds, std::size_t max_folded);
+                            const std::vector<int>& outer_loop, const std::vector<int>& fixed,
+                            const std::function<Eigen::Vector2d(const Eigen::Vector2d&)>& to_edge,
+                            int max_rounds, std::size_t max_folded);
 
 }  // namespace scallop

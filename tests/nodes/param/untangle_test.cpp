@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "nodes/cloud/knn.h"
 #include "nodes/param/check.h"
 #include "tests/nodes/param/param_test_util.h"
@@ -42,7 +45,7 @@ TEST(Untangle, ALocalFoldIsUntangledAndTheBorderStays) {
   fold(g, 13, 12);
   const std::size_t before = check_map(g.cloud.points, g.cloud.normals, g.nb, g.uv).foldovers;
   ASSERT_GT(before, 0u);
-  const UntangleResult r = untangle_map(g.cloud.points, g.cloud.normals, g.nb, g.uv, g.border, 10, 50);
+  const UntangleResult r = untangle_map(g.cloud.points, g.cloud.normals, g.nb, g.uv, g.border, {}, {}, 10, 50);
   EXPECT_EQ(r.folded_before, before);
   EXPECT_EQ(r.folded_after, 0u);
   EXPECT_EQ(check_map(g.cloud.points, g.cloud.normals, g.nb, r.uv).foldovers, 0u);
@@ -54,9 +57,52 @@ TEST(Untangle, ALocalFoldIsUntangledAndTheBorderStays) {
   for (std::size_t i = 0; i < g.cloud.size(); ++i) EXPECT_LT((r.uv[i] - g.cloud.points[i].head<2>()).norm(), 0.5);
 }
 
+// The outer loop of the grid in counter-clockwise order, and the positions of its 4 corners.
+std::vector<int> ordered_border(const Grid& g, std::vector<int>& corners) {
+  std::vector<std::pair<double, int>> keyed;
+  for (int i : g.border) {
+    const Eigen::Vector3d& p = g.cloud.points[i];
+    // arc length along the square's edge from (0, 0), counter-clockwise
+    double s = p.y() < 0.3 ? p.x() : p.x() > 19.7 ? 20 + p.y() : p.y() > 19.7 ? 60 - p.x() : 80 - p.y();
+    keyed.emplace_back(s, i);
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<int> loop;
+  corners.clear();
+  for (const auto& [s, i] : keyed) {
+    if (std::abs(s - std::round(s / 20) * 20) < 1e-9) corners.push_back(static_cast<int>(loop.size()));
+    loop.push_back(i);
+  }
+  return loop;
+}
+
+TEST(Untangle, OuterLoopPointsSlideAlongTheEdge) {
+  Grid g = grid();
+  std::vector<int> corners;
+  const std::vector<int> loop = ordered_border(g, corners);
+  ASSERT_EQ(corners.size(), 4u);
+  // A patch on the bottom edge mirrored: the loop runs backwards there and the map folds.
+  fold(g, 10, 0);
+  const int a = loop[19], b = loop[21];
+  ASSERT_GT(g.uv[a].x(), g.uv[b].x());
+  ASSERT_GT(check_map(g.cloud.points, g.cloud.normals, g.nb, g.uv).foldovers, 0u);
+  auto to_edge = [](const Eigen::Vector2d& q) {  // the bottom edge is all this test needs
+    return Eigen::Vector2d(std::clamp(q.x(), 0.0, 20.0), 0.0);
+  };
+  // held in place, the loop points cannot undo it
+  const UntangleResult held = untangle_map(g.cloud.points, g.cloud.normals, g.nb, g.uv, loop, corners, {}, 10, 50);
+  EXPECT_GT(held.folded_after, 0u);
+  const UntangleResult r = untangle_map(g.cloud.points, g.cloud.normals, g.nb, g.uv, loop, corners, to_edge, 10, 50);
+  EXPECT_EQ(r.folded_after, 0u);
+  EXPECT_EQ(r.uv[a].y(), 0.0);  // still on the edge
+  EXPECT_EQ(r.uv[b].y(), 0.0);
+  EXPECT_LT(r.uv[a].x(), r.uv[b].x());  // and in loop order again
+  for (int k : corners) EXPECT_EQ(r.uv[loop[k]], g.uv[loop[k]]);
+}
+
 TEST(Untangle, AnUnfoldedMapIsLeftAlone) {
   const Grid g = grid();
-  const UntangleResult r = untangle_map(g.cloud.points, g.cloud.normals, g.nb, g.uv, g.border, 10, 50);
+  const UntangleResult r = untangle_map(g.cloud.points, g.cloud.normals, g.nb, g.uv, g.border, {}, {}, 10, 50);
   EXPECT_EQ(r.folded_before, 0u);
   EXPECT_EQ(r.moved, 0u);
   EXPECT_EQ(r.rounds, 0);
@@ -66,7 +112,7 @@ TEST(Untangle, AnUnfoldedMapIsLeftAlone) {
 TEST(Untangle, AMapThatFoldsEverywhereIsNotRepaired) {
   Grid g = grid();
   for (auto& q : g.uv) q.x() = -q.x();  // a mirror: every point folds
-  const UntangleResult r = untangle_map(g.cloud.points, g.cloud.normals, g.nb, g.uv, g.border, 10, 50);
+  const UntangleResult r = untangle_map(g.cloud.points, g.cloud.normals, g.nb, g.uv, g.border, {}, {}, 10, 50);
   EXPECT_EQ(r.folded_before, g.cloud.size());
   EXPECT_EQ(r.folded_after, g.cloud.size());
   EXPECT_EQ(r.moved, 0u);
@@ -77,13 +123,13 @@ TEST(Untangle, Errors) {
   Grid g = grid();
   fold(g, 7, 7);
   try {
-    untangle_map(g.cloud.points, g.cloud.normals, g.nb, g.uv, {-1}, 10, 50);
+    untangle_map(g.cloud.points, g.cloud.normals, g.nb, g.uv, {-1}, {}, {}, 10, 50);
     FAIL() << "no exception";
   } catch (const std::invalid_argument& e) {
     EXPECT_EQ(std::string(e.what()), "an outer loop index (-1) is outside the cloud");
   }
   g.uv.pop_back();
-  EXPECT_THROW(untangle_map(g.cloud.points, g.cloud.normals, g.nb, g.uv, {}, 10, 50), std::invalid_argument);
+  EXPECT_THROW(untangle_map(g.cloud.points, g.cloud.normals, g.nb, g.uv, {}, {}, {}, 10, 50), std::invalid_argument);
 }
 
 }  // namespace
