@@ -116,7 +116,7 @@ class BallLifter {
 // The surface the planner sees (the cloud, through the (u,v) interpolant) may lie up to
 // delta off the real one, either way: delta = the larger of the surface_error option and the
 // cloud's own per-point uncertainty there (set by cloud.denoise). Then
-//   real scallop <= scallop on the estimate + delta, so the passes keep that <= h;
+//   real scallop <= scallop on the estimate + delta, so the passes keep that <= h - delta/4;
 //   real gouge   <= chord overcut + delta - stock,  where the ball is kept `stock` above the
 //                                                   estimate so that this stays <= 0.9 e - delta/2.
 // With delta = 0: 90 % of e for the chord overcut (10 % is left for the interpolant's own error:
@@ -132,7 +132,9 @@ struct Margins {
 Margins margins(const IsoparametricOptions& o, double uncertainty) {
   Margins m;
   m.delta = std::max(o.surface_error, uncertainty);
-  m.scallop = o.scallop_height * o.safety_factor - m.delta;
+  // A quarter of delta more is kept off the scallop limit for the same reason as below (the
+  // certificate's scallop on the noisy catalog ran up to 0.13 delta over the planner's).
+  m.scallop = o.scallop_height * o.safety_factor - 1.25 * m.delta;
   m.overcut = std::max(0.25 * o.chord_error, 0.9 * o.chord_error - m.delta);
   // Half of delta more is kept off the gouge limit: fits of the same denoised cloud from other
   // neighbourhoods (post.simulate's height field) differ from the planner's by one or two of its
@@ -487,10 +489,11 @@ class Planner {
             if (v > gmax) gmax = v, fmax = fm;
           }
         }
-        // on the real surface the scallop may be up to delta higher
+        // on the real surface the scallop may be up to delta higher (and a quarter of delta is
+        // kept for the certificate's own fit, see Margins)
         Eigen::Vector3d w;
         g(fmax, &w);
-        best[i] = gmax + margin(at(sA + fmax * (sB - sA), t)).delta;
+        best[i] = gmax + h_ - margin(at(sA + fmax * (sB - sA), t)).scallop;
         where[i] = w;
       }
     });
