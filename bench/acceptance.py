@@ -84,10 +84,23 @@ def main():
                     for name in ("preview.png", "scallop_map.png"):
                         src = os.path.join(out, name)
                         if os.path.exists(src):
-                            shutil.copy(src, os.path.join(args.docs, f"{tag}_{graph}_{name}"))
+                            copy_picture(src, os.path.join(args.docs, f"{tag}_{graph}_{name}"))
     json.dump(rows, open(os.path.join(args.work, "acceptance.json"), "w"), indent=1)
     if args.docs:
         write_catalog(args, lines)
+
+
+def copy_picture(src, dst, width=700, colours=128):
+    """Copies a PNG for the docs, at most `width` pixels wide with a `colours` palette (PIL), or as it is."""
+    try:
+        from PIL import Image
+    except ImportError:
+        shutil.copy(src, dst)
+        return
+    im = Image.open(src).convert("RGB")
+    if im.width > width:
+        im = im.resize((width, round(im.height * width / im.width)), Image.LANCZOS)
+    im.quantize(colours).save(dst, optimize=True)
 
 
 def write_catalog(args, table):
@@ -96,7 +109,9 @@ def write_catalog(args, table):
     md = ["# Catalog surfaces", "",
           "Every catalog surface of `../shared/tools/surfaces.py` (50 000 points, seed 1), through both shipped graphs: "
           "tool radius 4 mm (2 mm for the bowl), scallop 0.05 mm, chord 0.01 mm. Made by `bench/acceptance.py --docs docs/catalog`; "
-          "verify.py is the independent measurement, simulate is the product's own `post.simulate`.", ""] + table + [""]
+          "verify.py is the independent measurement, simulate is the product's own `post.simulate`. "
+          "On noisy clouds `post.simulate` reports a bound for the real surface (the scallop on the "
+          "denoised cloud plus its uncertainty, see README \"Noisy clouds\"), hence above verify.py.", ""] + table + [""]
     for surface in args.surfaces.split(","):
         md.append(f"## {surface}")
         md.append("")
