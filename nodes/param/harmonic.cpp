@@ -4,6 +4,7 @@
 #include <Eigen/SparseCore>
 #include <Eigen/UmfPackSupport>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <unsupported/Eigen/IterativeSolvers>
 
@@ -45,9 +46,19 @@ Eigen::MatrixXd solve_iterative(Solver& s, const Eigen::SparseMatrix<double>& A,
 
 }  // namespace
 
-UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, const UVMap& boundary,
-                     HarmonicSolver solver,
-                     const std::vector<std::pair<int, Eigen::Vector2d>>& fixed) {
+namespace {
+
+// The LU factors of an interior system, kept for a second solve with the same unknowns (the
+// band solve fixes the same points twice, with other values).
+struct DirectFactor {
+  std::vector<Eigen::Index> unknown;
+  Eigen::SparseMatrix<double> A;
+  std::unique_ptr<Eigen::UmfPackLU<Eigen::SparseMatrix<double>>> lu;
+};
+
+UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, const UVMap& boundary,
+                             HarmonicSolver solver,
+                             const std::vector<std::pair<int, Eigen::Vector2d>>& fixed, DirectFactor* factor) {
   const Eigen::Index n = L.rows();
   if (L.cols() != n) throw std::invalid_argument("the Laplacian is not square");
   const auto& outer = boundary.outer_loop;
@@ -130,11 +141,21 @@ UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, cons
 
     Eigen::MatrixXd X;
     if (solver == HarmonicSolver::Direct) {
-      Eigen::UmfPackLU<Eigen::SparseMatrix<double>> lu;
-      lu.compute(A);
-      if (lu.info() != Eigen::Success) throw std::runtime_error(kSingular);
-      X = lu.solve(B);
-      if (lu.info() != Eigen::Success || !X.allFinite()) throw std::runtime_error(kSingular);
+      DirectFactor local;
+      DirectFactor& f = factor ? *factor : local;
+      // Same unknowns, same rows of L: the same matrix, so its factors can be used again.
+      if (!f.lu || f.unknown != unknown) {
+        f.unknown = unknown;
+        f.A = A;
+        f.lu = std::make_unique<Eigen::UmfPackLU<Eigen::SparseMatrix<double>>>();
+        f.lu->compute(f.A);
+        if (f.lu->info() != Eigen::Success) {
+          f.lu.reset();
+          throw std::runtime_error(kSingular);
+        }
+      }
+      X = f.lu->solve(B);
+      if (f.lu->info() != Eigen::Success || !X.allFinite()) throw std::runtime_error(kSingular);
     } else {
       // Start from the mean of the boundary positions: the interior values are averages of them.
       Eigen::Vector2d mean = Eigen::Vector2d::Zero();
@@ -165,6 +186,14 @@ UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, cons
   return out;
 }
 
+}  // namespace
+
+UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, const UVMap& boundary,
+                     HarmonicSolver solver,
+                     const std::vector<std::pair<int, Eigen::Vector2d>>& fixed) {
+  return solve_harmonic_reusing(L, boundary, solver, fixed, nullptr);
+}
+
 UVMap solve_harmonic_band(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L,
                           const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
                           const std::vector<std::uint8_t>& is_boundary,
@@ -175,8 +204,11 @@ UVMap solve_harmonic_band(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L,
                                 std::to_string(P.size()) + " points");
   const std::vector<BandPoint> band = outer_band(P, N, is_boundary, loops, boundary.outer_loop, boundary.corners);
   const std::vector<Eigen::Vector2d> zero(boundary.outer_loop.size(), Eigen::Vector2d::Zero());
-  UVMap first = solve_harmonic(L, boundary, solver, band_values(band, boundary, zero));
-  return solve_harmonic(L, boundary, solver, band_values(band, boundary, band_depth_slope(band, boundary, first.uv)));
+  DirectFactor factor;  // both solves usually fix the same points: one LU factorisation
+  UVMap first = solve_harmonic_reusing(L, boundary, solver, band_values(band, boundary, zero), &factor);
+  return solve_harmonic_reusing(L, boundary, solver,
+                                band_values(band, boundary, band_depth_slope(band, boundary, first.uv)),
+                                &factor);
 }
 
 }  // namespace scallop
