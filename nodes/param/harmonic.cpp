@@ -198,17 +198,23 @@ UVMap solve_harmonic_band(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L,
                           const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
                           const std::vector<std::uint8_t>& is_boundary,
                           const std::vector<std::vector<int>>& loops, const UVMap& boundary,
-                          HarmonicSolver solver) {
+                          HarmonicSolver solver,
+                          const std::function<void(double, const std::string&)>& progress) {
   if (static_cast<std::size_t>(L.rows()) != P.size())
     throw std::invalid_argument("the Laplacian has " + std::to_string(L.rows()) + " rows but the cloud has " +
                                 std::to_string(P.size()) + " points");
   const std::vector<BandPoint> band = outer_band(P, N, is_boundary, loops, boundary.outer_loop, boundary.corners);
   const std::vector<Eigen::Vector2d> zero(boundary.outer_loop.size(), Eigen::Vector2d::Zero());
   DirectFactor factor;  // both solves usually fix the same points: one LU factorisation
+  if (progress)
+    progress(0.05, "first solve, the band on the domain's edge (" + std::to_string(L.rows()) +
+                       " points; the sparse factorisation takes most of the time)");
   UVMap first = solve_harmonic_reusing(L, boundary, solver, band_values(band, boundary, zero), &factor);
-  return solve_harmonic_reusing(L, boundary, solver,
-                                band_values(band, boundary, band_depth_slope(band, boundary, first.uv)),
-                                &factor);
+  if (progress) progress(0.6, "second solve, the band at its measured depth");
+  UVMap out = solve_harmonic_reusing(
+      L, boundary, solver, band_values(band, boundary, band_depth_slope(band, boundary, first.uv)), &factor);
+  if (progress) progress(1.0, "solved");
+  return out;
 }
 
 }  // namespace scallop

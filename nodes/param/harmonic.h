@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -46,11 +47,13 @@ UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, cons
 // smoothed loop times that derivative (band_values), so the band keeps its geometry in (u,v) and neither the loop's
 // zig-zag nor free band points fold the map at the edge.
 // P, N, is_boundary, loops  as for outer_band; boundary  map_boundary of loops[0].
+// progress  optional, called with the fraction done and what is being solved.
 // Same errors as solve_harmonic and outer_band.
 UVMap solve_harmonic_band(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L,
                           const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
                           const std::vector<std::uint8_t>& is_boundary,
                           const std::vector<std::vector<int>>& loops, const UVMap& boundary,
-                          HarmonicSolver solver = HarmonicSolver::Direct);
+                          HarmonicSolver solver = HarmonicSolver::Direct,
+                          const std::function<void(double, const std::string&)>& progress = {});
 
 }  // namespace scallop

@@ -37,9 +37,12 @@ NodeDecl make_harmonic_node() {
       const HarmonicSolver solver = parse_harmonic_solver(ctx.text("solver"));
       if (ctx.flag("fix_band"))
         ctx.set("map", solve_harmonic_band(lap->L, cloud->points, cloud->normals, loops->is_boundary, loops->loops,
-                                           *bmap, solver));
-      else
+                                           *bmap, solver,
+                                           [&ctx](double f, const std::string& m) { ctx.progress(f, m); }));
+      else {
+        ctx.progress(0.05, "solving for " + std::to_string(lap->L.rows()) + " points");
         ctx.set("map", solve_harmonic(lap->L, *bmap, solver));
+      }
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     } catch (const std::runtime_error& e) {
