@@ -125,7 +125,7 @@ class BallLifter {
 // forward points), and only the rest becomes stock (which costs side step).
 struct Margins {
   double delta;     // mm, how far the estimate may be off here
-  double scallop;   // mm, the limit for the scallop on the estimate (stock included): h - delta
+  double scallop;   // mm, the limit for the scallop on the estimate (stock included): h - 1.25 delta
   double overcut;   // mm, the chord overcut allowed
   double stock;     // mm, how far the ball is kept above the estimate
 };

@@ -11,25 +11,30 @@
 //           "pass" is the single point at the centre.
 //
 // Along a pass, the forward step starts from formula (2) (chord deviation e, the pass's own
-// curvature) and is then checked on the ball-centre polyline: at 1/4, 1/2, 3/4 of each segment
-// the chord may lie at most e below the true centre curve (overcut) and at most min(e, h/10)
-// above it (undercut, which would add to the scallop), and at most e away in any direction; 2 % of
-// e is kept back for the error of the
-// interpolant.
+// curvature) and is then checked on the ball-centre polyline, at 1/4, 1/2, 3/4 of each segment
+// and at least every two sampling steps of the map: the chord may lie at most the overcut budget
+// below the centre curve (0.9 e on an exact cloud, see "Margins" below), at most min(e, h/10)
+// above it (undercut, which adds to the scallop), and at most 0.9 e away in any direction.
 //
 // Between passes, the side step is the smallest over the points of the current pass of formula
 // (3) (where r_s and r_t are within `conformal_tolerance` of orthogonal) or formula (4)
 // (elsewhere), chosen per point. The next pass is then built and the scallop between the two
 // ball-centre polylines is evaluated exactly (the first hit of the surface normal ray with the
-// swept balls, as ../shared/tools/verify.py defines it) along the strip; where it exceeds
-// h = safety_factor * scallop_height the step is shrunk (secant on sqrt(h), then bisection) and
-// the pass rebuilt.
+// swept balls, as ../shared/tools/verify.py defines it) along the strip; where it exceeds its
+// limit the step is shrunk (secant on sqrt(h), then bisection) and the pass rebuilt.
 //
-// Every ball centre is then kept off the cloud: where a cloud point lies more than e/4 inside the
-// ball (a concave place of radius below r, a kink), the ball and its contact are lifted along
-// the normal; segments next to lifted vertices (or whose chord check failed) are sampled every
-// r/16 and their ends lifted until no cloud point is more than e/2 inside the swept ball. The
-// report's "ball_lifted" gives how many points were lifted and by how much at most (mm).
+// Margins. Where the cloud is known only to +-delta (its per-point uncertainty from
+// cloud.denoise, or the surface_error option, whichever is larger), the scallop on the estimate
+// may reach only safety_factor * h - 1.25 delta, the chord overcut max(e/4, 0.9 e - delta), and
+// the ball is kept stock = overcut + 1.5 delta - 0.9 e (when positive) above the estimate, so
+// that the limits hold on the real surface (isoparametric.cpp, Margins).
+//
+// Every ball centre is then kept off the cloud: where a cloud point lies more than
+// min(e/4, 0.9 e - 1.5 delta) inside the ball (a concave place of radius below r, a kink), the
+// ball and its contact are lifted along the normal; segments next to lifted vertices (or whose
+// chord check failed) are sampled every r/16 and their ends lifted until no cloud point is more
+// than min(e/2, 0.9 e - 1.5 delta) inside the swept ball. The report's "ball_lifted" gives how
+// many points were lifted and by how much at most (mm).
 #pragma once
 
 #include <cstddef>
@@ -49,9 +54,8 @@ struct IsoparametricOptions {
   double scallop_height = 0.01;      // h (mm), 0 < h < r
   double chord_error = 0.005;        // e (mm), > 0
   double safety_factor = 1.0;        // plan for h * safety_factor, in (0, 1]
-  double surface_error = 0;          // delta (mm), >= 0: the cloud's surface is known to +-delta;
-                                     // passes are planned for h * safety_factor - delta, and the
-                                     // ball kept up to delta above the estimate (see stock())
+  double surface_error = 0;          // delta (mm), >= 0: the cloud's surface is known to at least
+                                     // +-delta everywhere (see Margins above)
   double conformal_tolerance = 5.0;  // degrees: |angle(r_s, r_t) - 90| above this uses formula (4)
   double max_segment = 5.0;          // longest forward step (mm), > 0
   int interpolation_k = 20;          // neighbours per local fit (see uv_interpolation.h)
@@ -68,15 +72,16 @@ struct IsoparametricResult {
   nlohmann::json report;
 };
 
-// cloud      #P points (mm) with #P upward unit normals
+// cloud      #P points (mm) with #P upward unit normals, and optionally #P uncertainties (mm)
 // neighbors  the cloud's k nearest neighbours (#P rows; used for the sampling scale)
 // map        uv of every point; domain "rectangle" (zigzag) or "disk" (contour)
 // Returns the passes (contact points, normals, uv; ordered for cutting) and a report: passes,
 // points, side steps and intervals (min/max), forward intervals, where formula (4) was used,
 // the largest scallop and chord deviations found by the checks, concave regions whose normal
-// curvature radius is below r (count, location, size), and warnings.
+// curvature radius is below r (count, location, size), the margins kept for the cloud's
+// uncertainty (surface_error: median, max, stock, too-uncertain points), and warnings.
 // Throws std::invalid_argument with a clear message for bad input (empty cloud, no normals,
-// size mismatch, wrong domain for the pattern, bad options).
+// size mismatch, wrong domain for the pattern, bad options, a cloud too uncertain for h).
 IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborhoods& neighbors,
                                        const UVMap& map, const IsoparametricOptions& options);
 
