@@ -225,7 +225,7 @@ class Planner {
   }
 
   // Largest ratio of the chord deviation of the ball-centre segment c0-c1 (pass s, t0 to t1)
-  // to its limit, sampled at 1/4, 1/2 and 3/4, and at least every two sampling steps of the map
+  // to its limit, sampled at 1/4, 1/2 and 3/4, and at least every half sampling step of the map
   // (a denoised cloud keeps small bumps of its residual noise that a long segment can pass
   // over between quarter points); records the deviations when `record`.
   double chord_ratio(double s, double t0, double t1, const Eigen::Vector3d& c0,
@@ -233,6 +233,7 @@ class Planner {
     double ratio = 0;
     const Eigen::Vector3d seg = c1 - c0;
     const double L2 = seg.squaredNorm();
+    // hfd_ is two sampling steps of the map: a quarter of it is half a step
     const double dt_sample = 0.25 * (co_.polar ? hfd_ / std::max(co_.R - s, hfd_) : hfd_);
     const int parts = std::clamp(static_cast<int>(std::ceil(std::abs(t1 - t0) / dt_sample)), 4, 64);
     for (int k = 1; k < parts; ++k) {

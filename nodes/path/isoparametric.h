@@ -12,7 +12,7 @@
 //
 // Along a pass, the forward step starts from formula (2) (chord deviation e, the pass's own
 // curvature) and is then checked on the ball-centre polyline, at 1/4, 1/2, 3/4 of each segment
-// and at least every two sampling steps of the map: the chord may lie at most the overcut budget
+// and at least every half sampling step of the map: the chord may lie at most the overcut budget
 // below the centre curve (0.9 e on an exact cloud, see "Margins" below), at most min(e, h/10)
 // above it (undercut, which adds to the scallop), and at most 0.9 e away in any direction.
 //
