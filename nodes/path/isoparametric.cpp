@@ -70,6 +70,7 @@ struct VertexInfo {
 
 struct Derivs {
   Eigen::Vector3d p, n, rs, rt, rss, rst, rtt;
+  double uncertainty = 0;  // of the surface there (SurfaceSample::uncertainty)
 };
 
 struct StripCheck {
@@ -195,6 +196,7 @@ class Planner {
     const SurfaceSample x = at(s, t);
     d.p = x.position;
     d.n = x.normal;
+    d.uncertainty = x.uncertainty;
     d.rs = (ps - ms) / (2 * hs);
     d.rt = (pt - mt) / (2 * ht);
     d.rss = (ps + ms - 2 * p0) / (hs * hs);
@@ -214,7 +216,7 @@ class Planner {
     const double kappa_s = v.formula4 ? normal_curvature(ff, 1, -ff.F / ff.G)
                                       : normal_curvature(ff, 1, 0);
     // the margin for the estimate's error, and the stock, come off the scallop allowed
-    const Margins m = margin(at(s, t));
+    const Margins m = margins(o_, d.uncertainty);
     v.interval = side_interval(std::max(m.scallop - m.stock, 0.1 * h_), r_, kappa_s);
     const double rsn = std::sqrt(ff.E);
     v.ds = v.formula4 ? side_step_corrected(v.interval, rsn, theta)
@@ -419,9 +421,9 @@ class Planner {
   // centre polylines of A and B, per pass: the first hit of the normal ray (verify.py's
   // definition of the scallop); +infinity where the ray misses.
   Eigen::Vector2d hits_at(const Pass& A, const Pass& B, double s, double t,
-                          Eigen::Vector3d* where) const {
+                          SurfaceSample* where) const {
     const SurfaceSample x = at(s, t);
-    if (where) *where = x.position;
+    if (where) *where = x;
     Eigen::Vector2d hit(kInf, kInf);
     const double reach = r_ + 20 * h_;
     near_segments(A, A.c, t, x.position, reach, [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
@@ -453,7 +455,7 @@ class Planner {
                       [&](const tbb::blocked_range<std::size_t>& range) {
       for (std::size_t i = range.begin(); i != range.end(); ++i) {
         const double t = ts[i];
-        auto g = [&](double f, Eigen::Vector3d* w) {
+        auto g = [&](double f, SurfaceSample* w) {
           return hits_at(A, B, sA + f * (sB - sA), t, w);
         };
         // Coarse scan across the strip; the cusp is where the first hit passes from A's balls
@@ -492,10 +494,10 @@ class Planner {
         }
         // on the real surface the scallop may be up to delta higher (and a quarter of delta is
         // kept for the certificate's own fit, see Margins)
-        Eigen::Vector3d w;
+        SurfaceSample w;
         g(fmax, &w);
-        best[i] = gmax + h_ - margin(at(sA + fmax * (sB - sA), t)).scallop;
-        where[i] = w;
+        best[i] = gmax + h_ - margin(w).scallop;
+        where[i] = w.position;
       }
     });
     StripCheck out;

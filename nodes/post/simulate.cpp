@@ -200,6 +200,8 @@ struct HeightField::Impl {
   std::unique_ptr<KdTree<Eigen::Vector3d, 3>> tree3;
   std::vector<double> uncertainty;  // per point (mm), or empty
 
+  // The mean uncertainty of the points idx[0..got) (0 without uncertainties).
+  double mean_uncertainty(const std::uint32_t* idx, std::size_t got) const;
   bool local_fit(double x, double y, const std::uint32_t* idx, std::size_t got, int k, double& z,
                  Eigen::Vector3d& normal) const;
 };
@@ -390,15 +392,18 @@ HeightField::HeightField(const std::vector<Eigen::Vector3d>& P, int k,
 
 HeightField::~HeightField() { delete impl_; }
 
+double HeightField::Impl::mean_uncertainty(const std::uint32_t* idx, std::size_t got) const {
+  if (uncertainty.empty() || got == 0) return 0;
+  double sum = 0;
+  for (std::size_t j = 0; j < got; ++j) sum += uncertainty[idx[j]];
+  return sum / got;
+}
+
 double HeightField::uncertainty(double x, double y) const {
-  if (impl_->uncertainty.empty()) return 0;
   std::uint32_t idx[64];
   double d2[64];
   const double q[2] = {x, y};
-  const std::size_t got = impl_->tree->knnSearch(q, std::min(k_, 64), idx, d2);
-  double sum = 0;
-  for (std::size_t j = 0; j < got; ++j) sum += impl_->uncertainty[idx[j]];
-  return got ? sum / got : 0.0;
+  return impl_->mean_uncertainty(idx, impl_->tree->knnSearch(q, std::min(k_, 64), idx, d2));
 }
 
 bool HeightField::inside(double x, double y) const {
@@ -407,13 +412,15 @@ bool HeightField::inside(double x, double y) const {
   return eval(x, y, z, n);
 }
 
-bool HeightField::eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force) const {
+bool HeightField::eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force,
+                       double* uncertainty) const {
   const int k = k_;
   std::uint32_t idx[64];
   double d2[64];
   const double q[2] = {x, y};
   std::size_t got = impl_->tree->knnSearch(q, std::min(k, 64), idx, d2);
   if (got == 0) return false;
+  if (uncertainty) *uncertainty = impl_->mean_uncertainty(idx, got);
   if (!force) {
     if (d2[0] > 2.25 * spacing_ * spacing_) return false;
     // Beyond the edge of the cloud the neighbours are all on one side: their centroid moves
@@ -499,6 +506,7 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
   struct Raw {
     Eigen::Vector3d p, n;
     double w;
+    double u;  // the surface's uncertainty there (mm)
   };
   // Which grid nodes fall on the patch; holes in the cloud (not connected to the outside of the
   // grid through other missing nodes) are part of the patch too.
@@ -568,23 +576,23 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
       for (int i = 0; i < nu; ++i) {
         if (!inside[std::size_t(j) * nu + i]) continue;
         Eigen::Vector2d q = to_xy(grid_u(i), grid_v(j));
-        double z;
+        double z, u;
         Eigen::Vector3d n;
-        if (!surf.eval(q.x(), q.y(), z, n, true)) continue;
+        if (!surf.eval(q.x(), q.y(), z, n, true, &u)) continue;
         // Steep cells are split k×k so the spacing along the surface stays near `spacing`.
         int k = std::clamp(static_cast<int>(std::lround(1.0 / n.z())), 1, 4);
         if (k == 1) {
-          rows[j].push_back({{q.x(), q.y(), z}, n, spacing * spacing / n.z()});
+          rows[j].push_back({{q.x(), q.y(), z}, n, spacing * spacing / n.z(), u});
           continue;
         }
         for (int a = 0; a < k; ++a)
           for (int b = 0; b < k; ++b) {
             Eigen::Vector2d s = to_xy(grid_u(i) + ((a + 0.5) / k - 0.5) * spacing,
                                       grid_v(j) + ((b + 0.5) / k - 0.5) * spacing);
-            double zs;
+            double zs, us;
             Eigen::Vector3d ns;
-            if (surf.eval(s.x(), s.y(), zs, ns, true))
-              rows[j].push_back({{s.x(), s.y(), zs}, ns, spacing * spacing / (k * k * ns.z())});
+            if (surf.eval(s.x(), s.y(), zs, ns, true, &us))
+              rows[j].push_back({{s.x(), s.y(), zs}, ns, spacing * spacing / (k * k * ns.z()), us});
           }
       }
     }
@@ -656,8 +664,7 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
       const Raw& s = raw[i];
       SimSample& out = res.samples[i];
       out.x = s.p.x(), out.y = s.p.y(), out.z = s.p.z(), out.weight = s.w;
-      index.trace(s.p, s.n, r, T, surf.uncertainty(s.p.x(), s.p.y()), out.gouge, out.scallop,
-                  cand);
+      index.trace(s.p, s.n, r, T, s.u, out.gouge, out.scallop, cand);
       out.interior = is_interior(s.p.x(), s.p.y());
     }
     std::size_t d = done.fetch_add(rg.size()) + rg.size();
@@ -700,13 +707,15 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
         for (int a = -m; a <= m; ++a)
           for (int b = -m; b <= m; ++b) {
             double du = halfw * spacing * a / m, dv = halfw * spacing * b / m;
-            double x = c.x + ca * du - sa * dv, y = c.y + sa * du + ca * dv, z;
+            double x = c.x + ca * du - sa * dv, y = c.y + sa * du + ca * dv, z, u;
             Eigen::Vector3d n;
             std::size_t slot = (si * (2 * m + 1) + (a + m)) * (2 * m + 1) + (b + m);
-            if (use_loops ? !(on_patch_grid(x, y) && surf.eval(x, y, z, n, true)) : !surf.eval(x, y, z, n)) continue;
+            if (use_loops ? !(on_patch_grid(x, y) && surf.eval(x, y, z, n, true, &u))
+                          : !surf.eval(x, y, z, n, false, &u))
+              continue;
             SimSample& out = extra[slot];
             out.x = x, out.y = y, out.z = z, out.weight = 0;
-            index.trace({x, y, z}, n, r, T, surf.uncertainty(x, y), out.gouge, out.scallop, cand);
+            index.trace({x, y, z}, n, r, T, u, out.gouge, out.scallop, cand);
             out.interior = no_interior || is_interior(x, y);
             valid[slot] = 1;
           }

@@ -52,7 +52,9 @@ class HeightField {
   // Evaluates at (x, y); false (and nothing evaluated) when (x, y) is outside the patch: no cloud
   // point within 1.5 × the mean cloud spacing, or the fitted neighbours lie to one side (their
   // centroid farther than half their radius from (x, y)), unless `force`.
-  bool eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force = false) const;
+  // uncertainty, when given, gets uncertainty(x, y) from the same neighbours.
+  bool eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force = false,
+            double* uncertainty = nullptr) const;
   bool inside(double x, double y) const;
   // How far the surface at (x, y) may be off the real one (mm): the mean uncertainty of the k
   // nearest points in xy; 0 without uncertainties.
