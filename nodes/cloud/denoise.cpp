@@ -69,6 +69,43 @@ Vector6d quadric_basis(double s, double t) {
   return phi;
 }
 
+// The Gaussian-weighted least-squares quadric w = a + b s + c t + d s^2 + e s t + f t^2 of a
+// neighbourhood in the PCA frame of its reference plane (steps 1 and 2 of the projection below).
+struct QuadricFit {
+  Vector3d n, t1, t2;    // the frame: normal (oriented along `up`) and tangents
+  double inv_h = 0;      // frame coordinates are scaled by 1/h: s = u / h, t = v / h
+  Matrix6d B;            // Phi^T W^2 Phi, for the variance of the coefficients
+  Eigen::LDLT<Matrix6d> ldlt;  // of A = Phi^T W Phi
+  Vector6d coef;
+};
+
+// Fits X[0..m) (squared distances d2[0..m) from X[0], Gaussian weights exp(-d2 / h2) into w).
+// False for a degenerate neighbourhood (coincident or collinear points, a singular system).
+bool fit_quadric(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up,
+                 std::vector<double>& w, QuadricFit& f) {
+  // Step 1: reference plane.
+  if (!weighted_frame(X, d2, m, h2, up, w, f.n, f.t1, f.t2)) return false;
+  // Step 2: weighted least squares, with the frame coordinates scaled by h so that the 6x6
+  // normal equations are well scaled whatever the units.
+  f.inv_h = 1.0 / std::sqrt(h2);
+  Matrix6d A = Matrix6d::Zero();
+  f.B = Matrix6d::Zero();
+  Vector6d rhs = Vector6d::Zero();
+  for (int j = 0; j < m; ++j) {
+    const Vector3d r = X[j] - X[0];
+    const Vector6d phi = quadric_basis(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h);
+    A.selfadjointView<Eigen::Lower>().rankUpdate(phi, w[j]);
+    f.B.selfadjointView<Eigen::Lower>().rankUpdate(phi, w[j] * w[j]);
+    rhs += (w[j] * r.dot(f.n)) * phi;
+  }
+  A = A.selfadjointView<Eigen::Lower>();
+  f.B = f.B.selfadjointView<Eigen::Lower>();
+  f.ldlt.compute(A);
+  if (f.ldlt.info() != Eigen::Success || !(f.ldlt.rcond() > 1e-10)) return false;
+  f.coef = f.ldlt.solve(rhs);
+  return f.coef.allFinite();
+}
+
 // One MLS projection of q (= X[0]) given its neighbourhood X[0..m) with squared distances
 // d2[0..m) from q (d2[0] = 0). h2 is the squared Gaussian width: weight exp(-d2 / h2).
 // `up` orients the normal.
@@ -77,40 +114,17 @@ Projection project(const Vector3d* X, const double* d2, int m, double h2, const 
   out.point = X[0];
   out.normal = up;
   if (m < 6 || !(h2 > 0)) return out;
-
-  // Step 1: reference plane.
   thread_local std::vector<double> w;
-  Vector3d n, t1, t2;
-  if (!weighted_frame(X, d2, m, h2, up, w, n, t1, t2)) return out;
-  const Vector3d& q = X[0];
-
-  // Step 2: weighted least squares for w = a + b s + c t + d s^2 + e s t + f t^2, with the frame
-  // coordinates scaled by h (s = u / h, t = v / h) so that the 6x6 normal equations are well
-  // scaled whatever the units.
-  const double inv_h = 1.0 / std::sqrt(h2);
-  Matrix6d A = Matrix6d::Zero(), B = Matrix6d::Zero();
-  Vector6d rhs = Vector6d::Zero();
-  for (int j = 0; j < m; ++j) {
-    const Vector3d r = X[j] - q;
-    const Vector6d phi = quadric_basis(r.dot(t1) * inv_h, r.dot(t2) * inv_h);
-    A.selfadjointView<Eigen::Lower>().rankUpdate(phi, w[j]);
-    B.selfadjointView<Eigen::Lower>().rankUpdate(phi, w[j] * w[j]);
-    rhs += (w[j] * r.dot(n)) * phi;
-  }
-  A = A.selfadjointView<Eigen::Lower>();
-  B = B.selfadjointView<Eigen::Lower>();
-  Eigen::LDLT<Matrix6d> ldlt(A);
-  if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-10)) return out;
-  const Vector6d coef = ldlt.solve(rhs);
-  if (!coef.allFinite()) return out;
+  QuadricFit f;
+  if (!fit_quadric(X, d2, m, h2, up, w, f)) return out;
   // The fitted offset a = e0^T A^-1 Phi^T W z: for independent noise of sigma along n its
   // variance is sigma^2 e0^T A^-1 B A^-1 e0 with B = Phi^T W^2 Phi.
-  const Vector6d g = ldlt.solve(Vector6d::Unit(0));
-  out.spread = std::sqrt(std::max(0.0, g.dot(B * g)));
+  const Vector6d g = f.ldlt.solve(Vector6d::Unit(0));
+  out.spread = std::sqrt(std::max(0.0, g.dot(f.B * g)));
 
   // Step 3: the quadric point above q, and the quadric's normal there (gradient (b, c) / h).
-  out.point = q + coef(0) * n;
-  out.normal = (n - coef(1) * inv_h * t1 - coef(2) * inv_h * t2).normalized();
+  out.point = X[0] + f.coef(0) * f.n;
+  out.normal = (f.n - f.coef(1) * f.inv_h * f.t1 - f.coef(2) * f.inv_h * f.t2).normalized();
   if (out.normal.dot(up) < 0) out.normal = -out.normal;
   out.moved = true;
   return out;
@@ -122,38 +136,21 @@ bool fit_variance(const Vector3d* X, const double* d2, int m, double h2, double&
                   double& dof) {
   if (m < 10 || !(h2 > 0)) return false;
   thread_local std::vector<double> w;
-  Vector3d n, t1, t2;
-  if (!weighted_frame(X, d2, m, h2, Vector3d::UnitZ(), w, n, t1, t2)) return false;
-  const double inv_h = 1.0 / std::sqrt(h2);
-  thread_local std::vector<Vector6d> phi;
-  thread_local std::vector<double> z;
-  phi.resize(m);
-  z.resize(m);
-  Matrix6d A = Matrix6d::Zero(), B = Matrix6d::Zero();
-  Vector6d rhs = Vector6d::Zero();
-  double sw = 0, sw2 = 0;
+  QuadricFit f;
+  if (!fit_quadric(X, d2, m, h2, Vector3d::UnitZ(), w, f)) return false;
+  double sw = 0, sw2 = 0, ssr = 0;
   for (int j = 0; j < m; ++j) {
     const Vector3d r = X[j] - X[0];
-    phi[j] = quadric_basis(r.dot(t1) * inv_h, r.dot(t2) * inv_h);
-    z[j] = r.dot(n);
-    A.selfadjointView<Eigen::Lower>().rankUpdate(phi[j], w[j]);
-    B.selfadjointView<Eigen::Lower>().rankUpdate(phi[j], w[j] * w[j]);
-    rhs += (w[j] * z[j]) * phi[j];
+    const Vector6d phi = quadric_basis(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h);
     sw += w[j];
     sw2 += w[j] * w[j];
+    ssr += w[j] * std::pow(r.dot(f.n) - phi.dot(f.coef), 2);
   }
-  A = A.selfadjointView<Eigen::Lower>();
-  B = B.selfadjointView<Eigen::Lower>();
-  Eigen::LDLT<Matrix6d> ldlt(A);
-  if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-10)) return false;
-  const Vector6d coef = ldlt.solve(rhs);
   // E[sum w r^2] = sigma^2 tr(W (I - H)) with the hat matrix H = Phi A^-1 Phi^T W, and
   // tr(W H) = tr(A^-1 Phi^T W^2 Phi) = tr(A^-1 B).
-  const double denom = sw - ldlt.solve(B).trace();
+  const double denom = sw - f.ldlt.solve(f.B).trace();
   dof = sw * sw / sw2 - 6;
-  if (!coef.allFinite() || !(denom > 0) || !(dof > 1)) return false;
-  double ssr = 0;
-  for (int j = 0; j < m; ++j) ssr += w[j] * std::pow(z[j] - phi[j].dot(coef), 2);
+  if (!(denom > 0) || !(dof > 1)) return false;
   var = ssr / denom;
   return std::isfinite(var);
 }
