@@ -1,5 +1,4 @@
 #include <algorithm>
-#include <functional>
 #include <stdexcept>
 
 #include "engine/node.h"
@@ -39,29 +38,8 @@ NodeDecl make_map_check_node() {
     UntangleResult u;
     try {
       const std::size_t max_folded = std::max<std::size_t>(20, cloud->size() / 200);
-      // the nearest point of the domain's edge, for outer-loop points that slide along it
-      std::function<Eigen::Vector2d(const Eigen::Vector2d&)> to_edge;
-      if (map->domain == "disk") {
-        const double R = map->radius;
-        to_edge = [R](const Eigen::Vector2d& q) {
-          const double n = q.norm();
-          return n > 0 ? Eigen::Vector2d(q * (R / n)) : Eigen::Vector2d(R, 0);
-        };
-      } else if (map->domain == "rectangle") {
-        const double W = map->width, H = map->height;
-        to_edge = [W, H](const Eigen::Vector2d& q) {
-          Eigen::Vector2d p(std::clamp(q.x(), 0.0, W), std::clamp(q.y(), 0.0, H));
-          const double d[4] = {p.x(), W - p.x(), p.y(), H - p.y()};
-          const int side = static_cast<int>(std::min_element(d, d + 4) - d);
-          if (side == 0) p.x() = 0;
-          else if (side == 1) p.x() = W;
-          else if (side == 2) p.y() = 0;
-          else p.y() = H;
-          return p;
-        };
-      }
       u = untangle_map(cloud->points, cloud->normals, *nbrs, map->uv, map->outer_loop, map->corners,
-                       to_edge, static_cast<int>(ctx.integer("untangle_rounds")), max_folded);
+                       domain_edge(*map), static_cast<int>(ctx.integer("untangle_rounds")), max_folded);
       c = check_map(cloud->points, cloud->normals, *nbrs, u.uv);
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());

@@ -1,11 +1,37 @@
 #include "nodes/param/untangle.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
 #include "nodes/param/check.h"
 
 namespace scallop {
+
+std::function<Eigen::Vector2d(const Eigen::Vector2d&)> domain_edge(const UVMap& map) {
+  if (map.domain == "disk") {
+    const double R = map.radius;
+    return [R](const Eigen::Vector2d& q) {
+      const double n = q.norm();
+      return n > 0 ? Eigen::Vector2d(q * (R / n)) : Eigen::Vector2d(R, 0);
+    };
+  }
+  if (map.domain == "rectangle") {
+    const double W = map.width, H = map.height;
+    return [W, H](const Eigen::Vector2d& q) {
+      Eigen::Vector2d p(std::clamp(q.x(), 0.0, W), std::clamp(q.y(), 0.0, H));
+      const double d[4] = {p.x(), W - p.x(), p.y(), H - p.y()};  // to each side
+      switch (std::min_element(d, d + 4) - d) {
+        case 0: p.x() = 0; break;
+        case 1: p.x() = W; break;
+        case 2: p.y() = 0; break;
+        default: p.y() = H;
+      }
+      return p;
+    };
+  }
+  return {};
+}
 
 UntangleResult untangle_map(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
                             const Neighborhoods& nbrs, const std::vector<Eigen::Vector2d>& uv,

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "nodes/types/cloud.h"
+#include "nodes/types/param.h"
 
 namespace scallop {
 
@@ -27,6 +28,10 @@ struct UntangleResult {
   std::size_t moved = 0;            // points whose (u,v) changed
   int rounds = 0;                   // rounds used
 };
+
+// The nearest point of the edge of a map's domain (the disk's circle, the rectangle's sides), for
+// untangle_map's to_edge; empty for another domain.
+std::function<Eigen::Vector2d(const Eigen::Vector2d&)> domain_edge(const UVMap& map);
 
 // P, N, nbrs, uv  as for check_map; outer_loop  the outer loop's point indices in order (may be
 // empty); fixed  positions in outer_loop that never move (a rectangle's corners);

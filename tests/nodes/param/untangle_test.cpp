@@ -134,3 +134,29 @@ TEST(Untangle, Errors) {
 
 }  // namespace
 }  // namespace scallop
+
+namespace scallop {
+namespace {
+
+TEST(Untangle, DomainEdgeIsTheNearestPointOfTheBoundary) {
+  UVMap disk;
+  disk.domain = "disk";
+  disk.radius = 2;
+  const auto on_circle = domain_edge(disk);
+  EXPECT_NEAR((on_circle({0.3, 0.4}) - Eigen::Vector2d(1.2, 1.6)).norm(), 0, 1e-15);
+  EXPECT_NEAR((on_circle({3, 4}) - Eigen::Vector2d(1.2, 1.6)).norm(), 0, 1e-15);
+  UVMap rect;
+  rect.domain = "rectangle";
+  rect.width = 10;
+  rect.height = 4;
+  const auto on_side = domain_edge(rect);
+  EXPECT_EQ(on_side({5, 1}), Eigen::Vector2d(5, 0));
+  EXPECT_EQ(on_side({9, 2}), Eigen::Vector2d(10, 2));
+  EXPECT_EQ(on_side({1, 3.5}), Eigen::Vector2d(1, 4));
+  EXPECT_EQ(on_side({-1, 2}), Eigen::Vector2d(0, 2));
+  UVMap other;
+  EXPECT_FALSE(domain_edge(other));
+}
+
+}  // namespace
+}  // namespace scallop
