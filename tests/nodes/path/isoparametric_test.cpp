@@ -252,16 +252,24 @@ TEST(Isoparametric, ContourOnADomeIsConcentricCirclesToTheCentre) {
   EXPECT_GE(rep["predicted"]["scallop_max"].get<double>(), 0.97 * h);
 }
 
-TEST(Isoparametric, ReportsConcaveRegionsTighterThanTheTool) {
-  // A trough z = (y - 3)^2 / 4: curvature radius 2 at its bottom, below r = 3 for |y - 3| < 1.11.
-  const Input in = rect_patch(
+// A trough z = (y - 3)^2 / 4: curvature radius 2 at its bottom, below r = 3 for |y - 3| < 1.11;
+// planned with r = 3, h = 0.01, e = 0.005.
+struct Trough {
+  Input in = rect_patch(
       4, 6, 0.15, [](double, double y) { return (y - 3) * (y - 3) / 4; },
       [](double, double y) { return Eigen::Vector2d(0, (y - 3) / 2); });
-  IsoparametricOptions o;
-  o.tool_radius = 3;
-  o.scallop_height = 0.01;
-  o.chord_error = 0.005;
-  const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  IsoparametricOptions o = [] {
+    IsoparametricOptions o;
+    o.tool_radius = 3;
+    o.scallop_height = 0.01;
+    o.chord_error = 0.005;
+    return o;
+  }();
+};
+
+TEST(Isoparametric, ReportsConcaveRegionsTighterThanTheTool) {
+  const Trough trough;
+  const IsoparametricResult res = plan_isoparametric(trough.in.cloud, trough.in.nb, trough.in.map, trough.o);
   const auto& cr = res.report["concave_regions"];
   ASSERT_EQ(cr["count"], 1);
   const auto& g = cr["regions"][0];
@@ -280,13 +288,9 @@ TEST(Isoparametric, LiftsTheBallWhereItWouldGougeAConcavePlace) {
   // The trough again (radius 2 < r = 3 at the bottom): a ball set on its contact there reaches
   // into the flanks; the planner lifts it, so no cloud point lies deeper than e inside a ball
   // swept along any pass.
-  const Input in = rect_patch(
-      4, 6, 0.15, [](double, double y) { return (y - 3) * (y - 3) / 4; },
-      [](double, double y) { return Eigen::Vector2d(0, (y - 3) / 2); });
-  IsoparametricOptions o;
-  o.tool_radius = 3;
-  o.scallop_height = 0.01;
-  o.chord_error = 0.005;
+  const Trough trough;
+  const Input& in = trough.in;
+  const IsoparametricOptions& o = trough.o;
   const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
   EXPECT_GT(res.report["ball_lifted"]["points"].get<int>(), 0);
   EXPECT_GT(res.report["ball_lifted"]["max"].get<double>(), 0.01);
