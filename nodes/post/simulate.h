@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "nodes/cloud/surface_fit.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
@@ -35,45 +36,6 @@ std::vector<CentreSegment> feed_centres(const Toolpath& path);
 // Ball centres (tip + r·ẑ) of the feed and plunge moves of a linked path; rapid_length gets the
 // total length of its rapid moves.
 std::vector<CentreSegment> feed_centres(const LinkedPath& path, double& rapid_length);
-
-// Height-field model of a cloud seen from +z: z(x, y) and the upward normal from a weighted
-// quadratic least-squares fit of the k nearest cloud points in xy; where the surface is steeper
-// than ~37 degrees, from a quadratic fitted in the local tangent frame to the k nearest points
-// in 3-D (a fit of z over xy is ill-posed there when the points crowd together in xy).
-class HeightField {
- public:
-  // P  #P by 3 cloud points (mm), at least 10. k  neighbours per fit.
-  // uncertainty  optional #P bounds (mm) on how far each point may be off the real surface
-  HeightField(const std::vector<Eigen::Vector3d>& P, int k = 20,
-              const std::vector<double>* uncertainty = nullptr);
-  ~HeightField();
-  HeightField(const HeightField&) = delete;
-  HeightField& operator=(const HeightField&) = delete;
-  // Evaluates at (x, y); false (and nothing evaluated) when (x, y) is outside the patch: no cloud
-  // point within 1.5 × the mean cloud spacing, or the fitted neighbours lie to one side (their
-  // centroid farther than half their radius from (x, y)), unless `force`.
-  // uncertainty, when given, gets uncertainty(x, y) from the same neighbours.
-  bool eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force = false,
-            double* uncertainty = nullptr) const;
-  bool inside(double x, double y) const;
-  // How far the surface at (x, y) may be off the real one (mm): the mean uncertainty of the k
-  // nearest points in xy; 0 without uncertainties.
-  double uncertainty(double x, double y) const;
-  double uncertainty_max() const { return uncertainty_max_; }
-  double spacing() const { return spacing_; }  // mean cloud spacing in xy (mm)
-  double min_x() const { return lo_.x(); }
-  double min_y() const { return lo_.y(); }
-  double max_x() const { return hi_.x(); }
-  double max_y() const { return hi_.y(); }
-  double max_z() const { return zmax_; }
-
- private:
-  struct Impl;
-  Impl* impl_;
-  int k_;
-  double spacing_ = 0, zmax_ = 0, uncertainty_max_ = 0;
-  Eigen::Vector2d lo_, hi_;
-};
 
 struct SimulateOptions {
   double tool_radius = 0;   // r (mm)

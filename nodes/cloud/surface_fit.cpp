@@ -1,0 +1,288 @@
+#include "nodes/cloud/surface_fit.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <nanoflann.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "nodes/cloud/kd_tree.h"
+
+namespace scallop {
+
+struct HeightField::Impl {
+  std::vector<Eigen::Vector2d> xy;
+  std::vector<double> z;
+  std::vector<Eigen::Vector3d> p;  // the points in 3-D, for the local-frame fit
+  std::unique_ptr<PointsAdaptor<Eigen::Vector2d>> adaptor;
+  std::unique_ptr<KdTree<Eigen::Vector2d, 2>> tree;
+  std::unique_ptr<PointsAdaptor<Eigen::Vector3d>> adaptor3;
+  std::unique_ptr<KdTree<Eigen::Vector3d, 3>> tree3;
+  std::vector<double> uncertainty;  // per point (mm), or empty
+
+  // The mean uncertainty of the points idx[0..got) (0 without uncertainties).
+  double mean_uncertainty(const std::uint32_t* idx, std::size_t got) const;
+  bool local_fit(double x, double y, const std::uint32_t* idx, std::size_t got, int k, double& z,
+                 Eigen::Vector3d& normal) const;
+};
+
+namespace {
+
+// Weighted centroid and unit normal (least-variance direction, turned up) of points `idx`,
+// Gaussian weights of width h about o. False when the normal is within ~1 degree of horizontal
+// (a wall: no height there) or the points are degenerate.
+bool local_plane(const std::vector<Eigen::Vector3d>& P, const std::uint32_t* idx, std::size_t got,
+                 const Eigen::Vector3d& o, double h, Eigen::Vector3d& centroid, Eigen::Matrix3d& frame) {
+  double wsum = 0;
+  Eigen::Vector3d m = Eigen::Vector3d::Zero();
+  std::vector<double> w(got);
+  for (std::size_t j = 0; j < got; ++j) {
+    w[j] = std::exp(-2.0 * (P[idx[j]] - o).squaredNorm() / (h * h));
+    m += w[j] * P[idx[j]];
+    wsum += w[j];
+  }
+  if (!(wsum > 0)) return false;
+  m /= wsum;
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (std::size_t j = 0; j < got; ++j) {
+    const Eigen::Vector3d d = P[idx[j]] - m;
+    C += w[j] * d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+  if (es.info() != Eigen::Success || !(es.eigenvalues()[1] > 1e-6 * es.eigenvalues()[2])) return false;
+  Eigen::Vector3d n = es.eigenvectors().col(0);
+  if (n.z() < 0) n = -n;
+  if (n.z() < 0.02) return false;
+  frame.col(2) = n;
+  frame.col(0) = es.eigenvectors().col(2);
+  frame.col(1) = n.cross(frame.col(0));
+  centroid = m;
+  return true;
+}
+
+}  // namespace
+
+// Moving least squares in a local frame (tangent plane of the neighbours, normal w): w(a, b) a
+// quadratic, fitted to the k points nearest in 3-D to the current estimate, then the point of it
+// above (x, y) found by Newton's method. Unlike a fit of z over (x, y), it stays accurate where
+// the surface is steep and the neighbours crowd together in xy (rings of a sphere near its rim
+// project onto nearly the same xy lines, and a quadratic in (x, y) through them is ill-posed).
+bool HeightField::Impl::local_fit(double x, double y, const std::uint32_t* idx_xy, std::size_t got_xy,
+                                  int k, double& z_out, Eigen::Vector3d& n_out) const {
+  Eigen::Vector3d m;
+  Eigen::Matrix3d F;
+  double hxy = 0;
+  for (std::size_t j = 0; j < got_xy; ++j) hxy = std::max(hxy, (xy[idx_xy[j]] - Eigen::Vector2d(x, y)).norm());
+  // First estimate: the plane through the points nearest to the vertical line at (x, y).
+  Eigen::Vector3d o(x, y, 0);
+  {
+    // weights only on the xy distance here: the z spread is what is unknown
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    double wsum = 0;
+    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+    std::vector<double> w(got_xy);
+    for (std::size_t j = 0; j < got_xy; ++j) {
+      w[j] = std::exp(-2.0 * (xy[idx_xy[j]] - Eigen::Vector2d(x, y)).squaredNorm() / (hxy * hxy + 1e-300));
+      c += w[j] * p[idx_xy[j]];
+      wsum += w[j];
+    }
+    c /= wsum;
+    for (std::size_t j = 0; j < got_xy; ++j) C += w[j] * (p[idx_xy[j]] - c) * (p[idx_xy[j]] - c).transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+    Eigen::Vector3d n = es.eigenvectors().col(0);
+    if (n.z() < 0) n = -n;
+    if (es.info() != Eigen::Success || n.z() < 0.02) return false;
+    // Up to ~37 degrees the fit of z over (x, y) below is as good and cheaper.
+    if (n.z() > 0.8) return false;
+    o.z() = c.z() - (n.x() * (x - c.x()) + n.y() * (y - c.y())) / n.z();
+  }
+  std::uint32_t idx[64];
+  double d2[64];
+  const int kk = std::min(k, 64);
+  for (int round = 0; round < 3; ++round) {
+    const std::size_t got = tree3->knnSearch(o.data(), kk, idx, d2);
+    if (got < 6) return false;
+    const double h = std::sqrt(d2[got - 1]) + 1e-12;
+    if (!local_plane(p, idx, got, o, 2 * h, m, F)) return false;
+    // w = c0 + c1 a + c2 b + c3 a^2 + c4 ab + c5 b^2 in units of h about o, frame F
+    Eigen::Matrix<double, 6, 6> M = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
+    for (std::size_t j = 0; j < got; ++j) {
+      const Eigen::Vector3d l = F.transpose() * (p[idx[j]] - o) / h;
+      const double w = std::exp(-2.0 * (l.x() * l.x() + l.y() * l.y()));
+      Eigen::Matrix<double, 6, 1> b;
+      b << 1, l.x(), l.y(), l.x() * l.x(), l.x() * l.y(), l.y() * l.y();
+      M.selfadjointView<Eigen::Lower>().rankUpdate(b, w);
+      rhs += w * l.z() * b;
+    }
+    M.triangularView<Eigen::Upper>() = M.transpose();
+    auto ldlt = M.ldlt();
+    if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-8)) return false;
+    const Eigen::Matrix<double, 6, 1> c = ldlt.solve(rhs);
+    if (!c.allFinite()) return false;
+    // Newton on (a, b): the xy of o + h (a t1 + b t2 + w(a, b) n) must be (x, y).
+    double a = 0, b = 0;
+    Eigen::Vector3d P, ta, tb;
+    bool conv = false;
+    for (int it = 0; it < 20; ++it) {
+      const double w = c[0] + c[1] * a + c[2] * b + c[3] * a * a + c[4] * a * b + c[5] * b * b;
+      const double wa = c[1] + 2 * c[3] * a + c[4] * b, wb = c[2] + c[4] * a + 2 * c[5] * b;
+      P = o + h * (a * F.col(0) + b * F.col(1) + w * F.col(2));
+      ta = F.col(0) + wa * F.col(2);
+      tb = F.col(1) + wb * F.col(2);
+      const Eigen::Vector2d res(P.x() - x, P.y() - y);
+      if (res.norm() < 1e-12 * (1 + h)) {
+        conv = true;
+        break;
+      }
+      Eigen::Matrix2d J;
+      J << ta.x(), tb.x(), ta.y(), tb.y();
+      J *= h;
+      if (!(std::abs(J.determinant()) > 1e-12 * h * h)) return false;
+      const Eigen::Vector2d step = J.inverse() * res;
+      a -= step.x();
+      b -= step.y();
+      if (std::abs(a) > 3 || std::abs(b) > 3) return false;  // left the neighbourhood
+    }
+    if (!conv) return false;
+    Eigen::Vector3d n = ta.cross(tb).normalized();
+    if (n.z() < 0) n = -n;
+    const double moved = (P - o).norm();
+    o = P;
+    z_out = P.z();
+    n_out = n;
+    if (moved < 0.05 * h) return true;  // the neighbourhood is centred on the point found
+  }
+  return true;
+}
+
+HeightField::HeightField(const std::vector<Eigen::Vector3d>& P, int k,
+                         const std::vector<double>* uncertainty)
+    : impl_(new Impl), k_(k) {
+  if (P.size() < 10) {
+    delete impl_;
+    throw std::invalid_argument("the cloud has " + std::to_string(P.size()) +
+                                " points; the surface model needs at least 10");
+  }
+  if (uncertainty && uncertainty->size() != P.size()) {
+    delete impl_;
+    throw std::invalid_argument("the cloud has " + std::to_string(P.size()) + " points but " +
+                                std::to_string(uncertainty->size()) + " uncertainties");
+  }
+  if (uncertainty) {
+    impl_->uncertainty = *uncertainty;
+    for (double u : *uncertainty) uncertainty_max_ = std::max(uncertainty_max_, u);
+  }
+  k_ = std::min<int>(k, static_cast<int>(P.size()));
+  impl_->xy.reserve(P.size());
+  lo_ = Eigen::Vector2d(INFINITY, INFINITY);
+  hi_ = -lo_;
+  zmax_ = -INFINITY;
+  for (const auto& p : P) {
+    if (!p.allFinite()) {
+      delete impl_;
+      throw std::invalid_argument("the cloud has a non-finite point");
+    }
+    impl_->xy.emplace_back(p.x(), p.y());
+    impl_->z.push_back(p.z());
+    impl_->p.push_back(p);
+    lo_ = lo_.cwiseMin(impl_->xy.back());
+    hi_ = hi_.cwiseMax(impl_->xy.back());
+    zmax_ = std::max(zmax_, p.z());
+  }
+  impl_->adaptor = std::make_unique<PointsAdaptor<Eigen::Vector2d>>(PointsAdaptor<Eigen::Vector2d>{impl_->xy});
+  impl_->tree = std::make_unique<KdTree<Eigen::Vector2d, 2>>(2, *impl_->adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  impl_->tree->buildIndex();
+  impl_->adaptor3 = std::make_unique<PointsAdaptor<Eigen::Vector3d>>(PointsAdaptor<Eigen::Vector3d>{impl_->p});
+  impl_->tree3 = std::make_unique<KdTree<Eigen::Vector3d, 3>>(3, *impl_->adaptor3, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  impl_->tree3->buildIndex();
+  // Mean spacing from the 8th-neighbour distance: in a uniform sample of density ρ, π ρ r₈² ≈ 8.
+  const std::size_t n = P.size(), stride = std::max<std::size_t>(1, n / 2000);
+  std::vector<double> r8;
+  const int kk = std::min<int>(9, static_cast<int>(n));
+  std::vector<std::uint32_t> idx(kk);
+  std::vector<double> d2(kk);
+  for (std::size_t i = 0; i < n; i += stride) {
+    std::size_t got = impl_->tree->knnSearch(impl_->xy[i].data(), kk, idx.data(), d2.data());
+    r8.push_back(std::sqrt(d2[got - 1]));
+  }
+  std::nth_element(r8.begin(), r8.begin() + r8.size() / 2, r8.end());
+  spacing_ = r8[r8.size() / 2] * std::sqrt(3.14159265358979 / (kk - 1));
+}
+
+HeightField::~HeightField() { delete impl_; }
+
+double HeightField::Impl::mean_uncertainty(const std::uint32_t* idx, std::size_t got) const {
+  if (uncertainty.empty() || got == 0) return 0;
+  double sum = 0;
+  for (std::size_t j = 0; j < got; ++j) sum += uncertainty[idx[j]];
+  return sum / got;
+}
+
+double HeightField::uncertainty(double x, double y) const {
+  std::uint32_t idx[64];
+  double d2[64];
+  const double q[2] = {x, y};
+  return impl_->mean_uncertainty(idx, impl_->tree->knnSearch(q, std::min(k_, 64), idx, d2));
+}
+
+bool HeightField::inside(double x, double y) const {
+  double z;
+  Eigen::Vector3d n;
+  return eval(x, y, z, n);
+}
+
+bool HeightField::eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force,
+                       double* uncertainty) const {
+  const int k = k_;
+  std::uint32_t idx[64];
+  double d2[64];
+  const double q[2] = {x, y};
+  std::size_t got = impl_->tree->knnSearch(q, std::min(k, 64), idx, d2);
+  if (got == 0) return false;
+  if (uncertainty) *uncertainty = impl_->mean_uncertainty(idx, got);
+  if (!force) {
+    if (d2[0] > 2.25 * spacing_ * spacing_) return false;
+    // Beyond the edge of the cloud the neighbours are all on one side: their centroid moves
+    // off (x, y) by about 0.42 of their radius already at the edge (half a disc).
+    Eigen::Vector2d c = Eigen::Vector2d::Zero();
+    for (std::size_t j = 0; j < got; ++j) c += impl_->xy[idx[j]];
+    c /= double(got);
+    if ((c - Eigen::Vector2d(x, y)).squaredNorm() > 0.25 * d2[got - 1]) return false;
+  }
+  // Steep places: a fit in the local tangent frame (see local_fit).
+  if (impl_->local_fit(x, y, idx, got, k, z, normal)) return true;
+  // Gentle slopes (or a failed local fit): weighted least squares of z = c0 + c1 u + c2 v + c3 u² + c4 uv + c5 v², (u, v) = (dx, dy)/h,
+  // Gaussian weights of width h = the farthest neighbour (Lancaster & Šalkauskas, moving least squares).
+  double h = std::sqrt(d2[got - 1]) + 1e-12;
+  Eigen::Matrix<double, 6, 6> M = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
+  for (std::size_t j = 0; j < got; ++j) {
+    const auto& p = impl_->xy[idx[j]];
+    double u = (p.x() - x) / h, v = (p.y() - y) / h;
+    double w = std::exp(-2.0 * (u * u + v * v));
+    Eigen::Matrix<double, 6, 1> b;
+    b << 1, u, v, u * u, u * v, v * v;
+    M.selfadjointView<Eigen::Lower>().rankUpdate(b, w);
+    rhs += w * impl_->z[idx[j]] * b;
+  }
+  M.triangularView<Eigen::Upper>() = M.transpose();
+  Eigen::Matrix<double, 6, 1> c;
+  auto ldlt = M.ldlt();
+  bool ok = ldlt.info() == Eigen::Success && ldlt.rcond() > 1e-10;
+  if (ok) c = ldlt.solve(rhs);
+  if (!ok || !c.allFinite()) {  // degenerate neighbourhood (collinear points): a plane
+    Eigen::Matrix3d M3 = M.topLeftCorner<3, 3>();
+    Eigen::Vector3d c3 = M3.ldlt().solve(rhs.head<3>());
+    if (!c3.allFinite()) return false;
+    c.setZero();
+    c.head<3>() = c3;
+  }
+  z = c[0];
+  normal = Eigen::Vector3d(-c[1] / h, -c[2] / h, 1.0).normalized();
+  return true;
+}
+
+}  // namespace scallop
