@@ -25,6 +25,7 @@ NodeDecl make_laplacian_node();
 NodeDecl make_harmonic_node();
 NodeDecl make_map_check_node();
 NodeDecl make_isoparametric_node();
+NodeDecl make_gouge_guard_node();
 NodeDecl make_link_node();
 NodeDecl make_gcode_node();
 NodeDecl make_simulate_node();
@@ -50,7 +51,7 @@ void register_builtins(Registry& r) {
                     make_clean_node, make_knn_node, make_normals_node, make_boundary_node,
                     make_boundary_order_node, make_smooth_node, make_height_field_node, make_denoise_node,  // cloud
                     make_boundary_map_node, make_laplacian_node, make_harmonic_node, make_map_check_node,  // param
-                    make_isoparametric_node,  // path
+                    make_isoparametric_node, make_gouge_guard_node,  // path
                     make_link_node, make_gcode_node, make_simulate_node, make_render_node})  // post
     r.add(make());
 }

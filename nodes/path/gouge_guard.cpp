@@ -1,0 +1,265 @@
+#include "nodes/path/gouge_guard.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+#include "nodes/cloud/kd_tree.h"
+
+namespace scallop {
+
+struct BallClearance::Impl {
+  const HeightField& surface;
+  const std::vector<Eigen::Vector3d>& points;
+  double r;
+  PointsAdaptor<Eigen::Vector3d> adaptor{points};
+  KdTree<Eigen::Vector3d, 2> tree{2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
+  Impl(const HeightField& s, const std::vector<Eigen::Vector3d>& p, double radius)
+      : surface(s), points(p), r(radius) {
+    tree.buildIndex();
+  }
+};
+
+BallClearance::BallClearance(const HeightField& surface, const std::vector<Eigen::Vector3d>& points,
+                             double r)
+    : impl_(nullptr) {
+  if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
+  if (points.empty()) throw std::invalid_argument("the cloud has no points");
+  impl_ = new Impl(surface, points, r);
+}
+
+BallClearance::~BallClearance() { delete impl_; }
+
+BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const Eigen::Vector3d& hint) const {
+  const double r = impl_->r;
+  Result res;
+  // Foot point of c on the height field: move to the projection of c onto the tangent plane at
+  // the current point until it stops moving (converges for curvature radii above |c − foot|).
+  Eigen::Vector2d s = hint.head<2>();
+  double z = 0;
+  Eigen::Vector3d n;
+  bool found = false;
+  for (int it = 0; it < 12; ++it) {
+    if (!impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/true)) break;
+    found = true;
+    const Eigen::Vector3d p(s.x(), s.y(), z);
+    Eigen::Vector2d next = (c - (c - p).dot(n) * n).head<2>();
+    // at most a ball radius per step: a poor start must not throw the search off the patch
+    if ((next - s).norm() > r) next = s + r * (next - s).normalized();
+    const bool done = (next - s).norm() < 1e-7;
+    s = next;
+    if (done) break;
+  }
+  if (found && impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/false, &res.uncertainty)) {
+    res.on_surface = true;
+    res.foot = Eigen::Vector3d(s.x(), s.y(), z);
+    res.normal = n;
+    const Eigen::Vector3d d = c - res.foot;
+    res.clearance = (d.dot(n) >= 0 ? d.norm() : -d.norm()) - r;
+  }
+  // The cloud's own points within r of the centre in xy: a witness that needs no fit.
+  std::vector<std::pair<std::uint32_t, double>> hits;
+  impl_->tree.radiusSearch(c.data(), r * r, hits, nanoflann::SearchParams(32, 0, false));
+  for (const auto& h : hits) res.clearance = std::min(res.clearance, (c - impl_->points[h.first]).norm() - r);
+  return res;
+}
+
+namespace {
+
+constexpr double kProbeStep = 0.5;  // mm between the points checked along a long move
+
+struct Sample {
+  Eigen::Vector3d contact, normal;
+  Eigen::Vector2d uv;
+};
+
+struct Tally {
+  std::size_t positions = 0, moves = 0, lifted = 0, inserted = 0, unresolved = 0;
+  double deepest = 0;  // deepest cut-in found (mm)
+  Eigen::Vector3d deepest_at = Eigen::Vector3d::Zero();
+  double highest_lift = 0;
+  Eigen::Vector3d highest_lift_at = Eigen::Vector3d::Zero();
+  void add(const Tally& o) {
+    positions += o.positions, moves += o.moves, lifted += o.lifted, inserted += o.inserted;
+    unresolved += o.unresolved;
+    if (o.deepest > deepest) deepest = o.deepest, deepest_at = o.deepest_at;
+    if (o.highest_lift > highest_lift) highest_lift = o.highest_lift, highest_lift_at = o.highest_lift_at;
+  }
+};
+
+class PassGuard {
+ public:
+  PassGuard(const BallClearance& clearance, double r, double tol, double chord_tol, int max_splits)
+      : clearance_(clearance), r_(r), tol_(tol), chord_tol_(chord_tol), max_splits_(max_splits) {}
+
+  // Lifts the sample's ball until it only touches the surface (clears it by the surface's
+  // uncertainty there, so that a real surface that much higher is not cut either), when it cuts
+  // in by more than `allowed`; true when it was lifted.
+  bool lift_if_needed(Sample& s, double allowed, Tally& t) const {
+    Eigen::Vector3d c = s.contact + r_ * s.normal;
+    auto res = clearance_(c, s.contact);
+    if (!(res.clearance < -allowed)) return false;
+    if (-res.clearance > t.deepest) t.deepest = -res.clearance, t.deepest_at = s.contact;
+    const double z0 = c.z();
+    auto target = [](const BallClearance::Result& x) { return x.on_surface ? x.uncertainty : 0.0; };
+    for (int it = 0; it < 8 && res.clearance < target(res) - 1e-6; ++it) {
+      // raising the centre by dz moves it away from a surface with normal n by dz * n_z
+      const double nz = res.on_surface ? std::max(res.normal.z(), 0.2) : 0.5;
+      c.z() += (target(res) - res.clearance) / nz;
+      res = clearance_(c, res.on_surface ? res.foot : s.contact);
+    }
+    if (res.on_surface && (c - res.foot).norm() > 0) {
+      // the ball now touches the surface at its foot point (or clears it by δ along the normal)
+      s.normal = (c - res.foot).normalized();
+      s.contact = c - r_ * s.normal;
+    } else {
+      s.contact += Eigen::Vector3d(0, 0, c.z() - z0);
+    }
+    if (res.clearance < target(res) - 1e-6) ++t.unresolved;
+    if (c.z() - z0 > t.highest_lift) t.highest_lift = c.z() - z0, t.highest_lift_at = s.contact;
+    ++t.lifted;
+    return true;
+  }
+
+  // Appends to out the points to insert strictly between a and b.
+  void refine(const Sample& a, const Sample& b, int depth, std::vector<Sample>& out, Tally& t) const {
+    ++t.moves;
+    const Eigen::Vector3d ca = a.contact + r_ * a.normal, cb = b.contact + r_ * b.normal;
+    // the quarter points, and points at most kProbeStep apart on long moves
+    const int probes = std::clamp(static_cast<int>(std::ceil((cb - ca).norm() / kProbeStep)), 4, 64);
+    double worst = INFINITY, at = 0.5;
+    for (int j = 1; j < probes; ++j) {
+      const double f = double(j) / probes;
+      const double cl = clearance_((1 - f) * ca + f * cb, (1 - f) * a.contact + f * b.contact).clearance;
+      if (cl < worst) worst = cl, at = f;
+    }
+    if (!(worst < -chord_tol_)) return;
+    if (depth >= max_splits_) {
+      ++t.unresolved;
+      if (-worst > t.deepest) t.deepest = -worst, t.deepest_at = 0.5 * (a.contact + b.contact);
+      return;
+    }
+    Sample m;
+    m.normal = ((1 - at) * a.normal + at * b.normal).normalized();
+    m.contact = (1 - at) * ca + at * cb - r_ * m.normal;
+    m.uv = (1 - at) * a.uv + at * b.uv;
+    lift_if_needed(m, 0, t);
+    ++t.inserted;
+    refine(a, m, depth + 1, out, t);
+    out.push_back(m);
+    refine(m, b, depth + 1, out, t);
+  }
+
+  ToolpathPass guard(const ToolpathPass& p, Tally& t) const {
+    const bool has_uv = p.uv.size() == p.contact.size();
+    std::vector<Sample> s(p.contact.size());
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      s[i] = {p.contact[i], p.normal[i], has_uv ? p.uv[i] : Eigen::Vector2d::Zero()};
+      ++t.positions;
+      lift_if_needed(s[i], tol_, t);
+    }
+    std::vector<Sample> out;
+    out.reserve(s.size());
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      if (i > 0) refine(s[i - 1], s[i], 0, out, t);
+      out.push_back(s[i]);
+    }
+    ToolpathPass q;
+    for (const auto& x : out) {
+      q.contact.push_back(x.contact);
+      q.normal.push_back(x.normal);
+      if (has_uv) q.uv.push_back(x.uv);
+    }
+    return q;
+  }
+
+ private:
+  const BallClearance& clearance_;
+  double r_, tol_, chord_tol_;
+  int max_splits_;
+};
+
+nlohmann::json point_json(const Eigen::Vector3d& p) { return {{"x", p.x()}, {"y", p.y()}, {"z", p.z()}}; }
+
+std::string mm(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", v);
+  return b;
+}
+
+}  // namespace
+
+GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearance,
+                              const GougeGuardOptions& o) {
+  const double r = path.tool_radius, e = path.chord_error;
+  if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
+  bool any = false;
+  for (const auto& p : path.passes) {
+    if (p.normal.size() != p.contact.size())
+      throw std::invalid_argument("a pass has " + std::to_string(p.contact.size()) + " points but " +
+                                  std::to_string(p.normal.size()) + " normals");
+    for (std::size_t i = 0; i < p.contact.size(); ++i)
+      if (!p.contact[i].allFinite() || !p.normal[i].allFinite())
+        throw std::invalid_argument("the tool path has a non-finite point");
+    any |= !p.contact.empty();
+  }
+  if (!any) throw std::invalid_argument("the tool path has no points");
+  const double tol = o.tolerance > 0 ? o.tolerance : 0.25 * e;
+  const double chord_tol = o.chord_tolerance > 0 ? o.chord_tolerance : 0.95 * e;
+  if (o.max_splits < 0) throw std::invalid_argument("max_splits must be >= 0");
+
+  GougeGuardResult res;
+  res.path = path;
+  const std::size_t n = path.passes.size();
+  PassGuard guard(clearance, r, tol, chord_tol, o.max_splits);
+  Tally total;
+  std::mutex mu;
+  std::atomic<std::size_t> done{0};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& range) {
+    Tally t;
+    for (std::size_t i = range.begin(); i < range.end(); ++i) {
+      res.path.passes[i] = guard.guard(path.passes[i], t);
+      const std::size_t d = ++done;
+      if (o.progress && d % 16 == 0) o.progress(double(d) / double(n));
+    }
+    std::lock_guard<std::mutex> lock(mu);
+    total.add(t);
+  });
+  if (o.progress) o.progress(1.0);
+
+  nlohmann::json rep;
+  rep["tolerance"] = tol;
+  rep["chord_tolerance"] = chord_tol;
+  rep["positions_checked"] = total.positions;
+  rep["moves_checked"] = total.moves;
+  rep["lifted_positions"] = total.lifted;
+  rep["inserted_positions"] = total.inserted;
+  rep["unresolved"] = total.unresolved;
+  rep["deepest_cut_in"] = total.deepest;
+  if (total.deepest > 0) rep["deepest_cut_in_at"] = point_json(total.deepest_at);
+  rep["highest_lift"] = total.highest_lift;
+  if (total.highest_lift > 0) rep["highest_lift_at"] = point_json(total.highest_lift_at);
+  nlohmann::json warnings = nlohmann::json::array();
+  if (total.lifted > 0)
+    warnings.push_back(std::to_string(total.lifted) + " tool positions (" + std::to_string(total.inserted) +
+                       " of them added in the middle of moves) were lifted by up to " + mm(total.highest_lift) +
+                       " mm (most near x " + mm(total.highest_lift_at.x()) + ", y " + mm(total.highest_lift_at.y()) +
+                       ") where the planned ball would have cut up to " + mm(total.deepest) +
+                       " mm into the cloud's surface; the path leaves that much stock there");
+  if (total.unresolved > 0)
+    warnings.push_back(std::to_string(total.unresolved) + " places still cut in after lifting and " +
+                       std::to_string(o.max_splits) + " halvings of their moves (deepest near x " +
+                       mm(total.deepest_at.x()) + ", y " + mm(total.deepest_at.y()) + ")");
+  rep["warnings"] = warnings;
+  res.report = std::move(rep);
+  return res;
+}
+
+}  // namespace scallop

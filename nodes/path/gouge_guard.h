@@ -1,0 +1,72 @@
+// Gouge guard: every planned ball position, and the middle of every move, is checked against the
+// cloud's surface; where the surface would come inside the ball, the ball is lifted until it only
+// touches it.
+//
+// A planner works on its own model of the surface (path.isoparametric: a fit of x, y, z over the
+// (u, v) map). Where that model is poor (a fit that straddles a re-entrant corner of the outline,
+// where the map squeezes a narrow spike, at a sparse steep rim) a contact point can be off the
+// surface by more than the chord budget and the ball cuts into the part. The guard measures each
+// ball centre c against two independent witnesses: the height field fitted to the cloud in xy
+// (HeightField, what post.simulate certifies against), via the foot point of c on it, and the
+// cloud's points themselves within r of c. clearance(c) = distance to the surface − r; a
+// position with clearance < −tolerance is lifted along +z to clearance 0 (to the surface's
+// uncertainty δ when the cloud has one: the ball then clears a real surface δ higher), and a move whose
+// quarter points (and points 0.5 mm apart on longer moves) have clearance < −chord_tolerance
+// gets a lifted point inserted at its worst one
+// (and its halves are checked again, up to max_splits times). A lifted ball leaves stock: the
+// report says where and how much, so a planner's weak spot is never hidden.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "nodes/cloud/surface_fit.h"
+#include "nodes/types/toolpath.h"
+
+namespace scallop {
+
+// Clearance of a ball of radius r against a cloud's surface.
+class BallClearance {
+ public:
+  // surface  the height field of `points`; points  the cloud (mm). Both must outlive this.
+  BallClearance(const HeightField& surface, const std::vector<Eigen::Vector3d>& points, double r);
+  ~BallClearance();
+  BallClearance(const BallClearance&) = delete;
+  BallClearance& operator=(const BallClearance&) = delete;
+
+  struct Result {
+    double clearance = INFINITY;  // mm: distance from the centre to the surface − r (< 0: gouge)
+    Eigen::Vector3d foot;         // nearest surface point found (valid when on_surface)
+    Eigen::Vector3d normal;       // its upward unit normal (valid when on_surface)
+    bool on_surface = false;      // the foot point lies on the patch (not beyond its edge)
+    double uncertainty = 0;       // mm the surface there may be off the real one (on_surface)
+  };
+  // centre  ball centre; hint  a surface point near the contact (where the foot search starts).
+  // Thread-safe.
+  Result operator()(const Eigen::Vector3d& centre, const Eigen::Vector3d& hint) const;
+
+ private:
+  struct Impl;
+  Impl* impl_;
+};
+
+struct GougeGuardOptions {
+  double tolerance = 0;        // mm a planned position may cut in before it is lifted; <= 0: e/4
+  double chord_tolerance = 0;  // mm a move may cut in before a point is inserted; <= 0: 0.95 e
+  int max_splits = 3;          // how often a move may be halved
+  std::function<void(double)> progress;
+};
+
+struct GougeGuardResult {
+  Toolpath path;
+  nlohmann::json report;
+};
+
+// Throws std::invalid_argument for a path without points, r <= 0 or mismatched normals.
+GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearance,
+                              const GougeGuardOptions& options);
+
+}  // namespace scallop

@@ -1,0 +1,56 @@
+#include <stdexcept>
+
+#include "engine/node.h"
+#include "nodes/cloud/surface_fit.h"
+#include "nodes/path/gouge_guard.h"
+#include "nodes/types/cloud.h"
+#include "nodes/types/document.h"
+#include "nodes/types/toolpath.h"
+
+namespace scallop {
+
+NodeDecl make_gouge_guard_node() {
+  NodeDecl d;
+  d.type = "path.gouge_guard";
+  d.version = 1;
+  d.description =
+      "checks every planned ball position and the middle of every move against the cloud's "
+      "surface (its height field and its points); lifts the ball where it would cut in and "
+      "reports where and by how much";
+  d.input("path", "Toolpath", "the planned passes")
+      .input("cloud", "Cloud", "the surface the passes must not cut into (seen from +z); with per-point uncertainty, lifted balls clear it by that much")
+      .output("toolpath", "Toolpath", "the passes, lifted where needed (lifted contact points are the ball's new touching points)")
+      .output("report", "Report",
+              "positions and moves checked, lifted and inserted positions, the deepest cut-in "
+              "found and the highest lift, with where")
+      .param_float("tolerance", 0, 0, 10, "mm",
+                   "how far the surface may come inside the ball at a planned position before it "
+                   "is lifted; 0: a quarter of the path's chord error")
+      .param_float("chord_tolerance", 0, 0, 10, "mm",
+                   "how far the surface may come inside the ball in the middle of a move before "
+                   "a lifted point is inserted; 0: 0.95 of the path's chord error")
+      .param_int("max_splits", 3, 0, 10, "", "how often a move may be halved");
+  d.run = [](NodeContext& ctx) {
+    auto path = ctx.input<Toolpath>("path");
+    auto cloud = ctx.input<PointCloud>("cloud");
+    GougeGuardOptions o;
+    o.tolerance = ctx.number("tolerance");
+    o.chord_tolerance = ctx.number("chord_tolerance");
+    o.max_splits = static_cast<int>(ctx.integer("max_splits"));
+    o.progress = [&ctx](double f) { ctx.progress(f, "checking the ball against the surface"); };
+    try {
+      HeightField surface(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
+      BallClearance clearance(surface, cloud->points, path->tool_radius);
+      auto res = guard_gouges(*path, clearance, o);
+      Report report;
+      report.data = std::move(res.report);
+      ctx.set("toolpath", std::move(res.path));
+      ctx.set("report", std::move(report));
+    } catch (const std::invalid_argument& e) {
+      throw NodeError(e.what());
+    }
+  };
+  return d;
+}
+
+}  // namespace scallop

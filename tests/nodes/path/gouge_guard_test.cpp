@@ -1,0 +1,204 @@
+#include "nodes/path/gouge_guard.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "nodes/all_nodes.h"
+#include "nodes/types/cloud.h"
+#include "nodes/types/document.h"
+#include "tests/test_support.h"
+
+namespace scallop {
+namespace {
+
+// The tilted plane z = 0.2 x + 0.25 y (|grad| gives sqrt(1 + 0.04 + 0.0625) = 1.05), sampled
+// every 0.25 mm over [-10, 10]^2.
+double plane_z(double x, double y) { return 0.2 * x + 0.25 * y; }
+const Eigen::Vector3d kPlaneNormal = Eigen::Vector3d(-0.2, -0.25, 1.0) / 1.05;
+
+std::vector<Eigen::Vector3d> plane_cloud() {
+  std::vector<Eigen::Vector3d> c;
+  for (double x = -10; x <= 10 + 1e-9; x += 0.25)
+    for (double y = -10; y <= 10 + 1e-9; y += 0.25) c.emplace_back(x, y, plane_z(x, y));
+  return c;
+}
+
+// The sphere of radius R about (0, 0, -R + 5), its upper cap sampled over [-10, 10]^2.
+constexpr double kR = 30;
+double cap_z(double x, double y) { return std::sqrt(kR * kR - x * x - y * y) - kR + 5; }
+std::vector<Eigen::Vector3d> cap_cloud() {
+  std::vector<Eigen::Vector3d> c;
+  for (double x = -10; x <= 10 + 1e-9; x += 0.2)
+    for (double y = -10; y <= 10 + 1e-9; y += 0.2) c.emplace_back(x, y, cap_z(x, y));
+  return c;
+}
+Eigen::Vector3d cap_point(double x, double y) { return {x, y, cap_z(x, y)}; }
+Eigen::Vector3d cap_normal(double x, double y) { return (cap_point(x, y) - Eigen::Vector3d(0, 0, 5 - kR)).normalized(); }
+
+// One pass along x at y on the plane, contacts every `step` mm, optionally sunk by `sink` mm
+// (along the normal) at point `sunk`.
+Toolpath plane_pass(double step, int sunk = -1, double sink = 0) {
+  Toolpath t;
+  t.tool_radius = 2;
+  t.chord_error = 0.01;
+  t.scallop_height = 0.05;
+  ToolpathPass p;
+  for (int i = 0; -5 + i * step <= 5 + 1e-9; ++i) {
+    const double x = -5 + i * step;
+    Eigen::Vector3d c(x, 1, plane_z(x, 1));
+    if (i == sunk) c -= sink * kPlaneNormal;
+    p.contact.push_back(c);
+    p.normal.push_back(kPlaneNormal);
+    p.uv.emplace_back(i, 0);
+  }
+  t.passes.push_back(p);
+  return t;
+}
+
+TEST(BallClearance, IsTheDistanceToATiltedPlaneMinusR) {
+  auto cloud = plane_cloud();
+  HeightField surface(cloud);
+  BallClearance clearance(surface, cloud, 2.0);
+  const Eigen::Vector3d foot(1, 2, plane_z(1, 2));
+  for (double gap : {0.1, 0.0, -0.03}) {
+    auto res = clearance(foot + (2.0 + gap) * kPlaneNormal, foot + Eigen::Vector3d(0.3, -0.2, 0));
+    EXPECT_NEAR(res.clearance, gap, 1e-6) << gap;
+    ASSERT_TRUE(res.on_surface);
+    EXPECT_NEAR((res.foot - foot).norm(), 0, 1e-5);
+    EXPECT_NEAR((res.normal - kPlaneNormal).norm(), 0, 1e-6);
+  }
+}
+
+TEST(BallClearance, SeesTheCloudsPointsBeyondTheEdge) {
+  // A ball beyond the cloud's edge (no height field under it) still meets the edge points.
+  auto cloud = plane_cloud();
+  HeightField surface(cloud);
+  BallClearance clearance(surface, cloud, 2.0);
+  const Eigen::Vector3d edge(10, 0, plane_z(10, 0));
+  const Eigen::Vector3d centre = edge + Eigen::Vector3d(1.0, 0, 1.0);
+  auto res = clearance(centre, centre);
+  EXPECT_FALSE(res.on_surface);
+  double nearest = INFINITY;  // brute force over the cloud
+  for (const auto& q : cloud) nearest = std::min(nearest, (q - centre).norm());
+  EXPECT_LT(nearest, std::sqrt(2.0));
+  EXPECT_NEAR(res.clearance, nearest - 2.0, 1e-12);
+}
+
+TEST(GougeGuard, LeavesAPathOnTheSurfaceAlone) {
+  auto cloud = plane_cloud();
+  HeightField surface(cloud);
+  BallClearance clearance(surface, cloud, 2.0);
+  const Toolpath path = plane_pass(0.5);
+  auto res = guard_gouges(path, clearance, {});
+  ASSERT_EQ(res.path.passes[0].contact.size(), path.passes[0].contact.size());
+  for (std::size_t i = 0; i < path.passes[0].contact.size(); ++i)
+    EXPECT_EQ(res.path.passes[0].contact[i], path.passes[0].contact[i]);
+  EXPECT_EQ(res.report["lifted_positions"], 0);
+  EXPECT_EQ(res.report["inserted_positions"], 0);
+  EXPECT_EQ(res.report["positions_checked"], 21);
+  EXPECT_EQ(res.report["moves_checked"], 20);
+  EXPECT_TRUE(res.report["warnings"].empty());
+}
+
+TEST(GougeGuard, LiftsAPositionThatCutsInUntilTheBallTouches) {
+  auto cloud = plane_cloud();
+  HeightField surface(cloud);
+  BallClearance clearance(surface, cloud, 2.0);
+  // point 10 sunk 0.05 mm into the plane: more than the tolerance e/4 = 0.0025
+  const Toolpath path = plane_pass(0.5, 10, 0.05);
+  auto res = guard_gouges(path, clearance, {});
+  const auto& p = res.path.passes[0];
+  ASSERT_EQ(p.contact.size(), path.passes[0].contact.size());
+  // lifted along z back onto the plane: the ball centre is r above it along the normal again
+  const Eigen::Vector3d c = res.path.centre(p.contact[10], p.normal[10]);
+  EXPECT_NEAR(c.z() - plane_z(c.x(), c.y()), 2.0 / kPlaneNormal.z(), 1e-6);
+  EXPECT_NEAR((p.normal[10] - kPlaneNormal).norm(), 0, 1e-6);
+  EXPECT_NEAR(clearance(res.path.centre(p.contact[10], p.normal[10]), p.contact[10]).clearance, 0, 1e-6);
+  EXPECT_EQ(res.report["lifted_positions"], 1);
+  EXPECT_NEAR(res.report["deepest_cut_in"].get<double>(), 0.05, 1e-6);
+  // the lift is along z: 0.05 / n_z
+  EXPECT_NEAR(res.report["highest_lift"].get<double>(), 0.05 / kPlaneNormal.z(), 1e-6);
+  ASSERT_EQ(res.report["warnings"].size(), 1u);
+  EXPECT_EQ(res.report["warnings"][0].get<std::string>().rfind("1 tool positions (0 of them added in the middle of moves) were lifted by up to 0.0525 mm", 0), 0u);
+  // a sink within the tolerance stays
+  auto small = guard_gouges(plane_pass(0.5, 10, 0.002), clearance, {});
+  EXPECT_EQ(small.report["lifted_positions"], 0);
+}
+
+TEST(GougeGuard, SplitsAMoveWhoseMiddleCutsIn) {
+  // Two contacts 8 mm apart on a sphere of radius 30: the straight centre move sags by about
+  // 8^2 / (8 (30 + 2)) = 0.25 mm into it; the guard inserts lifted points until every move's
+  // quarter points are within the chord tolerance.
+  auto cloud = cap_cloud();
+  HeightField surface(cloud);
+  BallClearance clearance(surface, cloud, 2.0);
+  Toolpath path;
+  path.tool_radius = 2;
+  path.chord_error = 0.01;
+  ToolpathPass p;
+  for (double x : {-4.0, 4.0}) {
+    p.contact.push_back(cap_point(x, 0));
+    p.normal.push_back(cap_normal(x, 0));
+  }
+  path.passes.push_back(p);
+  GougeGuardOptions o;
+  o.max_splits = 8;
+  auto res = guard_gouges(path, clearance, o);
+  const auto& q = res.path.passes[0];
+  EXPECT_GT(q.contact.size(), 2u);
+  EXPECT_EQ(res.report["inserted_positions"].get<std::size_t>(), q.contact.size() - 2);
+  EXPECT_EQ(res.report["unresolved"], 0);
+  EXPECT_GT(res.report["deepest_cut_in"].get<double>(), 0.2);
+  for (std::size_t i = 0; i + 1 < q.contact.size(); ++i) {
+    const Eigen::Vector3d a = res.path.centre(q.contact[i], q.normal[i]);
+    const Eigen::Vector3d b = res.path.centre(q.contact[i + 1], q.normal[i + 1]);
+    for (double f : {0.0, 0.25, 0.5, 0.75}) {
+      const Eigen::Vector3d c = (1 - f) * a + f * b;
+      // exact distance to the sphere minus r
+      const double cl = (c - Eigen::Vector3d(0, 0, 5 - kR)).norm() - kR - 2.0;
+      EXPECT_GT(cl, -0.0095 - 1e-4) << i << " " << f;
+    }
+  }
+}
+
+TEST(GougeGuard, BadInputGetsClearErrors) {
+  auto cloud = plane_cloud();
+  HeightField surface(cloud);
+  BallClearance clearance(surface, cloud, 2.0);
+  Toolpath empty;
+  empty.tool_radius = 2;
+  try {
+    guard_gouges(empty, clearance, {});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "the tool path has no points");
+  }
+  Toolpath bad = plane_pass(1.0);
+  bad.passes[0].normal.pop_back();
+  try {
+    guard_gouges(bad, clearance, {});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "a pass has 11 points but 10 normals");
+  }
+  std::vector<Eigen::Vector3d> none;
+  EXPECT_THROW(BallClearance(surface, none, 2.0), std::invalid_argument);
+  EXPECT_THROW(BallClearance(surface, cloud, 0.0), std::invalid_argument);
+}
+
+TEST(GougeGuard, NodeReportsAndKeepsUV) {
+  PointCloud pc;
+  pc.points = plane_cloud();
+  auto out = test::run_node(*builtin_registry().find("path.gouge_guard"), {},
+                            {{"path", std::make_shared<const Toolpath>(plane_pass(0.5, 4, 0.1))},
+                             {"cloud", std::make_shared<const PointCloud>(pc)}});
+  auto path = std::dynamic_pointer_cast<const Toolpath>(out.at("toolpath"));
+  auto report = std::dynamic_pointer_cast<const Report>(out.at("report"));
+  ASSERT_TRUE(path && report);
+  EXPECT_EQ(report->data["lifted_positions"], 1);
+  EXPECT_EQ(path->passes[0].uv.size(), path->passes[0].contact.size());
+}
+
+}  // namespace
+}  // namespace scallop
