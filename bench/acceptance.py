@@ -29,7 +29,8 @@ def main():
     os.makedirs(args.work, exist_ok=True)
     rows, lines = [], []
     header = ("| surface | noise | graph | passes | verify scallop max (interior) | simulate scallop max (interior) "
-              "| sim/verify | gouge max | uncut | rs274 | rapids through part | efficiency L*/L | verify pass | plan s |")
+              "| sim/verify | gouge max | uncut | rs274 | rapids through part | efficiency L*/L | verify pass "
+              "| guard: lifted (highest lift mm) | plan s |")
     def emit(line):
         print(line, flush=True)
         lines.append(line)
@@ -60,7 +61,7 @@ def main():
                 gcode = os.path.join(out, "gcode.ngc")
                 if p.returncode != 0 or not os.path.exists(gcode):
                     err = (p.stderr.strip().splitlines() or ["?"])[-1]
-                    emit(f"| {surface} | {noise} | {graph} | FAILED: {err} |||||||||||")
+                    emit(f"| {surface} | {noise} | {graph} | FAILED: {err} ||||||||||||")
                     rows.append({"surface": surface, "noise": noise, "graph": graph, "error": err})
                     continue
                 vj = os.path.join(out, "verify.json")
@@ -70,15 +71,17 @@ def main():
                 v = json.load(open(vj)) if os.path.exists(vj) else {"error": "no report"}
                 sim = json.load(open(os.path.join(out, "report.json")))
                 plan = json.load(open(os.path.join(out, "plan_report.json")))
+                guard_path = os.path.join(out, "guard_report.json")
+                guard = json.load(open(guard_path)) if os.path.exists(guard_path) else {}
                 vs, ss = v.get("scallop_max_interior"), sim.get("scallop_max_interior")
                 ratio = f"{ss / vs:.4f}" if vs and ss else "-"
                 row = {"surface": surface, "noise": noise, "graph": graph, "passes": plan.get("passes"),
-                       "verify": v, "simulate": sim, "plan_seconds": plan_s}
+                       "verify": v, "simulate": sim, "guard": guard, "plan_seconds": plan_s}
                 rows.append(row)
                 emit(f"| {surface} | {noise} | {graph} | {plan.get('passes')} | {vs:.5f} | {ss:.5f} | {ratio} "
                       f"| {v.get('gouge_max', float('nan')):.5f} | {v.get('uncut_fraction')} | {v.get('gcode_valid')} "
                       f"| {v.get('rapids_through_part')} | {v.get('efficiency', float('nan')):.3f} | {v.get('pass')} "
-                      f"| {plan_s:.1f} |")
+                      f"| {guard.get('lifted_positions', '-')} ({guard.get('highest_lift', 0):.4f}) | {plan_s:.1f} |")
                 if args.docs and float(noise) == 0:
                     os.makedirs(args.docs, exist_ok=True)
                     for name in ("preview.png", "scallop_map.png"):

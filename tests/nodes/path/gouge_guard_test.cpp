@@ -126,6 +126,22 @@ TEST(GougeGuard, LiftsAPositionThatCutsInUntilTheBallTouches) {
   EXPECT_EQ(small.report["lifted_positions"], 0);
 }
 
+TEST(GougeGuard, LiftedBallsClearAnUncertainSurfaceByItsUncertainty) {
+  // every point known to +-0.01 mm: a lifted ball clears the estimate by 0.01, so a real surface
+  // 0.01 higher is touched, not cut
+  auto cloud = plane_cloud();
+  const std::vector<double> uncertainty(cloud.size(), 0.01);
+  HeightField surface(cloud, 20, &uncertainty);
+  BallClearance clearance(surface, cloud, 2.0);
+  auto res = guard_gouges(plane_pass(0.5, 10, 0.05), clearance, {});
+  const auto& p = res.path.passes[0];
+  const auto after = clearance(res.path.centre(p.contact[10], p.normal[10]), p.contact[10]);
+  EXPECT_NEAR(after.uncertainty, 0.01, 1e-12);
+  EXPECT_NEAR(after.clearance, 0.01, 1e-6);
+  EXPECT_EQ(res.report["lifted_positions"], 1);
+  EXPECT_NEAR(res.report["highest_lift"].get<double>(), 0.06 / kPlaneNormal.z(), 1e-6);
+}
+
 TEST(GougeGuard, SplitsAMoveWhoseMiddleCutsIn) {
   // Two contacts 8 mm apart on a sphere of radius 30: the straight centre move sags by about
   // 8^2 / (8 (30 + 2)) = 0.25 mm into it; the guard inserts lifted points until every move's
