@@ -12,7 +12,7 @@ namespace scallop {
 NodeDecl make_isoparametric_node() {
   NodeDecl d;
   d.type = "path.isoparametric";
-  d.version = 3;  // 3: margins for the cloud's uncertainty (surface_error)
+  d.version = 4;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field
   d.description =
       "iso-parametric finishing passes from a UV-mapped cloud: zig-zag on a rectangle map, "
       "concentric on a disk map; forward step from the chord error, side step from the scallop "

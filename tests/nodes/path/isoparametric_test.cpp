@@ -130,6 +130,8 @@ TEST(Isoparametric, FlatRectanglePassesAreStraightEvenAndCoverIt) {
   EXPECT_GT(r["side_formula"]["formula3_points"].get<int>(), 0);
   EXPECT_EQ(r["concave_regions"]["count"], 0);
   EXPECT_NEAR(r["side_interval"]["nominal_plane"].get<double>(), std::sqrt(8 * 3 * 0.01), 1e-12);
+  // the planner's fit and the cloud's height field agree on a plane: no margin for their gap
+  EXPECT_LT(r["surface_error"]["fit_gap_max"].get<double>(), 1e-9);
 }
 
 // A surface known only to +-delta: on a flat patch the margins have closed forms. With r = 3,
