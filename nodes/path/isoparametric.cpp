@@ -73,6 +73,7 @@ struct VertexInfo {
 struct Derivs {
   Eigen::Vector3d p, n, rs, rt, rss, rst, rtt;
   double uncertainty = 0;  // of the surface there (SurfaceSample::uncertainty)
+  double fit_gap = 0;      // Planner::fit_gap there
 };
 
 struct StripCheck {
@@ -132,12 +133,16 @@ struct Margins {
   double overcut;   // mm, the chord overcut allowed
   double stock;     // mm, how far the ball is kept above the estimate
 };
-Margins margins(const IsoparametricOptions& o, double uncertainty) {
+// fit_gap: how far the planner's fit lies from the cloud's height field there (see
+// Planner::fit_gap); it comes off the scallop limit (up to h/4), not off the chord budget (the
+// gouge guard downstream checks the ball against that height field).
+Margins margins(const IsoparametricOptions& o, double uncertainty, double fit_gap = 0) {
   Margins m;
   m.delta = std::max(o.surface_error, uncertainty);
+  const double h = o.scallop_height * o.safety_factor;
   // A quarter of delta more is kept off the scallop limit for the same reason as below (the
   // certificate's scallop on the noisy catalog ran up to 0.13 delta over the planner's).
-  m.scallop = o.scallop_height * o.safety_factor - 1.25 * m.delta;
+  m.scallop = h - std::max(1.25 * m.delta, std::min(fit_gap, 0.25 * h));
   m.overcut = std::max(0.25 * o.chord_error, 0.9 * o.chord_error - m.delta);
   // Half of delta more is kept off the gouge limit: fits of the same denoised cloud from other
   // neighbourhoods (post.simulate's height field) differ from the planner's by one or two of its
@@ -165,25 +170,24 @@ class Planner {
   double forward_min = kInf, forward_max = 0;
   int forward_floor_hits = 0;
 
-  // The surface at (s, t). Where the planner's fit and the cloud's height field disagree, the
-  // surface is known no better than that: the gap counts as uncertainty (the larger of the two),
-  // so the margins below cover the fit's own error (it grows where a fit over the (u, v) map
-  // straddles a corner or a squeezed part of the map; measured 0.002 mm beside a 110 degree
-  // corner of the freeform patch, a clean cloud, where the scallop came out 3 % over h).
-  SurfaceSample at(double s, double t) const {
-    SurfaceSample x = f_(co_.uv(s, t));
+  SurfaceSample at(double s, double t) const { return f_(co_.uv(s, t)); }
+  // How far the planner's fit lies from the cloud's height field (the certificate's model) at x,
+  // along the normal; 0 off the field. Where the two disagree the surface is known no better
+  // than that: the scallop limit keeps the gap as a margin (Margins). It grows where a fit over
+  // the (u, v) map straddles a corner or a squeezed part of the map: measured 0.002 mm beside a
+  // 110 degree corner of the freeform patch (a clean cloud), where the scallop came out 3 % over
+  // h without it.
+  double fit_gap(const SurfaceSample& x) const {
     double z;
     Eigen::Vector3d n;
-    if (model_ && model_->eval(x.position.x(), x.position.y(), z, n)) {
-      const double gap = std::abs(x.position.z() - z) * std::abs(x.normal.z());
-      x.uncertainty = std::max(x.uncertainty, gap);
-      double seen = model_gap_max_.load(std::memory_order_relaxed);
-      while (gap > seen && !model_gap_max_.compare_exchange_weak(seen, gap)) {
-      }
+    if (!model_ || !model_->eval(x.position.x(), x.position.y(), z, n)) return 0;
+    const double gap = std::abs(x.position.z() - z) * std::abs(x.normal.z());
+    double seen = fit_gap_max_.load(std::memory_order_relaxed);
+    while (gap > seen && !fit_gap_max_.compare_exchange_weak(seen, gap)) {
     }
-    return x;
+    return gap;
   }
-  double model_gap_max() const { return model_gap_max_.load(); }
+  double fit_gap_max() const { return fit_gap_max_.load(); }
   Margins margin(const SurfaceSample& x) const { return margins(o_, x.uncertainty); }
   // How far a cloud point may reach into the ball before it is lifted: `fraction` of e, and no
   // more than the real gouge allows when the point itself may be delta too low (0.9 e - 1.5 delta
@@ -218,6 +222,7 @@ class Planner {
     d.p = x.position;
     d.n = x.normal;
     d.uncertainty = x.uncertainty;
+    d.fit_gap = fit_gap(x);
     d.rs = (ps - ms) / (2 * hs);
     d.rt = (pt - mt) / (2 * ht);
     d.rss = (ps + ms - 2 * p0) / (hs * hs);
@@ -237,7 +242,7 @@ class Planner {
     const double kappa_s = v.formula4 ? normal_curvature(ff, 1, -ff.F / ff.G)
                                       : normal_curvature(ff, 1, 0);
     // the margin for the estimate's error, and the stock, come off the scallop allowed
-    const Margins m = margins(o_, d.uncertainty);
+    const Margins m = margins(o_, d.uncertainty, d.fit_gap);
     v.interval = side_interval(std::max(m.scallop - m.stock, 0.1 * h_), r_, kappa_s);
     const double rsn = std::sqrt(ff.E);
     v.ds = v.formula4 ? side_step_corrected(v.interval, rsn, theta)
@@ -524,7 +529,7 @@ class Planner {
         // kept for the certificate's own fit, see Margins)
         SurfaceSample w;
         g(fmax, &w);
-        best[i] = gmax + h_ - margin(w).scallop;
+        best[i] = gmax + h_ - margins(o_, w.uncertainty, fit_gap(w)).scallop;
         where[i] = w.position;
       }
     });
@@ -565,7 +570,7 @@ class Planner {
   const UVInterpolator& f_;
   const BallLifter& lifter_;
   const HeightField* model_;
-  mutable std::atomic<double> model_gap_max_{0};
+  mutable std::atomic<double> fit_gap_max_{0};
   Coords co_;
   const IsoparametricOptions& o_;
   double r_, h_, e_under_, hfd_, ls0_;
@@ -873,7 +878,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
                          {"stock_at_median", margins(o, delta_median).stock},
                          {"stock_at_max", margins(o, delta_max).stock},
                          {"too_uncertain_points", uncertain},
-                         {"fit_gap_max", planner.model_gap_max()}}},
+                         {"fit_gap_max", planner.fit_gap_max()}}},
       {"passes", passes.size()},
       {"points", points},
       {"contact_length", length},
