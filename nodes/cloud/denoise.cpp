@@ -255,6 +255,7 @@ int choose_denoise_k(double sigma, double tolerance) {
 }
 
 constexpr int kMaxWiden = 2;
+constexpr double kRefitAgreement = 2;  // how many noise widths a wider rim refit may move a point
 
 DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vector3d>& N,
                           const DenoiseOptions& o, const Neighborhoods* nbrs,
@@ -394,6 +395,9 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
         for (std::size_t i = 0; i < n; ++i)
           if (spread[i] > target && spread[i] < 1.0) rim.push_back(i);
         if (!rim.empty() && !index) index = std::make_unique<KnnIndex>(X);
+        if (!rim.empty() && res.noise_sigma < 0) res.noise_sigma = estimate_noise_sigma(P);
+        const double sigma = res.noise_sigma;
+        std::atomic<std::size_t> biased{0};
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rim.size(), 16), [&](const auto& range) {
           Scratch& s = scratch.local();
           for (std::size_t r = range.begin(); r != range.end(); ++r) {
@@ -401,11 +405,22 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
             for (int m = 2; m <= kMaxWiden && spread[i] > target; ++m) {
               const int kk = static_cast<int>(std::min<std::size_t>(n - 1, std::size_t(m) * k));
               const Projection p = fit_point(i, s, kk);
-              if (p.moved && p.spread < spread[i]) store(i, p);
+              if (!p.moved || !(p.spread < spread[i])) continue;
+              // The wider one-sided fit is less noisy but more biased where the rim is curved
+              // (bias grows with the cube of the width). Noise alone moves it off the narrower
+              // fit by about sigma * sqrt(spread_narrow^2 - spread_wide^2) (nested least
+              // squares); a larger move is bias, and the narrower, honestly less certain, fit stays.
+              const double noise = sigma * std::sqrt(spread[i] * spread[i] - p.spread * p.spread);
+              if (std::abs((p.point - next[i]).dot(next_normals[i])) > kRefitAgreement * noise) {
+                ++biased;
+                break;
+              }
+              store(i, p);
             }
           }
         });
         res.refitted += rim.size();
+        res.refits_biased += biased;
       }
     }
     res.points.swap(next);

@@ -46,6 +46,8 @@ struct DenoiseResult {
   std::vector<Eigen::Vector3d> normals;  // #P unit normals, or empty when !set_normals
   std::size_t kept = 0;  // points left in place in the last iteration (degenerate neighbourhood)
   std::size_t refitted = 0;  // rim points refitted from a wider neighbourhood (all iterations)
+  std::size_t refits_biased = 0;  // of those, kept with the narrower fit: the wider one moved
+                                  // the point further than noise can (a curved rim)
   int k = 0;               // neighbours per fit actually used (0 when skipped)
   double noise_sigma = -1; // mm; estimated noise (estimate_noise_sigma)
   bool skipped = false;    // automatic mode found noise_sigma < tolerance: points left as they are

@@ -12,7 +12,7 @@ namespace scallop {
 NodeDecl make_denoise_node() {
   NodeDecl d;
   d.type = "cloud.denoise";
-  d.version = 3;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty
+  d.version = 4;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused
   d.description =
       "moving-least-squares denoising: each point projected along its local normal onto a "
       "weighted quadric fitted to its neighbours (parallel)";
@@ -26,7 +26,7 @@ NodeDecl make_denoise_node() {
               "keep as a margin")
       .output("report", "Report",
               "{noise_sigma (mm, estimated), k (used; 0 when skipped), moved_rms (mm), skipped, "
-              "rim_refitted (points refitted from a wider neighbourhood), uncertainty {median, "
+              "rim_refitted (points refitted from a wider neighbourhood), rim_refits_biased (of those, kept with the narrower fit because the wider one was biased), uncertainty {median, "
               "max, max_at, factor}: how far the points may still be off the real surface}")
       .param_int("k", 0, 0, 512, "",
                  "neighbours in each fit; more averages more noise away (noise in the normal "
@@ -83,6 +83,7 @@ NodeDecl make_denoise_node() {
                    {"moved_rms", r.moved_rms},
                    {"skipped", r.skipped},
                    {"rim_refitted", r.refitted},
+                   {"rim_refits_biased", r.refits_biased},
                    {"uncertainty", {{"median", sorted[sorted.size() / 2]},
                                     {"max", uncertainty[worst]},
                                     {"max_at", {at.x(), at.y(), at.z()}},

@@ -57,7 +57,20 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     s = next;
     if (done) break;
   }
-  if (found && impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/false, &res.uncertainty)) {
+  // On the patch, or within one cloud spacing beyond its outermost points: the part's edge lies
+  // there (a cloud's last points sit about half a spacing inside it), and the field's
+  // extrapolation that far is the best estimate of it.
+  auto near_cloud = [&] {
+    std::uint32_t j;
+    double d2;
+    nanoflann::KNNResultSet<double, std::uint32_t> one(1);
+    one.init(&j, &d2);
+    const double q[3] = {s.x(), s.y(), 0};
+    impl_->tree.findNeighbors(one, q, nanoflann::SearchParams(32, 0, false));
+    return d2 <= impl_->surface.spacing() * impl_->surface.spacing() &&
+           impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/true, &res.uncertainty);
+  };
+  if (found && (impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/false, &res.uncertainty) || near_cloud())) {
     res.on_surface = true;
     res.foot = Eigen::Vector3d(s.x(), s.y(), z);
     res.normal = n;

@@ -117,6 +117,29 @@ TEST(Denoise, RimRefitsEqualiseTheStandardError) {
   double rms = 0;
   for (const auto& p : after.points) rms += p.z() * p.z();
   EXPECT_LT(std::sqrt(rms / P.size()), 0.3 * 0.02);
+  // on a plane a wider fit has no bias: few refits are refused, by noise alone
+  EXPECT_LT(after.refits_biased, after.refitted / 10);
+}
+
+// Where the rim is curved, the wider one-sided fit is biased; such refits are refused and the
+// point keeps its narrower fit and its larger standard error, so the error stays within the
+// uncertainty at the rim too. Surface z = 2 sin(x / 6): no quadric follows it over a wide
+// one-sided neighbourhood.
+TEST(Denoise, BiasedRimRefitsAreRefused) {
+  auto P = noisy_plane(0, 0, 0, 40, 30, 6000, 0.02, true, 23);
+  for (auto& p : P) p.z() += 2 * std::sin(p.x() / 6);
+  DenoiseOptions o;
+  o.k = 128;
+  const DenoiseResult r = mls_denoise(P, {}, o);
+  EXPECT_GT(r.refits_biased, 0u);
+  double worst = 0;
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    const Vector3d& q = r.points[i];
+    const double slope = std::cos(q.x() / 6) / 3;
+    const double err = (q.z() - 2 * std::sin(q.x() / 6)) / std::sqrt(1 + slope * slope);
+    worst = std::max(worst, std::abs(err) / r.standard_error[i]);
+  }
+  EXPECT_LT(worst, kUncertaintyFactor);
 }
 
 TEST(Denoise, ExactPlaneIsKeptExactly) {

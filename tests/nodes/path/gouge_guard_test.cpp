@@ -85,6 +85,20 @@ TEST(BallClearance, SeesTheCloudsPointsBeyondTheEdge) {
   EXPECT_NEAR(res.clearance, nearest - 2.0, 1e-12);
 }
 
+TEST(BallClearance, CoversTheEdgeBandWithinASpacingOfTheCloud) {
+  // The part's edge lies about half a spacing beyond a cloud's outermost points: a foot there is
+  // on the surface (the field extrapolated), one farther out is not.
+  auto cloud = plane_cloud();
+  HeightField surface(cloud);
+  BallClearance clearance(surface, cloud, 2.0);
+  for (double beyond : {0.1, 1.0}) {
+    const Eigen::Vector3d foot(10 + beyond, 0, plane_z(10 + beyond, 0));
+    auto res = clearance(foot + 1.95 * kPlaneNormal, foot);
+    EXPECT_EQ(res.on_surface, beyond < surface.spacing()) << beyond;
+    if (res.on_surface) EXPECT_NEAR(res.clearance, -0.05, 1e-6);
+  }
+}
+
 TEST(GougeGuard, LeavesAPathOnTheSurfaceAlone) {
   auto cloud = plane_cloud();
   HeightField surface(cloud);
