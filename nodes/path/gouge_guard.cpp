@@ -211,19 +211,8 @@ std::string mm(double v) {
 
 GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearance,
                               const GougeGuardOptions& o) {
+  path.check_passes();
   const double r = path.tool_radius, e = path.chord_error;
-  if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
-  bool any = false;
-  for (const auto& p : path.passes) {
-    if (p.normal.size() != p.contact.size())
-      throw std::invalid_argument("a pass has " + std::to_string(p.contact.size()) + " points but " +
-                                  std::to_string(p.normal.size()) + " normals");
-    for (std::size_t i = 0; i < p.contact.size(); ++i)
-      if (!p.contact[i].allFinite() || !p.normal[i].allFinite())
-        throw std::invalid_argument("the tool path has a non-finite point");
-    any |= !p.contact.empty();
-  }
-  if (!any) throw std::invalid_argument("the tool path has no points");
   const double tol = o.tolerance > 0 ? o.tolerance : 0.25 * e;
   const double chord_tol = o.chord_tolerance > 0 ? o.chord_tolerance : 0.95 * e;
   if (o.max_splits < 0) throw std::invalid_argument("max_splits must be >= 0");

@@ -47,22 +47,11 @@ double largest_stepover(const Toolpath& path) {
 
 LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>& surface_in,
                        const LinkOptions& o) {
+  path.check_passes();
   const double r = path.tool_radius;
-  if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
   std::vector<Eigen::Vector3d> own;
-  bool any = false;
-  for (const auto& p : path.passes) {
-    if (p.normal.size() != p.contact.size())
-      throw std::invalid_argument("a pass has " + std::to_string(p.contact.size()) + " points but " +
-                                  std::to_string(p.normal.size()) + " normals");
-    for (std::size_t i = 0; i < p.contact.size(); ++i) {
-      if (!p.contact[i].allFinite() || !p.normal[i].allFinite())
-        throw std::invalid_argument("the tool path has a non-finite point");
-      if (surface_in.empty()) own.push_back(p.contact[i]);
-    }
-    any |= !p.contact.empty();
-  }
-  if (!any) throw std::invalid_argument("the tool path has no points");
+  if (surface_in.empty())
+    for (const auto& p : path.passes) own.insert(own.end(), p.contact.begin(), p.contact.end());
   const std::vector<Eigen::Vector3d>& surface = surface_in.empty() ? own : surface_in;
 
   const double tol = o.tolerance > 0 ? o.tolerance : std::max(path.chord_error, 1e-3);

@@ -76,4 +76,19 @@ ValuePtr LinkedPath::deserialize(std::istream& in) {
   return l;
 }
 
+void Toolpath::check_passes() const {
+  if (!(tool_radius > 0)) throw std::invalid_argument("tool radius must be > 0");
+  bool any = false;
+  for (const auto& p : passes) {
+    if (p.normal.size() != p.contact.size())
+      throw std::invalid_argument("a pass has " + std::to_string(p.contact.size()) + " points but " +
+                                  std::to_string(p.normal.size()) + " normals");
+    for (std::size_t i = 0; i < p.contact.size(); ++i)
+      if (!p.contact[i].allFinite() || !p.normal[i].allFinite())
+        throw std::invalid_argument("the tool path has a non-finite point");
+    any |= !p.contact.empty();
+  }
+  if (!any) throw std::invalid_argument("the tool path has no points");
+}
+
 }  // namespace scallop

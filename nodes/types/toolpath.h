@@ -33,6 +33,9 @@ struct Toolpath final : Value {
     return centre(contact, normal) - Eigen::Vector3d(0, 0, tool_radius);
   }
 
+  // Throws std::invalid_argument for r <= 0, a pass whose normals do not match its points, a
+  // non-finite point or normal, or no point at all: what every consumer of passes needs.
+  void check_passes() const;
   std::string type_name() const override { return "Toolpath"; }
   void serialize(std::ostream& out) const override;
   static ValuePtr deserialize(std::istream& in);
