@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <nanoflann.hpp>
@@ -11,6 +12,8 @@
 #include "nodes/cloud/kd_tree.h"
 
 namespace scallop {
+
+constexpr double kPi = 3.14159265358979323846;
 
 struct HeightField::Impl {
   std::vector<Eigen::Vector2d> xy;
@@ -24,6 +27,12 @@ struct HeightField::Impl {
 
   // The mean uncertainty of the points idx[0..got) (0 without uncertainties).
   double mean_uncertainty(const std::uint32_t* idx, std::size_t got) const;
+  // The widest angle (radians) between neighbouring directions from (x, y) to the points
+  // idx[0..got).
+  double widest_gap(double x, double y, const std::uint32_t* idx, std::size_t got) const;
+  // How surely (x, y) lies beyond the cloud's edge: 0 inside, 1 where the points around it all
+  // lie to one side; idx[0..got) its nearest points (a first look).
+  double beyond_edge(double x, double y, const std::uint32_t* idx, std::size_t got) const;
   bool local_fit(double x, double y, const std::uint32_t* idx, std::size_t got, int k, double& z,
                  Eigen::Vector3d& normal) const;
 };
@@ -209,7 +218,7 @@ HeightField::HeightField(const std::vector<Eigen::Vector3d>& P, int k,
     r8.push_back(std::sqrt(d2[got - 1]));
   }
   std::nth_element(r8.begin(), r8.begin() + r8.size() / 2, r8.end());
-  spacing_ = r8[r8.size() / 2] * std::sqrt(3.14159265358979 / (kk - 1));
+  spacing_ = r8[r8.size() / 2] * std::sqrt(kPi / (kk - 1));
 }
 
 HeightField::~HeightField() { delete impl_; }
@@ -221,11 +230,34 @@ double HeightField::Impl::mean_uncertainty(const std::uint32_t* idx, std::size_t
   return sum / got;
 }
 
-double HeightField::uncertainty(double x, double y) const {
-  std::uint32_t idx[64];
+double HeightField::Impl::widest_gap(double x, double y, const std::uint32_t* idx, std::size_t got) const {
+  std::array<double, 64> angle;
+  for (std::size_t j = 0; j < got; ++j) angle[j] = std::atan2(xy[idx[j]].y() - y, xy[idx[j]].x() - x);
+  std::sort(angle.begin(), angle.begin() + got);
+  double widest = angle[0] + 2 * kPi - angle[got - 1];
+  for (std::size_t j = 1; j < got; ++j) widest = std::max(widest, angle[j] - angle[j - 1]);
+  return widest;
+}
+
+double HeightField::Impl::beyond_edge(double x, double y, const std::uint32_t* idx, std::size_t got) const {
+  // The widest angle between neighbouring directions to the 64 nearest points, as boundary
+  // detection uses it: at least pi beyond a straight edge; at most 0.41 pi measured inside the
+  // freeform patch's denoised 50k-point cloud, in 1808 holes whose nearest point was 0.6 to
+  // 0.9 mm away (with the 20 nearest points, up to pi: too few to tell a hole from an edge).
+  constexpr double kFrom = 0.6 * kPi, kTo = 0.9 * kPi;
+  if (widest_gap(x, y, idx, got) < kFrom) return 0;  // fewer points cannot close a wide gap
+  std::uint32_t wide[64];
   double d2[64];
   const double q[2] = {x, y};
-  return impl_->mean_uncertainty(idx, impl_->tree->knnSearch(q, std::min(k_, 64), idx, d2));
+  const double widest = widest_gap(x, y, wide, tree->knnSearch(q, 64, wide, d2));
+  return std::clamp((widest - kFrom) / (kTo - kFrom), 0.0, 1.0);
+}
+
+double HeightField::uncertainty(double x, double y) const {
+  double z, u = 0;
+  Eigen::Vector3d n;
+  eval(x, y, z, n, /*force=*/true, &u);
+  return u;
 }
 
 bool HeightField::inside(double x, double y) const {
@@ -242,7 +274,16 @@ bool HeightField::eval(double x, double y, double& z, Eigen::Vector3d& normal, b
   const double q[2] = {x, y};
   std::size_t got = impl_->tree->knnSearch(q, std::min(k, 64), idx, d2);
   if (got == 0) return false;
-  if (uncertainty) *uncertainty = impl_->mean_uncertainty(idx, got);
+  if (uncertainty) {
+    *uncertainty = impl_->mean_uncertainty(idx, got);
+    // Beyond the edge, a gap in the data (the nearest point farther than the half spacing a
+    // well-sampled edge has) is an extrapolation, known the less the farther it reaches:
+    // measured on the noisy freeform patch (sigma 0.02), the fit 0.9 mm from its nearest rim
+    // points was 0.0195 mm low where they were known to 0.0115. Holes inside the patch are
+    // interpolated across and keep the points' uncertainty.
+    const double gap = std::sqrt(d2[0]) - 0.5 * spacing_;
+    if (*uncertainty > 0 && gap > 0) *uncertainty *= 1 + impl_->beyond_edge(x, y, idx, got) * gap / spacing_;
+  }
   if (!force) {
     if (d2[0] > 2.25 * spacing_ * spacing_) return false;
     // Beyond the edge of the cloud the neighbours are all on one side: their centroid moves

@@ -23,12 +23,14 @@ class HeightField {
   // Evaluates at (x, y); false (and nothing evaluated) when (x, y) is outside the patch: no cloud
   // point within 1.5 × the mean cloud spacing, or the fitted neighbours lie to one side (their
   // centroid farther than half their radius from (x, y)), unless `force`.
-  // uncertainty, when given, gets uncertainty(x, y) from the same neighbours.
+  // uncertainty, when given, gets the mean uncertainty of the same neighbours, grown at the edge
+  // where the nearest point is d > spacing / 2 away (a gap z is extrapolated across): by the factor
+  // 1 + (d − spacing / 2) / spacing beyond the edge, fading to 1 inside it.
   bool eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force = false,
             double* uncertainty = nullptr) const;
   bool inside(double x, double y) const;
-  // How far the surface at (x, y) may be off the real one (mm): the mean uncertainty of the k
-  // nearest points in xy; 0 without uncertainties.
+  // How far the surface at (x, y) may be off the real one (mm), as eval gives it; 0 without
+  // uncertainties.
   double uncertainty(double x, double y) const;
   double uncertainty_max() const { return uncertainty_max_; }
   double spacing() const { return spacing_; }  // mean cloud spacing in xy (mm)

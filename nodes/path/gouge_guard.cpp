@@ -57,9 +57,10 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     s = next;
     if (done) break;
   }
-  // On the patch, or within one cloud spacing beyond its outermost points: the part's edge lies
-  // there (a cloud's last points sit about half a spacing inside it), and the field's
-  // extrapolation that far is the best estimate of it.
+  // On the patch, or within two cloud spacings of its outermost points: the part's edge lies
+  // there (a cloud's last points sit about half a spacing inside it, more where the sample left a
+  // gap at the rim), and the field's extrapolation that far, with its grown uncertainty, is the
+  // best estimate of it.
   auto near_cloud = [&] {
     std::uint32_t j;
     double d2;
@@ -67,7 +68,7 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     one.init(&j, &d2);
     const double q[3] = {s.x(), s.y(), 0};
     impl_->tree.findNeighbors(one, q, nanoflann::SearchParams(32, 0, false));
-    return d2 <= impl_->surface.spacing() * impl_->surface.spacing() &&
+    return d2 <= 4 * impl_->surface.spacing() * impl_->surface.spacing() &&
            impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/true, &res.uncertainty);
   };
   if (found && (impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/false, &res.uncertainty) || near_cloud())) {
@@ -112,20 +113,24 @@ class PassGuard {
   PassGuard(const BallClearance& clearance, double r, double tol, double chord_tol, int max_splits)
       : clearance_(clearance), r_(r), tol_(tol), chord_tol_(chord_tol), max_splits_(max_splits) {}
 
-  // Lifts the sample's ball until it only touches the surface (clears it by the surface's
-  // uncertainty there, so that a real surface that much higher is not cut either), when it cuts
-  // in by more than `allowed`; true when it was lifted.
+  // How far the ball reaches into the band it must clear: the surface raised by its uncertainty
+  // (a real surface that much higher must not be cut either); > 0: too deep.
+  static double reach(const BallClearance::Result& x) {
+    return (x.on_surface ? x.uncertainty : 0.0) - x.clearance;
+  }
+
+  // Lifts the sample's ball until it only touches that band, when it reaches more than
+  // `allowed` into it; true when it was lifted.
   bool lift_if_needed(Sample& s, double allowed, Tally& t) const {
     Eigen::Vector3d c = s.contact + r_ * s.normal;
     auto res = clearance_(c, s.contact);
-    if (!(res.clearance < -allowed)) return false;
-    if (-res.clearance > t.deepest) t.deepest = -res.clearance, t.deepest_at = s.contact;
+    if (!(reach(res) > allowed)) return false;
+    if (reach(res) > t.deepest) t.deepest = reach(res), t.deepest_at = s.contact;
     const double z0 = c.z();
-    auto target = [](const BallClearance::Result& x) { return x.on_surface ? x.uncertainty : 0.0; };
-    for (int it = 0; it < 8 && res.clearance < target(res) - 1e-6; ++it) {
+    for (int it = 0; it < 8 && reach(res) > 1e-6; ++it) {
       // raising the centre by dz moves it away from a surface with normal n by dz * n_z
       const double nz = res.on_surface ? std::max(res.normal.z(), 0.2) : 0.5;
-      c.z() += (target(res) - res.clearance) / nz;
+      c.z() += reach(res) / nz;
       res = clearance_(c, res.on_surface ? res.foot : s.contact);
     }
     if (res.on_surface && (c - res.foot).norm() > 0) {
@@ -135,7 +140,7 @@ class PassGuard {
     } else {
       s.contact += Eigen::Vector3d(0, 0, c.z() - z0);
     }
-    if (res.clearance < target(res) - 1e-6) ++t.unresolved;
+    if (reach(res) > 1e-6) ++t.unresolved;
     if (c.z() - z0 > t.highest_lift) t.highest_lift = c.z() - z0, t.highest_lift_at = s.contact;
     ++t.lifted;
     return true;
@@ -147,16 +152,16 @@ class PassGuard {
     const Eigen::Vector3d ca = a.contact + r_ * a.normal, cb = b.contact + r_ * b.normal;
     // the quarter points, and points at most kProbeStep apart on long moves
     const int probes = std::clamp(static_cast<int>(std::ceil((cb - ca).norm() / kProbeStep)), 4, 64);
-    double worst = INFINITY, at = 0.5;
+    double worst = -INFINITY, at = 0.5;
     for (int j = 1; j < probes; ++j) {
       const double f = double(j) / probes;
-      const double cl = clearance_((1 - f) * ca + f * cb, (1 - f) * a.contact + f * b.contact).clearance;
-      if (cl < worst) worst = cl, at = f;
+      const double in = reach(clearance_((1 - f) * ca + f * cb, (1 - f) * a.contact + f * b.contact));
+      if (in > worst) worst = in, at = f;
     }
-    if (!(worst < -chord_tol_)) return;
+    if (!(worst > chord_tol_)) return;
     if (depth >= max_splits_) {
       ++t.unresolved;
-      if (-worst > t.deepest) t.deepest = -worst, t.deepest_at = 0.5 * (a.contact + b.contact);
+      if (worst > t.deepest) t.deepest = worst, t.deepest_at = 0.5 * (a.contact + b.contact);
       return;
     }
     Sample m;
@@ -254,7 +259,7 @@ GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearan
                        " of them added in the middle of moves) were lifted by up to " + mm(total.highest_lift) +
                        " mm (most near x " + mm(total.highest_lift_at.x()) + ", y " + mm(total.highest_lift_at.y()) +
                        ") where the planned ball would have cut up to " + mm(total.deepest) +
-                       " mm into the cloud's surface; the path leaves that much stock there");
+                       " mm into the cloud's surface (raised by its uncertainty); the path leaves that much stock there");
   if (total.unresolved > 0)
     warnings.push_back(std::to_string(total.unresolved) + " places still cut in after lifting and " +
                        std::to_string(o.max_splits) + " halvings of their moves (deepest near x " +

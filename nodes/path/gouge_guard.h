@@ -8,10 +8,12 @@
 // surface by more than the chord budget and the ball cuts into the part. The guard measures each
 // ball centre c against two independent witnesses: the height field fitted to the cloud in xy
 // (HeightField, what post.simulate certifies against), via the foot point of c on it, and the
-// cloud's points themselves within r of c. clearance(c) = distance to the surface − r; a
-// position with clearance < −tolerance is lifted along +z to clearance 0 (to the surface's
-// uncertainty δ when the cloud has one: the ball then clears a real surface δ higher), and a move whose
-// quarter points (and points 0.5 mm apart on longer moves) have clearance < −chord_tolerance
+// cloud's points themselves within r of c. clearance(c) = distance to the surface − r, and the
+// ball must clear the surface by its uncertainty δ there (0 on a clean cloud; grown beyond the
+// cloud's edge, where the field is extrapolated): the real surface may be δ higher. A position
+// reaching more than `tolerance` into that band (δ − clearance > tolerance) is lifted along +z
+// until it clears it by δ (what post.simulate's gouge bound counts), and a move whose quarter
+// points (and points 0.5 mm apart on longer moves) reach more than chord_tolerance into it
 // gets a lifted point inserted at its worst one
 // (and its halves are checked again, up to max_splits times). A lifted ball leaves stock: the
 // report says where and how much, so a planner's weak spot is never hidden.
@@ -41,8 +43,8 @@ class BallClearance {
     double clearance = INFINITY;  // mm: distance from the centre to the surface − r (< 0: gouge)
     Eigen::Vector3d foot;         // nearest surface point found (valid when on_surface)
     Eigen::Vector3d normal;       // its upward unit normal (valid when on_surface)
-    bool on_surface = false;      // the foot point lies on the patch, or less than a cloud
-                                  // spacing beyond its outermost points
+    bool on_surface = false;      // the foot point lies on the patch, or less than two cloud
+                                  // spacings beyond its outermost points
     double uncertainty = 0;       // mm the surface there may be off the real one (on_surface)
   };
   // centre  ball centre; hint  a surface point near the contact (where the foot search starts).
@@ -55,8 +57,8 @@ class BallClearance {
 };
 
 struct GougeGuardOptions {
-  double tolerance = 0;        // mm a planned position may cut in before it is lifted; <= 0: e/4
-  double chord_tolerance = 0;  // mm a move may cut in before a point is inserted; <= 0: 0.95 e
+  double tolerance = 0;        // mm a planned position may reach in before it is lifted; <= 0: e/4
+  double chord_tolerance = 0;  // mm a move may reach in before a point is inserted; <= 0: 0.95 e
   int max_splits = 3;          // how often a move may be halved
   std::function<void(double)> progress;
 };

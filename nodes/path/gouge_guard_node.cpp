@@ -12,7 +12,7 @@ namespace scallop {
 NodeDecl make_gouge_guard_node() {
   NodeDecl d;
   d.type = "path.gouge_guard";
-  d.version = 1;
+  d.version = 2;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge
   d.description =
       "checks every planned ball position and the middle of every move against the cloud's "
       "surface (its height field and its points); lifts the ball where it would cut in and "

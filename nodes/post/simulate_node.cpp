@@ -12,7 +12,8 @@ namespace scallop {
 NodeDecl make_simulate_node() {
   NodeDecl d;
   d.type = "post.simulate";
-  d.version = 3;  // 3: scallop and gouge are bounds that include the cloud's uncertainty
+  d.version = 4;  // 3: scallop and gouge are bounds that include the cloud's uncertainty
+                  // 4: the uncertainty grows at gaps beyond the cloud's edge
   d.description = "cutting simulation over the cloud's surface: scallop, gouge and uncut area (the certificate)";
   d.input("path", "Toolpath", "planned passes (give this or 'linked')", false)
       .input("linked", "LinkedPath", "linked machine moves (give this or 'path')", false)

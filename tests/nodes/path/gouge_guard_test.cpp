@@ -85,7 +85,7 @@ TEST(BallClearance, SeesTheCloudsPointsBeyondTheEdge) {
   EXPECT_NEAR(res.clearance, nearest - 2.0, 1e-12);
 }
 
-TEST(BallClearance, CoversTheEdgeBandWithinASpacingOfTheCloud) {
+TEST(BallClearance, CoversTheEdgeBandWithinTwoSpacingsOfTheCloud) {
   // The part's edge lies about half a spacing beyond a cloud's outermost points: a foot there is
   // on the surface (the field extrapolated), one farther out is not.
   auto cloud = plane_cloud();
@@ -94,7 +94,7 @@ TEST(BallClearance, CoversTheEdgeBandWithinASpacingOfTheCloud) {
   for (double beyond : {0.1, 1.0}) {
     const Eigen::Vector3d foot(10 + beyond, 0, plane_z(10 + beyond, 0));
     auto res = clearance(foot + 1.95 * kPlaneNormal, foot);
-    EXPECT_EQ(res.on_surface, beyond < surface.spacing()) << beyond;
+    EXPECT_EQ(res.on_surface, beyond < 2 * surface.spacing()) << beyond;
     if (res.on_surface) EXPECT_NEAR(res.clearance, -0.05, 1e-6);
   }
 }
@@ -147,13 +147,49 @@ TEST(GougeGuard, LiftedBallsClearAnUncertainSurfaceByItsUncertainty) {
   const std::vector<double> uncertainty(cloud.size(), 0.01);
   HeightField surface(cloud, 20, &uncertainty);
   BallClearance clearance(surface, cloud, 2.0);
-  auto res = guard_gouges(plane_pass(0.5, 10, 0.05), clearance, {});
+  // planned with 0.01 of stock (the planner's margin), one position sunk 0.05 below the surface
+  auto planned = plane_pass(0.5, 10, 0.06);
+  for (auto& c : planned.passes[0].contact) c += 0.01 * kPlaneNormal;
+  auto res = guard_gouges(planned, clearance, {});
   const auto& p = res.path.passes[0];
   const auto after = clearance(res.path.centre(p.contact[10], p.normal[10]), p.contact[10]);
   EXPECT_NEAR(after.uncertainty, 0.01, 1e-12);
   EXPECT_NEAR(after.clearance, 0.01, 1e-6);
   EXPECT_EQ(res.report["lifted_positions"], 1);
+  EXPECT_NEAR(res.report["deepest_cut_in"].get<double>(), 0.06, 1e-6);
   EXPECT_NEAR(res.report["highest_lift"].get<double>(), 0.06 / kPlaneNormal.z(), 1e-6);
+  // planned touching the estimate, every ball reaches 0.01 into the band and is lifted
+  EXPECT_EQ(guard_gouges(plane_pass(0.5), clearance, {}).report["lifted_positions"], 21);
+}
+
+TEST(GougeGuard, BeyondTheCloudsEdgeTheExtrapolationIsLessCertain) {
+  // A ball whose foot lies 0.4 mm beyond the last points of a cloud known to +-0.01 must clear
+  // the extrapolated plane by 0.01 (1 + (0.4 - spacing / 2) / spacing); a ball planned with the
+  // interior's 0.01 of stock there is lifted. On and inside the last points nothing grows.
+  auto cloud = plane_cloud();
+  const std::vector<double> uncertainty(cloud.size(), 0.01);
+  HeightField surface(cloud, 20, &uncertainty);
+  const double s = surface.spacing(), grown = 0.01 * (1 + (0.4 - 0.5 * s) / s);
+  for (double x : {5.0, 9.9, 10.0}) EXPECT_NEAR(surface.uncertainty(x, 0), 0.01, 1e-12) << x;
+  EXPECT_NEAR(surface.uncertainty(10.4, 0), grown, 1e-9);
+  BallClearance clearance(surface, cloud, 2.0);
+  Toolpath planned = plane_pass(0.5);
+  auto& p = planned.passes[0];
+  for (std::size_t i = 0; i < p.contact.size(); ++i) {
+    const double y = p.contact[i].x() / 10;
+    p.contact[i] = Eigen::Vector3d(10.4, y, plane_z(10.4, y)) + 0.01 * kPlaneNormal;
+  }
+  const auto before = clearance(planned.centre(p.contact[5], p.normal[5]), p.contact[5]);
+  ASSERT_TRUE(before.on_surface);
+  EXPECT_NEAR(before.clearance, 0.01, 1e-6);
+  EXPECT_NEAR(before.uncertainty, grown, 1e-6);
+  auto res = guard_gouges(planned, clearance, {});
+  EXPECT_EQ(res.report["lifted_positions"], p.contact.size());
+  const auto& q = res.path.passes[0];
+  const auto after = clearance(res.path.centre(q.contact[5], q.normal[5]), q.contact[5]);
+  // clears the band, by no more than the lift moves the foot (and so the band) along
+  EXPECT_GE(after.clearance, after.uncertainty - 1e-6);
+  EXPECT_NEAR(after.clearance, grown, 5e-4);
 }
 
 TEST(GougeGuard, SplitsAMoveWhoseMiddleCutsIn) {

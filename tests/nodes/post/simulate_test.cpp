@@ -142,10 +142,18 @@ TEST(Simulate, UncertainCloudGivesBoundsForTheRealSurface) {
   o.scallop = 0.05;
   o.chord = 0.01;
   o.spacing = 0.08;
-  const auto j = simulate_cut(surf, feed_centres(raster(r, s, dz)), 0.0, o).report;
+  const auto res = simulate_cut(surf, feed_centres(raster(r, s, dz)), 0.0, o);
+  const auto& j = res.report;
   const double w = line_gap(s), cusp = r - std::sqrt(r * r - w * w / 4);
   EXPECT_NEAR(j["scallop_max_interior"].get<double>(), cusp + dz / 1.05 + delta, 0.01 * cusp);
-  EXPECT_NEAR(j["gouge_max"].get<double>(), delta - dz / 1.05, 1e-6);
+  double gouge_interior = 0;
+  for (const auto& x : res.samples)
+    if (x.interior) gouge_interior = std::max(gouge_interior, x.gouge);
+  EXPECT_NEAR(gouge_interior, delta - dz / 1.05, 1e-6);
+  // past the outermost points the field is extrapolated and known less well: the bound grows
+  // there (by 1 + t / spacing, t up to about 0.8 spacings before the patch ends)
+  EXPECT_GT(j["gouge_max"].get<double>(), gouge_interior + 0.2 * delta);
+  EXPECT_LT(j["gouge_max"].get<double>(), 1.8 * delta - dz / 1.05 + 1e-6);
   EXPECT_EQ(j["surface_uncertainty_max"].get<double>(), delta);
   const std::vector<double> short_u(3, 0.0);
   try {
