@@ -30,7 +30,7 @@ def main():
     rows, lines = [], []
     header = ("| surface | noise | graph | passes | verify scallop max (interior) | simulate scallop max (interior) "
               "| sim/verify | gouge max | uncut | rs274 | rapids through part | efficiency L*/L | verify pass "
-              "| guard: lifted (highest lift mm) | plan s |")
+              "| guard: lifted (highest lift mm) | certificate: pass (gouge bound) | plan s |")
     def emit(line):
         print(line, flush=True)
         lines.append(line)
@@ -61,7 +61,7 @@ def main():
                 gcode = os.path.join(out, "gcode.ngc")
                 if p.returncode != 0 or not os.path.exists(gcode):
                     err = (p.stderr.strip().splitlines() or ["?"])[-1]
-                    emit(f"| {surface} | {noise} | {graph} | FAILED: {err} ||||||||||||")
+                    emit(f"| {surface} | {noise} | {graph} | FAILED: {err} |||||||||||||")
                     rows.append({"surface": surface, "noise": noise, "graph": graph, "error": err})
                     continue
                 vj = os.path.join(out, "verify.json")
@@ -81,7 +81,8 @@ def main():
                 emit(f"| {surface} | {noise} | {graph} | {plan.get('passes')} | {vs:.5f} | {ss:.5f} | {ratio} "
                       f"| {v.get('gouge_max', float('nan')):.5f} | {v.get('uncut_fraction')} | {v.get('gcode_valid')} "
                       f"| {v.get('rapids_through_part')} | {v.get('efficiency', float('nan')):.3f} | {v.get('pass')} "
-                      f"| {guard.get('lifted_positions', '-')} ({guard.get('highest_lift', 0):.4f}) | {plan_s:.1f} |")
+                      f"| {guard.get('lifted_positions', '-')} ({guard.get('highest_lift', 0):.4f}) "
+                      f"| {sim.get('pass')} ({sim.get('gouge_max', float('nan')):.4f}) | {plan_s:.1f} |")
                 if args.docs and float(noise) == 0:
                     os.makedirs(args.docs, exist_ok=True)
                     for name in ("preview.png", "scallop_map.png"):

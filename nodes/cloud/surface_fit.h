@@ -25,7 +25,7 @@ class HeightField {
   // centroid farther than half their radius from (x, y)), unless `force`.
   // uncertainty, when given, gets the mean uncertainty of the same neighbours, grown at the edge
   // where the nearest point is d > spacing / 2 away (a gap z is extrapolated across): by the factor
-  // 1 + (d − spacing / 2) / spacing beyond the edge, fading to 1 inside it.
+  // 1 + (d − spacing / 2) / (2 spacing) beyond the edge, fading to 1 inside it.
   bool eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force = false,
             double* uncertainty = nullptr) const;
   bool inside(double x, double y) const;

@@ -164,12 +164,12 @@ TEST(GougeGuard, LiftedBallsClearAnUncertainSurfaceByItsUncertainty) {
 
 TEST(GougeGuard, BeyondTheCloudsEdgeTheExtrapolationIsLessCertain) {
   // A ball whose foot lies 0.4 mm beyond the last points of a cloud known to +-0.01 must clear
-  // the extrapolated plane by 0.01 (1 + (0.4 - spacing / 2) / spacing); a ball planned with the
+  // the extrapolated plane by 0.01 (1 + (0.4 - spacing / 2) / (2 spacing)); a ball planned with the
   // interior's 0.01 of stock there is lifted. On and inside the last points nothing grows.
   auto cloud = plane_cloud();
   const std::vector<double> uncertainty(cloud.size(), 0.01);
   HeightField surface(cloud, 20, &uncertainty);
-  const double s = surface.spacing(), grown = 0.01 * (1 + (0.4 - 0.5 * s) / s);
+  const double s = surface.spacing(), grown = 0.01 * (1 + (0.4 - 0.5 * s) / (2 * s));
   for (double x : {5.0, 9.9, 10.0}) EXPECT_NEAR(surface.uncertainty(x, 0), 0.01, 1e-12) << x;
   EXPECT_NEAR(surface.uncertainty(10.4, 0), grown, 1e-9);
   BallClearance clearance(surface, cloud, 2.0);
