@@ -15,20 +15,20 @@ NodeDecl make_gouge_guard_node() {
   d.version = 2;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge
   d.description =
       "checks every planned ball position and the middle of every move against the cloud's "
-      "surface (its height field and its points); lifts the ball where it would cut in and "
-      "reports where and by how much";
+      "surface (its height field and its points); lifts the ball where it would cut in (on a "
+      "denoised cloud: come closer than the surface's uncertainty) and reports where and by how much";
   d.input("path", "Toolpath", "the planned passes")
-      .input("cloud", "Cloud", "the surface the passes must not cut into (seen from +z); with per-point uncertainty, lifted balls clear it by that much")
+      .input("cloud", "Cloud", "the surface the passes must not cut into (seen from +z); with per-point uncertainty, balls clear it by that much (more at gaps beyond its edge)")
       .output("toolpath", "Toolpath", "the passes, lifted where needed (lifted contact points are the ball's new touching points)")
       .output("report", "Report",
               "positions and moves checked, lifted and inserted positions, the deepest cut-in "
               "found and the highest lift, with where")
       .param_float("tolerance", 0, 0, 10, "mm",
-                   "how far the surface may come inside the ball at a planned position before it "
-                   "is lifted; 0: a quarter of the path's chord error")
+                   "how far the surface (raised by its uncertainty) may come inside the ball at a planned "
+                   "position before it is lifted; 0: a quarter of the path's chord error")
       .param_float("chord_tolerance", 0, 0, 10, "mm",
-                   "how far the surface may come inside the ball in the middle of a move before "
-                   "a lifted point is inserted; 0: 0.95 of the path's chord error")
+                   "how far the surface (raised by its uncertainty) may come inside the ball in the middle "
+                   "of a move before a lifted point is inserted; 0: 0.95 of the path's chord error")
       .param_int("max_splits", 3, 0, 10, "", "how often a move may be halved");
   d.run = [](NodeContext& ctx) {
     auto path = ctx.input<Toolpath>("path");
