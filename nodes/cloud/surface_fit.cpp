@@ -253,6 +253,22 @@ double HeightField::Impl::beyond_edge(double x, double y, const std::uint32_t* i
   return std::clamp((widest - kFrom) / (kTo - kFrom), 0.0, 1.0);
 }
 
+double HeightField::reach_beyond(double x, double y) const {
+  std::uint32_t idx[64];
+  double d2[64];
+  const double q[2] = {x, y};
+  const std::size_t got = impl_->tree->knnSearch(q, 64, idx, d2);
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  for (std::size_t j = 0; j < got; ++j) centroid += impl_->xy[idx[j]];
+  centroid /= double(got);
+  const Eigen::Vector2d out = Eigen::Vector2d(x, y) - centroid;
+  if (!(out.norm() > 0)) return -INFINITY;
+  const Eigen::Vector2d dir = out.normalized();
+  double farthest = -INFINITY;
+  for (std::size_t j = 0; j < got; ++j) farthest = std::max(farthest, (impl_->xy[idx[j]] - centroid).dot(dir));
+  return out.norm() - farthest;
+}
+
 double HeightField::uncertainty(double x, double y) const {
   double z, u = 0;
   Eigen::Vector3d n;

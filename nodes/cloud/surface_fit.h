@@ -29,6 +29,9 @@ class HeightField {
   bool eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force = false,
             double* uncertainty = nullptr) const;
   bool inside(double x, double y) const;
+  // How far (x, y) lies beyond the outermost of its 64 nearest points, seen from their centroid
+  // (mm; <= 0 among them, e.g. in a gap between the points of a rim).
+  double reach_beyond(double x, double y) const;
   // How far the surface at (x, y) may be off the real one (mm), as eval gives it; 0 without
   // uncertainties.
   double uncertainty(double x, double y) const;

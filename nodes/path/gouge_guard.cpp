@@ -57,10 +57,11 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     s = next;
     if (done) break;
   }
-  // On the patch, or within two cloud spacings of its outermost points: the part's edge lies
-  // there (a cloud's last points sit about half a spacing inside it, more where the sample left a
-  // gap at the rim), and the field's extrapolation that far, with its grown uncertainty, is the
-  // best estimate of it.
+  // On the patch, or in the band where the part's edge lies: within a cloud spacing of its
+  // outermost points (they sit about half a spacing inside the edge), or up to two spacings
+  // away in a gap the sample left between the points of a rim (no farther out than half a
+  // spacing past them). The field's extrapolation there, with its grown uncertainty, is the
+  // best estimate of the part.
   auto near_cloud = [&] {
     std::uint32_t j;
     double d2;
@@ -68,8 +69,9 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     one.init(&j, &d2);
     const double q[3] = {s.x(), s.y(), 0};
     impl_->tree.findNeighbors(one, q, nanoflann::SearchParams(32, 0, false));
-    return d2 <= 4 * impl_->surface.spacing() * impl_->surface.spacing() &&
-           impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/true, &res.uncertainty);
+    const double sp = impl_->surface.spacing();
+    const bool in_band = d2 <= sp * sp || (d2 <= 4 * sp * sp && impl_->surface.reach_beyond(s.x(), s.y()) <= 0.5 * sp);
+    return in_band && impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/true, &res.uncertainty);
   };
   if (found && (impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/false, &res.uncertainty) || near_cloud())) {
     res.on_surface = true;

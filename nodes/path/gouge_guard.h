@@ -43,8 +43,8 @@ class BallClearance {
     double clearance = INFINITY;  // mm: distance from the centre to the surface − r (< 0: gouge)
     Eigen::Vector3d foot;         // nearest surface point found (valid when on_surface)
     Eigen::Vector3d normal;       // its upward unit normal (valid when on_surface)
-    bool on_surface = false;      // the foot point lies on the patch, or less than two cloud
-                                  // spacings beyond its outermost points
+    bool on_surface = false;      // the foot point lies on the patch, or in the band beyond
+                                  // its outermost points where the part's edge lies
     double uncertainty = 0;       // mm the surface there may be off the real one (on_surface)
   };
   // centre  ball centre; hint  a surface point near the contact (where the foot search starts).

@@ -85,18 +85,31 @@ TEST(BallClearance, SeesTheCloudsPointsBeyondTheEdge) {
   EXPECT_NEAR(res.clearance, nearest - 2.0, 1e-12);
 }
 
-TEST(BallClearance, CoversTheEdgeBandWithinTwoSpacingsOfTheCloud) {
+TEST(BallClearance, CoversTheEdgeBandAndGapsAtTheRim) {
   // The part's edge lies about half a spacing beyond a cloud's outermost points: a foot there is
-  // on the surface (the field extrapolated), one farther out is not.
-  auto cloud = plane_cloud();
+  // on the surface (the field extrapolated), one farther out is not. A foot in a gap the sample
+  // left at the rim (here no points within 0.45 mm of (10, 0)) is on the surface up to two
+  // spacings from the nearest point, as long as it is not past the rim's other points.
+  auto full = plane_cloud();
+  std::vector<Eigen::Vector3d> cloud;
+  for (const auto& p : full)
+    if (std::hypot(p.x() - 10, p.y()) > 0.45) cloud.push_back(p);
   HeightField surface(cloud);
+  const double s = surface.spacing();
   BallClearance clearance(surface, cloud, 2.0);
-  for (double beyond : {0.1, 1.0}) {
-    const Eigen::Vector3d foot(10 + beyond, 0, plane_z(10 + beyond, 0));
+  auto on_surface = [&](double x, double y) {
+    const Eigen::Vector3d foot(x, y, plane_z(x, y));
     auto res = clearance(foot + 1.95 * kPlaneNormal, foot);
-    EXPECT_EQ(res.on_surface, beyond < 2 * surface.spacing()) << beyond;
-    if (res.on_surface) EXPECT_NEAR(res.clearance, -0.05, 1e-6);
-  }
+    if (res.on_surface) EXPECT_NEAR(res.clearance, -0.05, 1e-6) << x << " " << y;
+    return res.on_surface;
+  };
+  EXPECT_TRUE(on_surface(10.1, 5));    // half a spacing past a straight rim
+  EXPECT_FALSE(on_surface(10.4, 5));   // nearest point 0.4 > s = 0.22, past the rim
+  EXPECT_FALSE(on_surface(11.0, 5));
+  // in the gap: the nearest point, (9.5, 0), is 0.35 mm away, between s and 2 s
+  EXPECT_TRUE(s < 0.35 && 0.35 < 2 * s) << s;
+  EXPECT_TRUE(on_surface(9.85, 0));
+  EXPECT_FALSE(on_surface(10.4, 0));  // past the rim beside the gap
 }
 
 TEST(GougeGuard, LeavesAPathOnTheSurfaceAlone) {
@@ -163,25 +176,25 @@ TEST(GougeGuard, LiftedBallsClearAnUncertainSurfaceByItsUncertainty) {
 }
 
 TEST(GougeGuard, BeyondTheCloudsEdgeTheExtrapolationIsLessCertain) {
-  // A ball whose foot lies 0.4 mm beyond the last points of a cloud known to +-0.01 must clear
-  // the extrapolated plane by 0.01 (1 + (0.4 - spacing / 2) / (2 spacing)); a ball planned with the
-  // interior's 0.01 of stock there is lifted. On and inside the last points nothing grows.
+  // A ball whose foot lies 0.2 mm beyond the last points of a cloud known to +-0.05 must clear
+  // the extrapolated plane by 0.05 (1 + (0.2 - spacing / 2) / (2 spacing)); a ball planned with the
+  // interior's 0.05 of stock there is lifted. On and inside the last points nothing grows.
   auto cloud = plane_cloud();
-  const std::vector<double> uncertainty(cloud.size(), 0.01);
+  const std::vector<double> uncertainty(cloud.size(), 0.05);
   HeightField surface(cloud, 20, &uncertainty);
-  const double s = surface.spacing(), grown = 0.01 * (1 + (0.4 - 0.5 * s) / (2 * s));
-  for (double x : {5.0, 9.9, 10.0}) EXPECT_NEAR(surface.uncertainty(x, 0), 0.01, 1e-12) << x;
-  EXPECT_NEAR(surface.uncertainty(10.4, 0), grown, 1e-9);
+  const double s = surface.spacing(), grown = 0.05 * (1 + (0.2 - 0.5 * s) / (2 * s));
+  for (double x : {5.0, 9.9, 10.0}) EXPECT_NEAR(surface.uncertainty(x, 0), 0.05, 1e-12) << x;
+  EXPECT_NEAR(surface.uncertainty(10.2, 0), grown, 1e-9);
   BallClearance clearance(surface, cloud, 2.0);
   Toolpath planned = plane_pass(0.5);
   auto& p = planned.passes[0];
   for (std::size_t i = 0; i < p.contact.size(); ++i) {
     const double y = p.contact[i].x() / 10;
-    p.contact[i] = Eigen::Vector3d(10.4, y, plane_z(10.4, y)) + 0.01 * kPlaneNormal;
+    p.contact[i] = Eigen::Vector3d(10.2, y, plane_z(10.2, y)) + 0.05 * kPlaneNormal;
   }
   const auto before = clearance(planned.centre(p.contact[5], p.normal[5]), p.contact[5]);
   ASSERT_TRUE(before.on_surface);
-  EXPECT_NEAR(before.clearance, 0.01, 1e-6);
+  EXPECT_NEAR(before.clearance, 0.05, 1e-6);
   EXPECT_NEAR(before.uncertainty, grown, 1e-6);
   auto res = guard_gouges(planned, clearance, {});
   EXPECT_EQ(res.report["lifted_positions"], p.contact.size());
