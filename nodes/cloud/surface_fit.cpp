@@ -27,6 +27,8 @@ struct HeightField::Impl {
 
   // The mean uncertainty of the points idx[0..got) (0 without uncertainties).
   double mean_uncertainty(const std::uint32_t* idx, std::size_t got) const;
+  // The centroid in xy of the points idx[0..got), got > 0.
+  Eigen::Vector2d centroid(const std::uint32_t* idx, std::size_t got) const;
   // The widest angle (radians) between neighbouring directions from (x, y) to the points
   // idx[0..got).
   double widest_gap(double x, double y, const std::uint32_t* idx, std::size_t got) const;
@@ -230,6 +232,12 @@ double HeightField::Impl::mean_uncertainty(const std::uint32_t* idx, std::size_t
   return sum / got;
 }
 
+Eigen::Vector2d HeightField::Impl::centroid(const std::uint32_t* idx, std::size_t got) const {
+  Eigen::Vector2d c = Eigen::Vector2d::Zero();
+  for (std::size_t j = 0; j < got; ++j) c += xy[idx[j]];
+  return c / double(got);
+}
+
 double HeightField::Impl::widest_gap(double x, double y, const std::uint32_t* idx, std::size_t got) const {
   std::array<double, 64> angle;
   for (std::size_t j = 0; j < got; ++j) angle[j] = std::atan2(xy[idx[j]].y() - y, xy[idx[j]].x() - x);
@@ -258,9 +266,7 @@ double HeightField::reach_beyond(double x, double y) const {
   double d2[64];
   const double q[2] = {x, y};
   const std::size_t got = impl_->tree->knnSearch(q, 64, idx, d2);
-  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
-  for (std::size_t j = 0; j < got; ++j) centroid += impl_->xy[idx[j]];
-  centroid /= double(got);
+  const Eigen::Vector2d centroid = impl_->centroid(idx, got);
   const Eigen::Vector2d out = Eigen::Vector2d(x, y) - centroid;
   if (!(out.norm() > 0)) return -INFINITY;
   const Eigen::Vector2d dir = out.normalized();
@@ -307,10 +313,7 @@ bool HeightField::eval(double x, double y, double& z, Eigen::Vector3d& normal, b
     if (d2[0] > 2.25 * spacing_ * spacing_) return false;
     // Beyond the edge of the cloud the neighbours are all on one side: their centroid moves
     // off (x, y) by about 0.42 of their radius already at the edge (half a disc).
-    Eigen::Vector2d c = Eigen::Vector2d::Zero();
-    for (std::size_t j = 0; j < got; ++j) c += impl_->xy[idx[j]];
-    c /= double(got);
-    if ((c - Eigen::Vector2d(x, y)).squaredNorm() > 0.25 * d2[got - 1]) return false;
+    if ((impl_->centroid(idx, got) - Eigen::Vector2d(x, y)).squaredNorm() > 0.25 * d2[got - 1]) return false;
   }
   // Steep places: a fit in the local tangent frame (see local_fit).
   if (impl_->local_fit(x, y, idx, got, k, z, normal)) return true;
