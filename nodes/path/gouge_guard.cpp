@@ -71,7 +71,8 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     impl_->tree.findNeighbors(one, q, nanoflann::SearchParams(32, 0, false));
     const double sp = impl_->surface.spacing();
     const bool in_band = d2 <= sp * sp || (d2 <= 4 * sp * sp && impl_->surface.reach_beyond(s.x(), s.y()) <= 0.5 * sp);
-    return in_band && impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/true, &res.uncertainty);
+    // (the uncertainty does not depend on force: the first eval below has set it)
+    return in_band && impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/true);
   };
   if (found && (impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/false, &res.uncertainty) || near_cloud())) {
     res.on_surface = true;
