@@ -35,10 +35,23 @@ void TerminalReporter::draw_bar(const std::string& label) {
   bar_shown_ = true;
 }
 
+std::string warning_line(const nlohmann::json& e) {
+  const std::string part = e.value("part", "");
+  return "warning: node '" + e.value("node", "") + "' (" + e.value("type", "") + ")" +
+         (part.empty() ? "" : " on part '" + part + "'") + ": " + e.value("message", "");
+}
+
 void TerminalReporter::on_event(const nlohmann::json& e) {
-  if (quiet_) return;
-  std::lock_guard lock(mutex_);
   const std::string kind = e.value("event", "");
+  if (quiet_ && kind != "node_warning") return;
+  std::lock_guard lock(mutex_);
+  if (kind == "node_warning") {
+    if (bar_shown_) std::fprintf(out_, "\r\033[K");
+    bar_shown_ = false;
+    std::fprintf(out_, "%s\n", warning_line(e).c_str());
+    std::fflush(out_);
+    return;
+  }
   std::string part = e.value("part", "");
   std::string who = (part.empty() ? "" : part + ": ") + e.value("node", "");
   if (kind == "node_start" && tty_) {

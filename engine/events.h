@@ -2,7 +2,8 @@
 //
 // Every event has "event", "t" (seconds since the process started), "part" and, for node events,
 // "node" and "type". node_finish adds "status" (ok|cached|failed|skipped), "seconds", "cache"
-// (hit|miss|off), "why" and "error".
+// (hit|miss|off), "why" and "error". node_warning (what a node said with ctx.warn, also replayed
+// from the cache with "cached": true) adds "message".
 #pragma once
 
 #include <cstdio>
@@ -16,6 +17,10 @@
 namespace scallop {
 
 double seconds_since_start();
+
+// The terminal's line for a node_warning event: "warning: node 'ID' (TYPE) on part 'P': message"
+// (without " on part 'P'" when the part has no name).
+std::string warning_line(const nlohmann::json& event);
 
 class EventSink {
  public:
@@ -35,7 +40,8 @@ class JsonLinesSink final : public EventSink {
 };
 
 // Human output on stderr: a progress bar redrawn in place on a terminal, plain lines otherwise;
-// --explain adds why each node hit or missed the cache.
+// --explain adds why each node hit or missed the cache. Node warnings are printed even when
+// quiet, one line each: "warning: node 'ID' (TYPE) on part 'P': message".
 class TerminalReporter final : public EventSink {
  public:
   TerminalReporter(std::FILE* out, bool explain, bool quiet);

@@ -47,6 +47,10 @@ std::string explain_miss(const std::optional<json>& last, const json& now) {
   return why.empty() ? "key changed" : why;
 }
 
+// Where a cache entry's warnings are kept (beside the manifests, by the entry's key): a node's
+// output depends only on its key, so the warnings it gave with it do too.
+std::string warnings_identity(const std::string& key) { return "warnings#" + key; }
+
 }  // namespace
 
 RunResult execute(const Plan& plan, const Registry& registry, const std::map<std::string, ValuePtr>& inputs,
@@ -133,6 +137,13 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
       rec.status = "skipped";
       rec.why = skipped_because;
     } else if (have[i]) {
+      // the warnings of the run that made the entry: a cached result is as suspect as a fresh one
+      if (auto said = options.cache->last_manifest(warnings_identity(keys[i])))
+        for (const auto& m : said->value("warnings", json::array())) {
+          rec.warnings.push_back(m.get<std::string>());
+          emit({{"event", "node_warning"}, {"node", pn.id}, {"type", rec.type}, {"message", rec.warnings.back()},
+                {"cached", true}});
+        }
       rec.status = "cached";
       rec.cache = "hit";
       rec.why = "same type, version, parameters and inputs";
@@ -151,11 +162,21 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
       if (options.cache) rec.why = explain_miss(options.cache->last_manifest(identity), manifests[i]);
       try {
         double last_emit = -1;
-        NodeContext ctx(*pn.decl, pn.id, options.part, pn.params, in, [&](double f, const std::string& msg) {
-          if (f - last_emit < 0.01 && f < 1.0) return;
-          last_emit = f;
-          emit({{"event", "node_progress"}, {"node", pn.id}, {"type", rec.type}, {"fraction", f}, {"message", msg}});
-        });
+        std::mutex warn_mutex;
+        NodeContext ctx(
+            *pn.decl, pn.id, options.part, pn.params, in,
+            [&](double f, const std::string& msg) {
+              if (f - last_emit < 0.01 && f < 1.0) return;
+              last_emit = f;
+              emit({{"event", "node_progress"}, {"node", pn.id}, {"type", rec.type}, {"fraction", f}, {"message", msg}});
+            },
+            [&](const std::string& msg) {
+              {
+                std::lock_guard lock(warn_mutex);
+                rec.warnings.push_back(msg);
+              }
+              emit({{"event", "node_warning"}, {"node", pn.id}, {"type", rec.type}, {"message", msg}});
+            });
         pn.decl->run(ctx);
         out = ctx.take_outputs();
         for (const auto& od : pn.decl->outputs)
@@ -165,6 +186,8 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
         if (options.cache && pn.decl->cache_on_disk) {
           options.cache->store(keys[i], out);
           options.cache->write_manifest(identity, manifests[i]);
+          if (!rec.warnings.empty())
+            options.cache->write_manifest(warnings_identity(keys[i]), json{{"warnings", rec.warnings}});
         }
       } catch (const std::exception& e) {
         rec.status = "failed";

@@ -27,6 +27,7 @@ struct NodeRun {
   std::string cache;   // hit | miss | off
   std::string why;     // why the cache hit or missed, or why the node was skipped
   std::string error;
+  std::vector<std::string> warnings;  // what the node said with ctx.warn (replayed on a cache hit)
   std::string key;
   double start = 0, finish = 0;  // seconds since process start
   double seconds() const { return finish - start; }

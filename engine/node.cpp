@@ -65,13 +65,15 @@ const ParamDecl* NodeDecl::find_param(const std::string& n) const { return find_
 
 NodeContext::NodeContext(const NodeDecl& decl, std::string node_id, std::string part, nlohmann::json params,
                          std::map<std::string, ValuePtr> inputs,
-                         std::function<void(double, const std::string&)> progress)
+                         std::function<void(double, const std::string&)> progress,
+                         std::function<void(const std::string&)> warn)
     : decl_(decl),
       node_id_(std::move(node_id)),
       part_(std::move(part)),
       params_(std::move(params)),
       inputs_(std::move(inputs)),
-      progress_(std::move(progress)) {}
+      progress_(std::move(progress)),
+      warn_(std::move(warn)) {}
 
 bool NodeContext::has_input(const std::string& port) const {
   auto it = inputs_.find(port);
@@ -104,6 +106,10 @@ void NodeContext::set_output(const std::string& port, ValuePtr value) {
 
 void NodeContext::progress(double fraction, const std::string& message) const {
   if (progress_) progress_(std::clamp(fraction, 0.0, 1.0), message);
+}
+
+void NodeContext::warn(const std::string& message) const {
+  if (warn_) warn_(message);
 }
 
 void Registry::add(NodeDecl decl) {

@@ -78,7 +78,8 @@ class NodeContext {
  public:
   NodeContext(const NodeDecl& decl, std::string node_id, std::string part, nlohmann::json params,
               std::map<std::string, ValuePtr> inputs,
-              std::function<void(double, const std::string&)> progress);
+              std::function<void(double, const std::string&)> progress,
+              std::function<void(const std::string&)> warn = nullptr);
 
   bool has_input(const std::string& port) const;
   template <class T>
@@ -102,6 +103,11 @@ class NodeContext {
   }
   // Reports progress of long work in [0, 1]; cheap to call often.
   void progress(double fraction, const std::string& message = {}) const;
+  // Says something the user must see even when the node succeeds (one line, no node id: the
+  // runner adds it): `scallop` prints "warning: node 'ID' (TYPE) on part 'P': message" on
+  // stderr, also with -q, and the events stream gets a node_warning event. Thread-safe when the
+  // handler is (the executor's is).
+  void warn(const std::string& message) const;
 
   const std::string& node_id() const { return node_id_; }
   const std::string& part() const { return part_; }
@@ -114,6 +120,7 @@ class NodeContext {
   nlohmann::json params_;
   std::map<std::string, ValuePtr> inputs_, outputs_;
   std::function<void(double, const std::string&)> progress_;
+  std::function<void(const std::string&)> warn_;
 };
 
 // All node types and value types the engine knows.
