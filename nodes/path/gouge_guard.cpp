@@ -91,6 +91,7 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
 namespace {
 
 constexpr double kProbeStep = 0.5;  // mm between the points checked along a long move
+constexpr double kMaxLiftRadii = 3;  // a lift higher than this many tool radii fails the node
 
 struct Sample {
   Eigen::Vector3d contact, normal;
@@ -103,11 +104,13 @@ struct Tally {
   Eigen::Vector3d deepest_at = Eigen::Vector3d::Zero();
   double highest_lift = 0;
   Eigen::Vector3d highest_lift_at = Eigen::Vector3d::Zero();
+  Eigen::Vector3d highest_lift_from = Eigen::Vector3d::Zero();  // the planned ball centre there
   void add(const Tally& o) {
     positions += o.positions, moves += o.moves, lifted += o.lifted, inserted += o.inserted;
     unresolved += o.unresolved;
     if (o.deepest > deepest) deepest = o.deepest, deepest_at = o.deepest_at;
-    if (o.highest_lift > highest_lift) highest_lift = o.highest_lift, highest_lift_at = o.highest_lift_at;
+    if (o.highest_lift > highest_lift)
+      highest_lift = o.highest_lift, highest_lift_at = o.highest_lift_at, highest_lift_from = o.highest_lift_from;
   }
 };
 
@@ -129,6 +132,7 @@ class PassGuard {
     auto res = clearance_(c, s.contact);
     if (!(reach(res) > allowed)) return false;
     if (reach(res) > t.deepest) t.deepest = reach(res), t.deepest_at = s.contact;
+    const Eigen::Vector3d planned = c;
     const double z0 = c.z();
     for (int it = 0; it < 8 && reach(res) > 1e-6; ++it) {
       // raising the centre by dz moves it away from a surface with normal n by dz * n_z
@@ -144,7 +148,8 @@ class PassGuard {
       s.contact += Eigen::Vector3d(0, 0, c.z() - z0);
     }
     if (reach(res) > 1e-6) ++t.unresolved;
-    if (c.z() - z0 > t.highest_lift) t.highest_lift = c.z() - z0, t.highest_lift_at = s.contact;
+    if (c.z() - z0 > t.highest_lift)
+      t.highest_lift = c.z() - z0, t.highest_lift_at = s.contact, t.highest_lift_from = planned;
     ++t.lifted;
     return true;
   }
@@ -243,6 +248,16 @@ GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearan
     total.add(t);
   });
   if (o.progress) o.progress(1.0);
+  // A lift of several tool radii does not correct a plan, it hides one that has left the surface
+  // (e.g. where the (u,v) map folds over): the path would cut air there, or worse.
+  if (total.highest_lift > kMaxLiftRadii * r) {
+    const Eigen::Vector3d& c = total.highest_lift_from;
+    throw std::runtime_error("the planned ball at (" + mm(c.x()) + ", " + mm(c.y()) + ", " + mm(c.z()) +
+                             ") would have to be lifted by " + mm(total.highest_lift) + " mm (> " +
+                             mm(kMaxLiftRadii) + " tool radii, " + mm(kMaxLiftRadii * r) +
+                             " mm) to clear the cloud's surface: the plan does not follow the surface "
+                             "there, e.g. a fold-over of the (u,v) map");
+  }
 
   nlohmann::json rep;
   rep["tolerance"] = tol;

@@ -68,7 +68,9 @@ struct GougeGuardResult {
   nlohmann::json report;
 };
 
-// Throws std::invalid_argument for a path without points, r <= 0 or mismatched normals.
+// Throws std::invalid_argument for a path without points, r <= 0 or mismatched normals, and
+// std::runtime_error (saying where) when a ball would have to be lifted by more than 3 tool
+// radii: such a plan does not follow the surface there, and lifting it only hides that.
 GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearance,
                               const GougeGuardOptions& options);
 

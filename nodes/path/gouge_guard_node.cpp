@@ -12,7 +12,8 @@ namespace scallop {
 NodeDecl make_gouge_guard_node() {
   NodeDecl d;
   d.type = "path.gouge_guard";
-  d.version = 2;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge
+  d.version = 3;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge
+                  // 3: fails where a ball would have to be lifted by more than 3 tool radii
   d.description =
       "checks every planned ball position and the middle of every move against the cloud's "
       "surface (its height field and its points); lifts the ball where it would cut in (on a "
@@ -42,6 +43,7 @@ NodeDecl make_gouge_guard_node() {
       HeightField surface(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
       BallClearance clearance(surface, cloud->points, path->tool_radius);
       auto res = guard_gouges(*path, clearance, o);
+      for (const auto& w : res.report["warnings"]) ctx.warn(w.get<std::string>());  // lifts, in one line each
       Report report;
       report.data = std::move(res.report);
       ctx.set("toolpath", std::move(res.path));

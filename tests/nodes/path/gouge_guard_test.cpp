@@ -266,6 +266,51 @@ TEST(GougeGuard, BadInputGetsClearErrors) {
   EXPECT_THROW(BallClearance(surface, cloud, 0.0), std::invalid_argument);
 }
 
+TEST(GougeGuard, ALiftOfMoreThanThreeToolRadiiFailsWithWhereAndWhy) {
+  // r = 2: a position sunk 5.8 mm needs a lift of 5.8 / n_z = 6.09 mm > 6 mm; one sunk 5.6 mm
+  // (5.88 mm) is still lifted.
+  auto cloud = plane_cloud();
+  HeightField surface(cloud);
+  BallClearance clearance(surface, cloud, 2.0);
+  auto ok = guard_gouges(plane_pass(0.5, 10, 5.6), clearance, {});
+  EXPECT_NEAR(ok.report["highest_lift"].get<double>(), 5.6 / kPlaneNormal.z(), 1e-6);
+  // the planned ball centre: contact (0, 1, 0.25) sunk 5.8 along the normal, plus r along it
+  const Eigen::Vector3d centre = Eigen::Vector3d(0, 1, 0.25) - 3.8 * kPlaneNormal;
+  EXPECT_NEAR(centre.x(), 0.7238, 1e-4);
+  try {
+    guard_gouges(plane_pass(0.5, 10, 5.8), clearance, {});
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(),
+                 "the planned ball at (0.7238, 1.905, -3.369) would have to be lifted by 6.09 mm (> 3 tool radii, "
+                 "6 mm) to clear the cloud's surface: the plan does not follow the surface there, e.g. a fold-over "
+                 "of the (u,v) map");
+  }
+}
+
+TEST(GougeGuard, NodeSaysItsLiftsWithCtxWarn) {
+  PointCloud pc;
+  pc.points = plane_cloud();
+  const NodeDecl& d = *builtin_registry().find("path.gouge_guard");
+  nlohmann::json params;
+  for (const auto& p : d.params) params[p.name] = p.default_value;
+  std::vector<std::string> said;
+  NodeContext ctx(d, "guard", "part", params,
+                  {{"path", std::make_shared<const Toolpath>(plane_pass(0.5, 4, 0.1))},
+                   {"cloud", std::make_shared<const PointCloud>(pc)}},
+                  nullptr, [&](const std::string& m) { said.push_back(m); });
+  d.run(ctx);
+  auto report = std::dynamic_pointer_cast<const Report>(ctx.take_outputs().at("report"));
+  ASSERT_TRUE(report);
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_EQ(said[0], report->data["warnings"][0].get<std::string>());
+  // the lifted ball touches the plane 0.1 mm up the slope from where it was planned to
+  EXPECT_EQ(said[0],
+            "1 tool positions (0 of them added in the middle of moves) were lifted by up to 0.105 mm (most near "
+            "x -2.981, y 1.024) where the planned ball would have cut up to 0.1 mm into the cloud's surface (raised "
+            "by its uncertainty); the path leaves that much stock there");
+}
+
 TEST(GougeGuard, NodeReportsAndKeepsUV) {
   PointCloud pc;
   pc.points = plane_cloud();
