@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <nanoflann.hpp>
 #include <stdexcept>
+#include <string>
 #include "nodes/cloud/kd_tree.h"
 
 namespace scallop {
@@ -12,6 +14,12 @@ namespace {
 
 using XY = PointsAdaptor<Eigen::Vector3d>;  // searched by xy
 using Tree = KdTree<Eigen::Vector3d, 2>;
+
+std::string mm(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", v);
+  return b;
+}
 
 double seg_dist(const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   Eigen::Vector3d e = b - a;
@@ -56,13 +64,28 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
 
   const double tol = o.tolerance > 0 ? o.tolerance : std::max(path.chord_error, 1e-3);
   const double max_link = o.max_link > 0 ? o.max_link : 2 * largest_stepover(path);
-  double top = -INFINITY;
+  double top = -INFINITY, bottom = INFINITY;
   for (const auto& q : surface) {
     if (!q.allFinite()) throw std::invalid_argument("the surface has a non-finite point");
     top = std::max(top, q.z());
+    bottom = std::min(bottom, q.z());
   }
+  const double part_top = top;
+  Eigen::Vector3d highest = Eigen::Vector3d::Constant(-INFINITY);
   for (const auto& p : path.passes)
-    for (const auto& c : p.contact) top = std::max(top, c.z());
+    for (const auto& c : p.contact)
+      if (c.z() > highest.z()) highest = c;
+  top = std::max(top, highest.z());
+  // Passes far above the part do not follow its surface (a guard lift at a fold-over of the map,
+  // say): a clearance plane raised to them is not a result.
+  const double limit = 10 * r + (part_top - bottom);
+  if (highest.z() - part_top > limit)
+    throw std::runtime_error("the passes rise to z " + mm(highest.z()) + " near x " + mm(highest.x()) + ", y " +
+                             mm(highest.y()) + ", " + mm(highest.z() - part_top) + " mm above the part's top (z " +
+                             mm(part_top) + "): more than 10 tool radii + the part's height range (" + mm(limit) +
+                             " mm), so the clearance plane would be at z " + mm(highest.z() + o.safety) +
+                             "; the passes do not follow the surface there (e.g. a gouge guard lift at a "
+                             "fold-over of the (u,v) map)");
 
   XY adaptor{surface};
   Tree tree(2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));

@@ -25,7 +25,8 @@ struct LinkOptions {
 
 // surface  #S by 3 points of the surface (the cloud); when empty the passes' own contact points
 // stand for it. Throws std::invalid_argument for r <= 0, no pass with points, a pass whose normals
-// do not match its points, or non-finite coordinates.
+// do not match its points, or non-finite coordinates, and std::runtime_error (saying where) when a
+// pass rises more than 10 r + the surface's height range above the surface's highest point.
 LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>& surface,
                        const LinkOptions& options);
 

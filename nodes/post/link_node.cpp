@@ -9,7 +9,7 @@ namespace scallop {
 NodeDecl make_link_node() {
   NodeDecl d;
   d.type = "post.link";
-  d.version = 1;
+  d.version = 2;  // 2: fails where the passes rise more than 10 r + the part's height range above it
   d.description = "joins passes in order: short feed links where the ball stays above the surface, else retract to a clearance plane";
   d.input("path", "Toolpath", "the passes, in cutting order")
       .input("cloud", "Cloud", "the surface, for link safety and the clearance plane (else the passes' contact points)", false)

@@ -73,6 +73,25 @@ TEST(Link, WithoutACloudThePassesStandForTheSurface) {
   EXPECT_DOUBLE_EQ(largest_stepover(zigzag(3, 1.5)), 1.5);
 }
 
+TEST(Link, PassesFarAboveThePartFailWithWhereAndWhy) {
+  // r = 2, the flat part's height range 0: a pass point 20 mm up is allowed, 20.5 mm is not
+  Toolpath t = zigzag(2, 1.0);
+  t.passes[1].contact[3].z() = 20;
+  EXPECT_DOUBLE_EQ(link_passes(t, flat_cloud(), {}).clearance_z, 25.0);
+  t.passes[1].contact[3].z() = 20.5;
+  try {
+    link_passes(t, flat_cloud(), {});
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(),
+                 "the passes rise to z 20.5 near x 7, y 1, 20.5 mm above the part's top (z 0): more than 10 tool "
+                 "radii + the part's height range (20 mm), so the clearance plane would be at z 25.5; the passes do "
+                 "not follow the surface there (e.g. a gouge guard lift at a fold-over of the (u,v) map)");
+  }
+  // without a cloud the passes are the surface: nothing to compare with
+  EXPECT_DOUBLE_EQ(link_passes(t, {}, {}).clearance_z, 25.5);
+}
+
 TEST(Link, BadInputIsRefused) {
   Toolpath t = zigzag(2, 1.0);
   t.passes[1].normal.pop_back();
