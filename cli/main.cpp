@@ -7,6 +7,7 @@
 
 #include "engine/runner.h"
 #include "nodes/all_nodes.h"
+#include "nodes/types/document.h"
 
 namespace fs = std::filesystem;
 using namespace scallop;
@@ -43,6 +44,63 @@ bool load(const std::string& path, Graph& graph) {
   }
 }
 
+// Exit statuses of run and batch (README, "The scallop command").
+constexpr int kExitDone = 0;             // done; every certificate passed (or there was none)
+constexpr int kExitNodeFailed = 1;       // a node (or writing an output) failed
+constexpr int kExitInvalid = 2;          // invalid graph, input or arguments
+constexpr int kExitCertificateFailed = 3;  // ran to the end, but a certificate failed: do not cut
+
+// A certificate is a graph output of type Report whose JSON has a boolean "pass" (post.simulate's
+// report): found by what it says, not by which node made it.
+struct Certificate {
+  std::string output;  // graph output name
+  bool pass = false;
+  std::vector<std::string> reasons;
+  std::string figures;  // "scallop_max 0.05, ..." : the headline numbers it has
+};
+
+std::vector<Certificate> certificates(const PartResult& r) {
+  std::vector<Certificate> out;
+  for (const auto& [name, value] : r.run.outputs) {
+    auto report = std::dynamic_pointer_cast<const Report>(value);
+    if (!report || !report->data.is_object() || !report->data.contains("pass") || !report->data["pass"].is_boolean())
+      continue;
+    const auto& d = report->data;
+    Certificate c;
+    c.output = name;
+    c.pass = d["pass"].get<bool>();
+    if (d.contains("fail_reasons") && d["fail_reasons"].is_array())
+      for (const auto& m : d["fail_reasons"]) c.reasons.push_back(m.is_string() ? m.get<std::string>() : m.dump());
+    for (const char* key : {"scallop_max", "scallop_max_interior", "gouge_max", "uncut_fraction"})
+      if (d.contains(key) && d[key].is_number()) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%s %.4g", key, d[key].get<double>());
+        c.figures += (c.figures.empty() ? "" : ", ") + std::string(buf);
+      }
+    if (!c.pass && c.reasons.empty()) c.reasons.push_back("no reason given");
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+// "certificate 'report': pass (scallop_max 0.048, ...)" or
+// "certificate 'report': FAIL, do not cut: reason; reason (scallop_max ...)".
+std::string verdict_line(const Certificate& c) {
+  std::string line = "certificate '" + c.output + "': ";
+  if (c.pass) return line + "pass" + (c.figures.empty() ? "" : " (" + c.figures + ")");
+  line += "FAIL, do not cut: ";
+  for (std::size_t i = 0; i < c.reasons.size(); ++i) line += (i ? "; " : "") + c.reasons[i];
+  return line + (c.figures.empty() ? "" : " (" + c.figures + ")");
+}
+
+// "pass", "FAIL" or "none" for a part's certificates together.
+std::string certificate_status(const std::vector<Certificate>& cs) {
+  if (cs.empty()) return "none";
+  for (const auto& c : cs)
+    if (!c.pass) return "FAIL";
+  return "pass";
+}
+
 struct Sinks {
   std::unique_ptr<DiskCache> cache;
   std::unique_ptr<JsonLinesSink> json;
@@ -62,13 +120,13 @@ void open_sinks(const CommonOptions& o, Sinks& s, int total_nodes) {
 int cmd_run(const std::string& graph_path, const std::vector<std::string>& input_args, const std::string& out_dir,
             const CommonOptions& o) {
   Graph graph;
-  if (!load(graph_path, graph)) return 2;
+  if (!load(graph_path, graph)) return kExitInvalid;
   PartRequest req;
   for (const auto& a : input_args) {
     auto eq = a.find('=');
     if (eq == std::string::npos) {
       std::cerr << "error: --input " << a << ": expected NAME=PATH\n";
-      return 2;
+      return kExitInvalid;
     }
     req.inputs[a.substr(0, eq)] = a.substr(eq + 1);
   }
@@ -81,26 +139,37 @@ int cmd_run(const std::string& graph_path, const std::vector<std::string>& input
   PartResult r = run_part(graph, builtin_registry(), req);
   if (r.run.nodes.empty() && !r.ok) {  // never started: validation or input errors
     for (const auto& m : r.errors) std::cerr << "error: " << m << "\n";
-    return 2;
+    return kExitInvalid;
   }
-  std::fprintf(stderr, "%s in %.3f s (%d nodes ran, %d from cache)\n", r.ok ? "done" : "FAILED", r.seconds,
-               r.run.executed(), static_cast<int>(std::count_if(r.run.nodes.begin(), r.run.nodes.end(),
-                                                                [](const NodeRun& n) { return n.status == "cached"; })));
+  int warnings = 0;
+  for (const auto& n : r.run.nodes) warnings += static_cast<int>(n.warnings.size());
+  std::fprintf(stderr, "%s in %.3f s (%d nodes ran, %d from cache%s)\n", r.ok ? "done" : "FAILED", r.seconds,
+               r.run.executed(),
+               static_cast<int>(std::count_if(r.run.nodes.begin(), r.run.nodes.end(),
+                                              [](const NodeRun& n) { return n.status == "cached"; })),
+               warnings ? (", " + std::to_string(warnings) + " warning" + (warnings > 1 ? "s" : "")).c_str() : "");
   for (const auto& w : r.written) std::cout << "wrote " << w << "\n";
+  std::cout.flush();
   for (const auto& m : r.errors) std::cerr << "error: " << m << "\n";
-  return r.ok ? 0 : 1;
+  bool certified = true;
+  for (const auto& c : certificates(r)) {
+    certified &= c.pass;
+    if (!c.pass || !o.quiet) std::cerr << verdict_line(c) << "\n";
+  }
+  if (!r.ok) return kExitNodeFailed;
+  return certified ? kExitDone : kExitCertificateFailed;
 }
 
 int cmd_batch(const std::string& graph_path, const std::vector<std::string>& parts, int jobs,
               const std::string& input_name_arg, const std::string& out_dir, const CommonOptions& o) {
   Graph graph;
-  if (!load(graph_path, graph)) return 2;
+  if (!load(graph_path, graph)) return kExitInvalid;
   std::string input_name = input_name_arg;
   if (input_name.empty()) {
     if (graph.inputs.size() != 1) {
       std::cerr << "error: the graph has " << graph.inputs.size()
                 << " inputs; say which one the parts bind to with --part-input NAME\n";
-      return 2;
+      return kExitInvalid;
     }
     input_name = graph.inputs.begin()->first;
   }
@@ -114,28 +183,53 @@ int cmd_batch(const std::string& graph_path, const std::vector<std::string>& par
   auto results = run_batch(graph, builtin_registry(), input_name, parts, jobs, common);
 
   nlohmann::json summary = nlohmann::json::array();
-  std::vector<std::string> failed;
-  std::printf("\n%-32s %-6s %10s  %s\n", "part", "status", "seconds", "outputs / first error");
+  std::vector<std::string> failed, uncertified;
+  std::vector<std::string> verdicts;  // printed after the table
+  std::printf("\n%-32s %-6s %-11s %10s  %s\n", "part", "status", "certificate", "seconds", "outputs / first error");
   for (std::size_t i = 0; i < results.size(); ++i) {
     const auto& r = results[i];
-    std::printf("%-32s %-6s %10.3f  %s\n", r.part.c_str(), r.ok ? "ok" : "FAILED", r.seconds,
+    const auto certs = certificates(r);
+    const std::string cert = certificate_status(certs);
+    std::printf("%-32s %-6s %-11s %10.3f  %s\n", r.part.c_str(), r.ok ? "ok" : "FAILED", cert.c_str(), r.seconds,
                 r.ok ? std::to_string(r.written.size()).c_str() : r.errors.front().c_str());
     if (!r.ok) failed.push_back(r.part);
-    summary.push_back({{"part", r.part}, {"input", parts[i]}, {"ok", r.ok}, {"seconds", r.seconds},
-                       {"errors", r.errors}, {"outputs", r.written}});
+    if (cert == "FAIL") uncertified.push_back(r.part);
+    nlohmann::json reasons = nlohmann::json::array(), warnings = nlohmann::json::array();
+    for (const auto& c : certs) {
+      if (!c.pass || !o.quiet) verdicts.push_back("part '" + r.part + "': " + verdict_line(c));
+      for (const auto& m : c.reasons) reasons.push_back(m);
+    }
+    for (const auto& n : r.run.nodes)
+      for (const auto& w : n.warnings) warnings.push_back("node '" + n.id + "' (" + n.type + "): " + w);
+    summary.push_back({{"part", r.part}, {"input", parts[i]}, {"ok", r.ok}, {"certificate", cert},
+                       {"certificate_reasons", reasons}, {"seconds", r.seconds}, {"errors", r.errors},
+                       {"warnings", warnings}, {"outputs", r.written}});
   }
   fs::create_directories(out_dir);
-  std::ofstream(fs::path(out_dir) / "summary.json") << nlohmann::json{{"graph", graph_path}, {"parts", summary}}.dump(2)
-                                                    << "\n";
-  std::printf("%zu of %zu parts ok; summary in %s\n", results.size() - failed.size(), results.size(),
-              (fs::path(out_dir) / "summary.json").string().c_str());
+  std::ofstream(fs::path(out_dir) / "summary.json")
+      << nlohmann::json{{"graph", graph_path},
+                        {"parts_failed", failed.size()},
+                        {"certificates_failed", uncertified.size()},
+                        {"parts", summary}}
+             .dump(2)
+      << "\n";
+  std::printf("%zu of %zu parts ok, %zu certificate(s) failed; summary in %s\n", results.size() - failed.size(),
+              results.size(), uncertified.size(), (fs::path(out_dir) / "summary.json").string().c_str());
+  std::fflush(stdout);
+  for (const auto& v : verdicts) std::fprintf(stderr, "%s\n", v.c_str());
+  auto names = [](const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& f : v) s += (s.empty() ? "" : ", ") + f;
+    return s;
+  };
+  if (!uncertified.empty())
+    std::fprintf(stderr, "error: %zu certificate(s) failed, do not cut: %s\n", uncertified.size(),
+                 names(uncertified).c_str());
   if (!failed.empty()) {
-    std::string names;
-    for (const auto& f : failed) names += (names.empty() ? "" : ", ") + f;
-    std::fprintf(stderr, "error: %zu part(s) failed: %s\n", failed.size(), names.c_str());
-    return 1;
+    std::fprintf(stderr, "error: %zu part(s) failed: %s\n", failed.size(), names(failed).c_str());
+    return kExitNodeFailed;
   }
-  return 0;
+  return uncertified.empty() ? kExitDone : kExitCertificateFailed;
 }
 
 int cmd_validate(const std::string& graph_path, const std::vector<std::string>& sets) {

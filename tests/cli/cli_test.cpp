@@ -16,13 +16,13 @@ namespace fs = std::filesystem;
 const std::string kScallop = SCALLOP_BINARY;
 const std::string kGraph = std::string(SCALLOP_SOURCE_DIR) + "/graphs/prepare-cloud.json";
 
-// A small wavy height-field patch.
-void write_patch(const fs::path& path, int n = 40) {
+// A small wavy height-field patch, raised by dz.
+void write_patch(const fs::path& path, int n = 40, double dz = 0) {
   PointCloud c;
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) {
       double x = i * 0.5 + 0.01 * std::sin(j), y = j * 0.5;
-      c.points.emplace_back(x, y, std::sin(x / 4) * std::cos(y / 5));
+      c.points.emplace_back(x, y, std::sin(x / 4) * std::cos(y / 5) + dz);
     }
   write_ply(path.string(), c);
 }
@@ -88,6 +88,168 @@ TEST(Cli, BatchWithACorruptPartReturnsTheOthersAndNamesIt) {
   EXPECT_NE(summary["parts"][1]["errors"][0].get<std::string>().find("node 'read' (io.read_cloud) failed on part 'broken'"),
             std::string::npos);
   EXPECT_EQ(summary["parts"][2]["ok"], true);
+}
+
+// Plans on the graph input `cloud` (default patch.ply beside the graph) with a 2 mm ball, and
+// guards, links and certifies the program against another surface, the input `part`: a part
+// lower than the plan is left with stock (the certificate fails), a higher one makes the guard
+// lift (warnings), one 10 mm higher needs lifts of more than 3 tool radii (the guard fails).
+constexpr const char* kPlanOnOneCutAnother = R"({"scallop_graph": 1, "name": "plan-on-one-cut-another",
+ "inputs": {"cloud": {"type": "File", "default": "patch.ply"}, "part": {"type": "File"}},
+ "nodes": [
+  {"id": "read", "type": "io.read_cloud", "inputs": {"file": "@cloud"}},
+  {"id": "knn", "type": "cloud.knn", "inputs": {"cloud": "read.cloud"}},
+  {"id": "normals", "type": "cloud.normals", "params": {"orientation": "up"},
+   "inputs": {"cloud": "read.cloud", "neighbors": "knn.neighbors"}},
+  {"id": "boundary", "type": "cloud.boundary", "inputs": {"cloud": "normals.cloud", "neighbors": "knn.neighbors"}},
+  {"id": "loops", "type": "cloud.boundary_order",
+   "inputs": {"cloud": "normals.cloud", "neighbors": "knn.neighbors", "loops": "boundary.loops"}},
+  {"id": "boundary_map", "type": "param.boundary_map", "params": {"domain": "rectangle"},
+   "inputs": {"cloud": "normals.cloud", "loops": "loops.loops"}},
+  {"id": "laplacian", "type": "param.laplacian", "inputs": {"cloud": "normals.cloud", "neighbors": "knn.neighbors"}},
+  {"id": "harmonic", "type": "param.harmonic",
+   "inputs": {"laplacian": "laplacian.laplacian", "map": "boundary_map.map", "loops": "loops.loops", "cloud": "normals.cloud"}},
+  {"id": "plan", "type": "path.isoparametric", "params": {"tool_radius": 2, "scallop_height": 0.05, "chord_error": 0.01},
+   "inputs": {"cloud": "normals.cloud", "neighbors": "knn.neighbors", "map": "harmonic.map"}},
+  {"id": "read_part", "type": "io.read_cloud", "inputs": {"file": "@part"}},
+  {"id": "guard", "type": "path.gouge_guard", "inputs": {"path": "plan.toolpath", "cloud": "read_part.cloud"}},
+  {"id": "link", "type": "post.link", "inputs": {"path": "guard.toolpath", "cloud": "read_part.cloud"}},
+  {"id": "simulate", "type": "post.simulate", "inputs": {"linked": "link.linked", "cloud": "read_part.cloud"}}],
+ "outputs": {"report": "simulate.report", "guard_report": "guard.report"}})";
+
+struct PlanOnOneCutAnother {
+  test::TempDir dir;
+  std::string graph = (dir.path / "g.json").string();
+  PlanOnOneCutAnother() {
+    test::write_file(graph, kPlanOnOneCutAnother);
+    write_patch(dir.path / "patch.ply");
+    write_patch(dir.path / "lowered.ply", 40, -0.3);
+    write_patch(dir.path / "raised.ply", 40, 0.3);
+    write_patch(dir.path / "high.ply", 40, 10);
+  }
+  std::string run(const std::string& part, const std::string& args) const {
+    return kScallop + " run " + graph + " --input part=" + (dir.path / (part + ".ply")).string() + " " + args;
+  }
+  nlohmann::json report(const std::string& file) const {
+    return nlohmann::json::parse(test::read_file(dir.path / file));
+  }
+};
+
+// What `scallop` prints for a certificate (a Report output with a boolean "pass"), from its JSON.
+std::string expected_verdict(const nlohmann::json& rep) {
+  std::string line = "certificate 'report': ";
+  if (rep["pass"].get<bool>()) {
+    line += "pass";
+  } else {
+    line += "FAIL, do not cut: ";
+    for (std::size_t i = 0; i < rep["fail_reasons"].size(); ++i)
+      line += (i ? "; " : "") + rep["fail_reasons"][i].get<std::string>();
+  }
+  char buf[256];
+  std::snprintf(buf, sizeof buf, " (scallop_max %.4g, scallop_max_interior %.4g, gouge_max %.4g, uncut_fraction %.4g)",
+                rep["scallop_max"].get<double>(), rep["scallop_max_interior"].get<double>(),
+                rep["gouge_max"].get<double>(), rep["uncut_fraction"].get<double>());
+  return line + buf;
+}
+
+TEST(Cli, AFailingCertificatePrintsItsVerdictAndExits3) {
+  // the plan is 0.3 mm above the part it cuts: stock everywhere
+  PlanOnOneCutAnother g;
+  std::string out;
+  EXPECT_EQ(test::run_command(g.run("lowered", "--no-cache -q -o " + (g.dir.path / "low").string()), &out), 3) << out;
+  auto rep = g.report("low/report.json");
+  ASSERT_EQ(rep["pass"], false);
+  ASSERT_FALSE(rep["fail_reasons"].empty());
+  EXPECT_NE(out.find("\n" + expected_verdict(rep) + "\n"), std::string::npos) << expected_verdict(rep) << "\n" << out;
+  EXPECT_EQ(out.find("path.isoparametric"), std::string::npos) << out;  // -q: no per-node lines
+
+  // the part it was planned for: the verdict is printed too (not with -q when it passes), and
+  // the exit status follows it
+  const int rc = test::run_command(g.run("patch", "--no-cache -o " + (g.dir.path / "same").string()), &out);
+  rep = g.report("same/report.json");
+  EXPECT_EQ(rc, rep["pass"].get<bool>() ? 0 : 3) << out;
+  EXPECT_NE(out.find("\n" + expected_verdict(rep) + "\n"), std::string::npos) << out;
+}
+
+TEST(Cli, NodeWarningsReachTheTerminalAndTheEventsFileAlsoFromTheCache) {
+  // the part is 0.3 mm above the plan: the guard lifts balls and says so with ctx.warn
+  PlanOnOneCutAnother g;
+  const std::string args = "-q --cache " + (g.dir.path / "cache").string() + " -o " + (g.dir.path / "out").string();
+  std::string out;
+  test::run_command(g.run("raised", args + " --events " + (g.dir.path / "e1.jsonl").string()), &out);
+  auto said = g.report("out/guard_report.json")["warnings"];
+  ASSERT_FALSE(said.empty()) << out;
+  const std::string first = said[0].get<std::string>();
+  EXPECT_EQ(first.find(" tool positions ("), first.find_first_not_of("0123456789")) << first;
+  EXPECT_NE(out.find("warning: node 'guard' (path.gouge_guard) on part 'patch': " + first + "\n"), std::string::npos)
+      << out;
+  auto warnings_in = [&](const fs::path& events) {
+    std::vector<nlohmann::json> w;
+    for (const auto& e : read_events(events))
+      if (e["event"] == "node_warning") w.push_back(e);
+    return w;
+  };
+  auto w1 = warnings_in(g.dir.path / "e1.jsonl");
+  ASSERT_EQ(w1.size(), said.size());
+  EXPECT_EQ(w1[0]["node"], "guard");
+  EXPECT_EQ(w1[0]["type"], "path.gouge_guard");
+  EXPECT_EQ(w1[0]["part"], "patch");
+  EXPECT_EQ(w1[0]["message"], first);
+  EXPECT_FALSE(w1[0].contains("cached"));
+
+  // a second run takes the guard from the cache and says the same again
+  test::run_command(g.run("raised", args + " --events " + (g.dir.path / "e2.jsonl").string()), &out);
+  EXPECT_EQ(finish_status(g.dir.path / "e2.jsonl")["guard"], "cached");
+  auto w2 = warnings_in(g.dir.path / "e2.jsonl");
+  ASSERT_EQ(w2.size(), said.size());
+  EXPECT_EQ(w2[0]["message"], first);
+  EXPECT_EQ(w2[0]["cached"], true);
+  EXPECT_NE(out.find("warning: node 'guard' (path.gouge_guard) on part 'patch': " + first + "\n"), std::string::npos)
+      << out;
+}
+
+TEST(Cli, BatchCountsFailedCertificatesAndExits3UnlessAPartFailed) {
+  PlanOnOneCutAnother g;
+  // a certificate with room to spare for the part the plan was made for (h 0.1, gouges to 0.05)
+  const std::string loose = " --part-input part --no-cache -q --set simulate.scallop=0.1 --set simulate.chord=0.05";
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " batch " + g.graph + " " + (g.dir.path / "patch.ply").string() + " " +
+                                  (g.dir.path / "lowered.ply").string() + loose + " -o " + (g.dir.path / "a").string(),
+                              &out),
+            3)
+      << out;
+  auto summary = g.report("a/summary.json");
+  EXPECT_EQ(summary["parts_failed"], 0);
+  EXPECT_EQ(summary["certificates_failed"], 1);
+  EXPECT_EQ(summary["parts"][0]["certificate"], "pass");
+  EXPECT_EQ(summary["parts"][0]["certificate_reasons"], nlohmann::json::array());
+  EXPECT_EQ(summary["parts"][1]["certificate"], "FAIL");
+  EXPECT_EQ(summary["parts"][1]["certificate_reasons"], g.report("a/lowered/report.json")["fail_reasons"]);
+  EXPECT_NE(out.find("\npart 'lowered': " + expected_verdict(g.report("a/lowered/report.json")) + "\n"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(out.find("part 'patch': certificate"), std::string::npos) << out;  // -q: only failing verdicts
+  EXPECT_NE(out.find("error: 1 certificate(s) failed, do not cut: lowered\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("2 of 2 parts ok, 1 certificate(s) failed; summary in "), std::string::npos) << out;
+
+  // a failed part wins: exit 1; the part whose guard would lift a ball 10 mm says where and why
+  EXPECT_EQ(test::run_command(kScallop + " batch " + g.graph + " " + (g.dir.path / "lowered.ply").string() + " " +
+                                  (g.dir.path / "high.ply").string() + loose + " -o " + (g.dir.path / "b").string(),
+                              &out),
+            1)
+      << out;
+  summary = g.report("b/summary.json");
+  EXPECT_EQ(summary["parts_failed"], 1);
+  EXPECT_EQ(summary["certificates_failed"], 1);
+  EXPECT_EQ(summary["parts"][1]["certificate"], "none");
+  const std::string error = summary["parts"][1]["errors"][0];
+  EXPECT_EQ(error.rfind("node 'guard' (path.gouge_guard) failed on part 'high': the planned ball at (", 0), 0u) << error;
+  EXPECT_NE(error.find(" mm (> 3 tool radii, 6 mm) to clear the cloud's surface: the plan does not follow the "
+                       "surface there, e.g. a fold-over of the (u,v) map"),
+            std::string::npos)
+      << error;
+  EXPECT_NE(out.find("error: 1 certificate(s) failed, do not cut: lowered\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("error: 1 part(s) failed: high\n"), std::string::npos) << out;
 }
 
 TEST(Cli, ValidatePrintsEveryErrorAndExits2) {
