@@ -12,21 +12,24 @@ namespace scallop {
 NodeDecl make_denoise_node() {
   NodeDecl d;
   d.type = "cloud.denoise";
-  d.version = 4;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused
+  d.version = 5;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty
   d.description =
       "moving-least-squares denoising: each point projected along its local normal onto a "
-      "weighted quadric fitted to its neighbours (parallel)";
+      "weighted quadric fitted to its neighbours, at the widest of several scales (k, k/2, ... "
+      "k/16) that agrees with the narrower ones, so crests and creases are not flattened "
+      "(parallel)";
   d.input("cloud", "Cloud", "the noisy points; their normals, if any, only orient the new ones")
       .input("neighbors", "Neighbors",
              "neighbours of each point (its first k are used); computed here when absent", false)
       .output("cloud", "Cloud",
               "the projected points (the input points when automatic mode finds them smooth "
               "enough), with normals from the fitted quadrics and a per-point uncertainty: "
-              "4 standard errors of the fit (or of the estimated noise), which path planners "
-              "keep as a margin")
+              "4 standard errors of the fit (or of the estimated noise); with scales > 1, 6 "
+              "standard errors of the kept fit plus a bound on its shape bias; path planners "
+              "keep it as a margin")
       .output("report", "Report",
               "{noise_sigma (mm, estimated), k (used; 0 when skipped), moved_rms (mm), skipped, "
-              "rim_refitted (points refitted from a wider neighbourhood), rim_refits_biased (of those, kept with the narrower fit because the wider one was biased), uncertainty {median, "
+              "rim_refitted (points refitted from a wider neighbourhood), rim_refits_biased (of those, kept with the narrower fit because the wider one was biased), narrowed (points kept with a narrower fit than k: sharp shape), bias_max (mm), uncertainty {median, "
               "max, max_at, factor}: how far the points may still be off the real surface}")
       .param_int("k", 0, 0, 512, "",
                  "neighbours in each fit; more averages more noise away (noise in the normal "
@@ -42,6 +45,12 @@ NodeDecl make_denoise_node() {
                    "weights exp(-2 d^2/R^2)); 0: automatic, the smallest k-th neighbour distance "
                    "around each point")
       .param_int("iterations", 1, 0, 20, "", "projections in sequence")
+      .param_int("scales", 1, 1, 6, "",
+                 "fits at k, k/2, ... (down to 16 neighbours); each point keeps the widest that "
+                 "agrees with the narrower ones, so a crest or crease is not flattened, and its "
+                 "uncertainty is 6 standard errors plus the bias bound from the other scales "
+                 "(honest on crests, about twice the single-scale uncertainty on noisy clouds). "
+                 "1: one fit of k; uncertainty 4 standard errors, noise only")
       .param_bool("normals", true,
                   "set normals from the fitted quadrics (oriented like the input normals, or "
                   "+Z); otherwise the input normals are kept");
@@ -55,6 +64,7 @@ NodeDecl make_denoise_node() {
     o.tolerance = ctx.number("tolerance");
     o.radius = ctx.number("radius");
     o.iterations = static_cast<int>(ctx.integer("iterations"));
+    o.scales = static_cast<int>(ctx.integer("scales"));
     o.set_normals = ctx.flag("normals");
     static const std::vector<Eigen::Vector3d> none;
     const auto& N = cloud->has_normals() ? cloud->normals : none;
@@ -67,10 +77,9 @@ NodeDecl make_denoise_node() {
     }
     // What each point may still be off the real surface: kUncertaintyFactor standard errors of
     // its fit, or of its own noise when the cloud was left as it is.
-    std::vector<double> uncertainty(cloud->size(), kUncertaintyFactor * r.noise_sigma);
+    std::vector<double> uncertainty(cloud->size(), uncertainty_factor(o.scales) * r.noise_sigma);
     if (!r.skipped)
-      for (std::size_t i = 0; i < uncertainty.size(); ++i)
-        uncertainty[i] = kUncertaintyFactor * r.standard_error[i];
+      uncertainty = r.uncertainty;
     std::size_t worst = 0;
     for (std::size_t i = 0; i < uncertainty.size(); ++i)
       if (uncertainty[i] > uncertainty[worst]) worst = i;
@@ -84,10 +93,12 @@ NodeDecl make_denoise_node() {
                    {"skipped", r.skipped},
                    {"rim_refitted", r.refitted},
                    {"rim_refits_biased", r.refits_biased},
+                   {"narrowed", r.narrowed},
+                   {"bias_max", r.bias.empty() ? 0.0 : *std::max_element(r.bias.begin(), r.bias.end())},
                    {"uncertainty", {{"median", sorted[sorted.size() / 2]},
                                     {"max", uncertainty[worst]},
                                     {"max_at", {at.x(), at.y(), at.z()}},
-                                    {"factor", kUncertaintyFactor}}}};
+                                    {"factor", uncertainty_factor(o.scales)}}}};
     ctx.set("report", std::move(report));
     if (r.skipped) {
       char msg[160];

@@ -91,6 +91,80 @@ TEST(Denoise, StandardErrorBoundsEveryPointsError) {
   EXPECT_GT(worst, 1.5);  // and not a vacuous bound
 }
 
+// A rounded crest (a hyperbola across the patch, radius c / a at its top, flanks of slope a)
+// sampled with noise: one wide fit flattens the crest by more than its uncertainty says; the
+// multi-scale rule keeps narrower fits there, counts the bias left, and every point lies within
+// its uncertainty of the exact surface.
+struct Crest {
+  double a = 0.7, radius = 3;
+  double z(double x) const { return 20 - a * std::sqrt(x * x + c() * c()); }
+  double c() const { return radius * a; }
+  // distance of p to the crest along its normal (first order)
+  double distance(const Vector3d& p) const {
+    const double slope = -a * p.x() / std::sqrt(p.x() * p.x() + c() * c());
+    return (p.z() - z(p.x())) / std::sqrt(1 + slope * slope);
+  }
+};
+
+std::vector<Vector3d> noisy_crest(const Crest& crest, int n, double sigma, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> ux(-15, 15), uy(-12, 12);
+  std::normal_distribution<double> g(0.0, sigma);
+  std::vector<Vector3d> P(n);
+  for (auto& p : P) {
+    const double x = ux(rng), y = uy(rng);
+    p = Vector3d(x, y, crest.z(x)) + Vector3d(g(rng), g(rng), g(rng));
+  }
+  return P;
+}
+
+TEST(Denoise, MultiScaleFitBoundsTheErrorOnACrest) {
+  const Crest crest;
+  const auto P = noisy_crest(crest, 4000, 0.02, 31);
+  DenoiseOptions o;
+  o.k = 256;
+  o.scales = 1;
+  const DenoiseResult one = mls_denoise(P, {}, o);
+  o.scales = 5;
+  const DenoiseResult multi = mls_denoise(P, {}, o);
+  ASSERT_EQ(multi.uncertainty.size(), P.size());
+  // the apex's bias: the mean error of the points within 0.5 mm of the crest's top line
+  double worst_one = 0, worst_multi = 0, apex_one = 0, apex_multi = 0;
+  std::size_t worst_at = 0, apex = 0;
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    worst_one = std::max(worst_one, std::abs(crest.distance(one.points[i])) / one.uncertainty[i]);
+    const double ratio = std::abs(crest.distance(multi.points[i])) / multi.uncertainty[i];
+    if (ratio > worst_multi) worst_multi = ratio, worst_at = i;
+    if (std::abs(P[i].x()) < 0.5) {
+      apex_one += crest.distance(one.points[i]);
+      apex_multi += crest.distance(multi.points[i]);
+      ++apex;
+    }
+  }
+  apex_one /= apex;
+  apex_multi /= apex;
+  EXPECT_GT(worst_one, 1.5) << "one wide fit: the crest's bias is not counted";
+  EXPECT_LE(worst_multi, 1.0) << "at " << P[worst_at].transpose();
+  EXPECT_GT(multi.narrowed, 0u);
+  EXPECT_LT(apex_one, -0.02);  // one fit of 256 flattens the top by 0.02 mm or more
+  EXPECT_LT(std::abs(apex_multi), 0.25 * std::abs(apex_one)) << "the top is flattened less";
+}
+
+TEST(Denoise, MultiScaleFitKeepsTheWidestOnAPlane) {
+  const double a = 0.1, b = 0.2, z0 = 1;
+  const auto P = noisy_plane(a, b, z0, 40, 30, 6000, 0.02, false, 23);
+  DenoiseOptions o;
+  o.k = 128;
+  o.scales = 5;
+  const DenoiseResult r = mls_denoise(P, {}, o);
+  EXPECT_LT(r.narrowed, P.size() / 10);  // narrower fits only by chance
+  double worst = 0;
+  for (std::size_t i = 0; i < P.size(); ++i)
+    worst = std::max(worst, std::abs(plane_distance(r.points[i], a, b, z0)) / r.uncertainty[i]);
+  EXPECT_LT(worst, 1.0);
+  EXPECT_GT(worst, 0.3);  // and not a vacuous bound
+}
+
 // Near the rim a one-sided neighbourhood leaves a point 1.5 to 4 times less certain; refitting
 // those points from a wider neighbourhood brings most of them back near the interior's level.
 TEST(Denoise, RimRefitsEqualiseTheStandardError) {
