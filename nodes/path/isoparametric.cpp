@@ -746,6 +746,9 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   Eigen::Vector3d scallop_where = Eigen::Vector3d::Zero();
   int shrunk = 0, formula4 = 0, formula3 = 0, floor_hits = 0;
   nlohmann::json warnings = nlohmann::json::array();
+  nlohmann::json strips_over = nlohmann::json::array();  // strips no side step kept under h
+  double strip_over_worst = 0;
+  Eigen::Vector3d strip_over_where = Eigen::Vector3d::Zero();
   const double hlim = planner.h();
 
   double s = 0;
@@ -786,9 +789,8 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
       const double s_next = s + ds0 >= co.S * (1 - 1e-12) ? co.S : s + ds0;
       B = planner.build_pass(s_next);
       chk = planner.check_strip(A, B);
-      warnings.push_back("between the passes at s = " + fmt(s) + " and " + fmt(s_next) +
-                         " no side step keeps the scallop under the limit (" +
-                         fmt(chk.scallop_max) + " mm at the formula's step)");
+      strips_over.push_back({{"s_from", s}, {"s_to", s_next}, {"scallop", chk.scallop_max}});
+      if (chk.scallop_max > strip_over_worst) strip_over_worst = chk.scallop_max, strip_over_where = chk.where;
     }
     ds_min = std::min(ds_min, B.s - s);
     ds_max = std::max(ds_max, B.s - s);
@@ -851,6 +853,14 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     points += out.contact.size();
     tp.passes.push_back(std::move(out));
   }
+  if (!strips_over.empty())
+    warnings.push_back(std::to_string(strips_over.size()) + " of " +
+                       std::to_string(passes.size() - 1) +
+                       " strips between passes leave more than the scallop limit at every side "
+                       "step tried (up to " + fmt(strip_over_worst) + " mm, near x " +
+                       fmt(strip_over_where.x()) + ", y " + fmt(strip_over_where.y()) +
+                       "; strips_over_limit_at lists them): a concave place the ball cannot "
+                       "reach, a kink, or a surface too uncertain there");
   if (planner.forward_floor_hits > 0)
     warnings.push_back(std::to_string(planner.forward_floor_hits) +
                        " forward steps reached the smallest step with the chord still too far "
@@ -891,6 +901,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
                         {"conformal_tolerance_deg", o.conformal_tolerance}}},
       {"steps_shrunk_by_check", shrunk},
       {"strips_over_limit", floor_hits},
+      {"strips_over_limit_at", strips_over},
       {"predicted", {{"scallop_max", scallop_max}, {"scallop_max_at", vec(scallop_where)},
                      {"chord_overcut_max", planner.chord_overcut_max},
                      {"chord_undercut_max", planner.chord_undercut_max}}},

@@ -12,7 +12,7 @@ namespace scallop {
 NodeDecl make_isoparametric_node() {
   NodeDecl d;
   d.type = "path.isoparametric";
-  d.version = 4;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field
+  d.version = 5;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field; 5: strips over the limit summarised in one warning (strips_over_limit_at), warnings said on the terminal
   d.description =
       "iso-parametric finishing passes from a UV-mapped cloud: zig-zag on a rectangle map, "
       "concentric on a disk map; forward step from the chord error, side step from the scallop "
@@ -65,6 +65,7 @@ NodeDecl make_isoparametric_node() {
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }
+    for (const auto& w : res.report["warnings"]) ctx.warn(w.get<std::string>());
     Report report;
     report.data = std::move(res.report);
     ctx.set("toolpath", std::move(res.toolpath));

@@ -286,6 +286,40 @@ TEST(Isoparametric, ReportsConcaveRegionsTighterThanTheTool) {
   EXPECT_TRUE(warned);
 }
 
+// The planner's warnings reach the terminal through ctx.warn, one line each; strips that no side
+// step keeps under the limit are one summary line, listed in strips_over_limit_at.
+TEST(Isoparametric, NodeSaysItsWarningsOneLineEach) {
+  const Trough trough;
+  const NodeDecl d = make_isoparametric_node();
+  nlohmann::json params;
+  for (const auto& p : d.params) params[p.name] = p.default_value;
+  params["tool_radius"] = trough.o.tool_radius;
+  params["scallop_height"] = trough.o.scallop_height;
+  params["chord_error"] = trough.o.chord_error;
+  std::vector<std::string> said;
+  NodeContext ctx(d, "plan", "part", params,
+                  {{"cloud", std::make_shared<const PointCloud>(trough.in.cloud)},
+                   {"neighbors", std::make_shared<const Neighborhoods>(trough.in.nb)},
+                   {"map", std::make_shared<const UVMap>(trough.in.map)}},
+                  nullptr, [&](const std::string& m) { said.push_back(m); });
+  d.run(ctx);
+  auto report = std::dynamic_pointer_cast<const Report>(ctx.take_outputs().at("report"));
+  ASSERT_TRUE(report);
+  const auto& w = report->data["warnings"];
+  ASSERT_EQ(said.size(), w.size());
+  for (std::size_t i = 0; i < said.size(); ++i) EXPECT_EQ(said[i], w[i].get<std::string>());
+  const int over = report->data["strips_over_limit"].get<int>();
+  EXPECT_EQ(report->data["strips_over_limit_at"].size(), static_cast<std::size_t>(over));
+  int summaries = 0;
+  for (const auto& line : said)
+    if (line.find(" strips between passes leave more than the scallop limit") != std::string::npos) {
+      ++summaries;
+      EXPECT_EQ(line.rfind(std::to_string(over) + " of ", 0), 0u) << line;
+    }
+  EXPECT_EQ(summaries, over > 0 ? 1 : 0);
+  EXPECT_GE(said.size(), 1u);  // the concave place at least
+}
+
 TEST(Isoparametric, LiftsTheBallWhereItWouldGougeAConcavePlace) {
   // The trough again (radius 2 < r = 3 at the bottom): a ball set on its contact there reaches
   // into the flanks; the planner lifts it, so no cloud point lies deeper than e inside a ball
