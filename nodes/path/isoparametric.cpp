@@ -38,12 +38,13 @@ std::string fmt(double x) {
 // (s, t) pass coordinates -> uv; see the header.
 struct Coords {
   bool polar = false;
+  bool transposed = false;  // rectangle: s runs along v and t along u (the outline passes)
   double S = 0;  // side extent: width (zigzag) or radius (contour)
   double T = 0;  // forward extent: height (zigzag) or 2 pi (contour)
   double R = 0;  // contour: disk radius
 
   Eigen::Vector2d uv(double s, double t) const {
-    if (!polar) return {s, t};
+    if (!polar) return transposed ? Eigen::Vector2d(t, s) : Eigen::Vector2d(s, t);
     const double rho = R - s;
     return {rho * std::cos(t), rho * std::sin(t)};
   }
@@ -812,6 +813,25 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   }
   info.push_back(planner.infos(passes.back()));
 
+  // ---- outline --------------------------------------------------------------------------------
+  // Zig-zag passes end on the rectangle's edges v = 0 and v = H: between two pass ends the rim is
+  // cut only by the balls' ends, and at a corner of the patch's outline not at all. Two passes
+  // along those edges (u = 0 ... W) cut the rim the passes end on; with the first and last pass
+  // (u = 0, W) they follow the whole boundary.
+  Coords along = co;
+  std::vector<Pass> outline;
+  if (o.outline && !co.polar) {
+    along.transposed = true;
+    along.S = co.T;
+    along.T = co.S;
+    Planner edge(interp, lifter, &model, along, o);
+    outline.push_back(edge.build_pass(0));
+    outline.push_back(edge.build_pass(along.S));
+    planner.forward_floor_hits += edge.forward_floor_hits;
+    planner.chord_overcut_max = std::max(planner.chord_overcut_max, edge.chord_overcut_max);
+    planner.chord_undercut_max = std::max(planner.chord_undercut_max, edge.chord_undercut_max);
+  }
+
   // ---- concave places the ball cannot reach -----------------------------------------------------
   std::vector<Eigen::Vector3d> concave_pts;
   std::vector<double> concave_r;
@@ -861,6 +881,18 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
                        fmt(strip_over_where.x()) + ", y " + fmt(strip_over_where.y()) +
                        "; strips_over_limit_at lists them): a concave place the ball cannot "
                        "reach, a kink, or a surface too uncertain there");
+  for (std::size_t i = 0; i < outline.size(); ++i) {
+    const Pass& P = outline[i];
+    ToolpathPass out;
+    for (std::size_t k = 0; k < P.p.size(); ++k) {
+      out.contact.push_back(P.p[k]);
+      out.normal.push_back(P.n[k]);
+      out.uv.push_back(along.uv(P.s, P.t[k]));
+      if (k) length += (P.p[k] - P.p[k - 1]).norm();
+    }
+    points += out.contact.size();
+    tp.passes.push_back(std::move(out));
+  }
   if (planner.forward_floor_hits > 0)
     warnings.push_back(std::to_string(planner.forward_floor_hits) +
                        " forward steps reached the smallest step with the chord still too far "
@@ -890,6 +922,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
                          {"too_uncertain_points", uncertain},
                          {"fit_gap_max", planner.fit_gap_max()}}},
       {"passes", passes.size()},
+      {"outline_passes", outline.size()},
       {"points", points},
       {"contact_length", length},
       {"cloud_spacing", cloud_spacing},

@@ -12,7 +12,7 @@ namespace scallop {
 NodeDecl make_isoparametric_node() {
   NodeDecl d;
   d.type = "path.isoparametric";
-  d.version = 5;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field; 5: strips over the limit summarised in one warning (strips_over_limit_at), warnings said on the terminal
+  d.version = 5;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field; 5: strips over the limit summarised in one warning (strips_over_limit_at), warnings said on the terminal, outline passes
   d.description =
       "iso-parametric finishing passes from a UV-mapped cloud: zig-zag on a rectangle map, "
       "concentric on a disk map; forward step from the chord error, side step from the scallop "
@@ -43,7 +43,10 @@ NodeDecl make_isoparametric_node() {
                    "where r_u and r_v are further than this from orthogonal, the side step uses "
                    "the corrected formula (4) instead of (3)")
       .param_float("max_segment", 5.0, 1e-3, 1e3, "mm", "longest forward step")
-      .param_int("interpolation_k", 20, 6, 64, "", "neighbours per local (u,v) fit");
+      .param_int("interpolation_k", 20, 6, 64, "", "neighbours per local (u,v) fit")
+      .param_bool("outline", true,
+                  "zigzag: also cut along the two edges of the rectangle the passes end on, so "
+                  "the rim between pass ends and the outline's corners are cut");
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");
     auto neighbors = ctx.input<Neighborhoods>("neighbors");
@@ -58,6 +61,7 @@ NodeDecl make_isoparametric_node() {
     o.conformal_tolerance = ctx.number("conformal_tolerance");
     o.max_segment = ctx.number("max_segment");
     o.interpolation_k = static_cast<int>(ctx.integer("interpolation_k"));
+    o.outline = ctx.flag("outline");
     o.progress = [&ctx](double f, const std::string& m) { ctx.progress(f, m); };
     IsoparametricResult res;
     try {

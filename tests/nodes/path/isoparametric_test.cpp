@@ -1,4 +1,5 @@
 #include "nodes/path/isoparametric.h"
+#include "nodes/post/simulate.h"
 
 #include <gtest/gtest.h>
 
@@ -90,6 +91,7 @@ TEST(Isoparametric, FlatRectanglePassesAreStraightEvenAndCoverIt) {
   o.scallop_height = 0.01;
   o.chord_error = 0.005;
   o.max_segment = 5;
+  o.outline = false;  // the passes alone (the outline is tested below)
   const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
   const Toolpath& tp = res.toolpath;
   ASSERT_GE(tp.passes.size(), 3u);
@@ -132,6 +134,44 @@ TEST(Isoparametric, FlatRectanglePassesAreStraightEvenAndCoverIt) {
   EXPECT_NEAR(r["side_interval"]["nominal_plane"].get<double>(), std::sqrt(8 * 3 * 0.01), 1e-12);
   // the planner's fit and the cloud's height field agree on a plane: no margin for their gap
   EXPECT_LT(r["surface_error"]["fit_gap_max"].get<double>(), 1e-9);
+}
+
+// The rim is part of the part: on a flat rectangle the zig-zag passes and the two outline passes
+// along the edges the passes end on (y = 0 and y = 20) leave at most h everywhere on the
+// rectangle, its edges and corners included (the product's simulation against the exact outline).
+TEST(Isoparametric, OutlinePassesCutTheRimTheWholePatchStaysUnderTheLimit) {
+  const Input in = flat();
+  IsoparametricOptions o;
+  o.tool_radius = 3;
+  o.scallop_height = 0.01;
+  o.chord_error = 0.005;
+  const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  const Toolpath& tp = res.toolpath;
+  const std::size_t n = res.report["passes"].get<std::size_t>();
+  ASSERT_EQ(tp.passes.size(), n + 2);
+  for (std::size_t i = n; i < n + 2; ++i) {
+    const ToolpathPass& edge = tp.passes[i];
+    const double y = i == n ? 0 : 20;
+    EXPECT_NEAR(edge.contact.front().x(), 0, 1e-9);
+    EXPECT_NEAR(edge.contact.back().x(), 30, 1e-9);
+    for (std::size_t k = 0; k < edge.contact.size(); ++k) {
+      EXPECT_NEAR(edge.contact[k].y(), y, 1e-9);
+      EXPECT_NEAR(edge.contact[k].z(), 0, 1e-9);
+      EXPECT_NEAR(edge.uv[k].y(), y, 1e-9);
+    }
+  }
+  const HeightField plane(in.cloud.points);
+  SimulateOptions so;
+  so.tool_radius = 3;
+  so.scallop = 0.01;
+  so.chord = 0.005;
+  so.spacing = 0.05;
+  so.loops = {{{0, 0}, {30, 0}, {30, 20}, {0, 20}}};
+  const auto sim = simulate_cut(plane, feed_centres(tp), 0, so);
+  EXPECT_LE(sim.report["scallop_max"].get<double>(), 1.01 * 0.01);
+  EXPECT_GE(sim.report["scallop_max"].get<double>(), 0.95 * 0.01);  // the cusps are there
+  EXPECT_EQ(sim.report["uncut_fraction"].get<double>(), 0.0);
+  EXPECT_LT(sim.report["gouge_max"].get<double>(), 1e-9);
 }
 
 // A surface known only to +-delta: on a flat patch the margins have closed forms. With r = 3,
@@ -197,6 +237,7 @@ TEST(Isoparametric, ForwardStepOnACylinderKeepsTheChordDeviation) {
   o.tool_radius = r;
   o.scallop_height = 0.01;
   o.chord_error = e;
+  o.outline = false;  // the outline runs straight along the cylinder's axis
   const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
   // Ball centres run on a circle of radius Rc + r; the sagitta of each centre chord is the
   // chord deviation. All within e, and the steps not needlessly short.
@@ -394,7 +435,8 @@ TEST(Isoparametric, NodeRunsAndReportsErrors) {
                            {"scallop_height", 0.01},   {"chord_error", 0.005},
                            {"safety_factor", 1.0},     {"surface_error", 0.0},
                            {"conformal_tolerance", 5.0},
-                           {"max_segment", 5.0},       {"interpolation_k", 20}};
+                           {"max_segment", 5.0},       {"interpolation_k", 20},
+                           {"outline", true}};
   auto in = std::make_shared<Input>(flat(6, 4));
   std::map<std::string, ValuePtr> inputs = {
       {"cloud", std::make_shared<PointCloud>(in->cloud)},
@@ -406,8 +448,9 @@ TEST(Isoparametric, NodeRunsAndReportsErrors) {
   auto tp = std::dynamic_pointer_cast<const Toolpath>(out.at("toolpath"));
   auto rep = std::dynamic_pointer_cast<const Report>(out.at("report"));
   ASSERT_TRUE(tp && rep);
-  EXPECT_EQ(rep->data["passes"], tp->passes.size());
-  EXPECT_NEAR(tp->passes.back().contact[0].x(), 6, 1e-9);
+  EXPECT_EQ(rep->data["passes"].get<std::size_t>() + 2, tp->passes.size());  // and the outline
+  EXPECT_EQ(rep->data["outline_passes"], 2);
+  EXPECT_NEAR(tp->passes[tp->passes.size() - 3].contact[0].x(), 6, 1e-9);
 
   auto disk = std::make_shared<Input>(disk_patch(3, 0.5, [](double, double) { return 0.0; },
                                                  [](double, double) { return Eigen::Vector2d(0, 0); }));
