@@ -852,8 +852,8 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   tp.pattern = o.pattern;
   std::size_t points = 0, lifted = 0;
   double length = 0, lift_max = 0;
-  for (std::size_t i = 0; i < passes.size(); ++i) {
-    const Pass& P = passes[i];
+  // One planned pass into the output (cut backwards when `reverse`), counted in the report.
+  auto emit = [&](const Pass& P, const Coords& c, bool reverse) {
     for (double d : P.lift) {
       lift_max = std::max(lift_max, d);
       if (d > 1e-3 * o.chord_error) ++lifted;
@@ -862,17 +862,20 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     for (std::size_t k = 0; k < P.p.size(); ++k) {
       out.contact.push_back(P.p[k]);
       out.normal.push_back(P.n[k]);
-      out.uv.push_back(co.uv(P.s, P.t[k]));
+      out.uv.push_back(c.uv(P.s, P.t[k]));
       if (k) length += (P.p[k] - P.p[k - 1]).norm();
     }
-    if (o.pattern == "zigzag" && i % 2 == 1) {  // alternate directions
+    if (reverse) {
       std::reverse(out.contact.begin(), out.contact.end());
       std::reverse(out.normal.begin(), out.normal.end());
       std::reverse(out.uv.begin(), out.uv.end());
     }
     points += out.contact.size();
     tp.passes.push_back(std::move(out));
-  }
+  };
+  for (std::size_t i = 0; i < passes.size(); ++i)
+    emit(passes[i], co, o.pattern == "zigzag" && i % 2 == 1);  // zig-zag: alternate directions
+  for (const Pass& P : outline) emit(P, along, false);
   if (!strips_over.empty())
     warnings.push_back(std::to_string(strips_over.size()) + " of " +
                        std::to_string(passes.size() - 1) +
@@ -881,18 +884,6 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
                        fmt(strip_over_where.x()) + ", y " + fmt(strip_over_where.y()) +
                        "; strips_over_limit_at lists them): a concave place the ball cannot "
                        "reach, a kink, or a surface too uncertain there");
-  for (std::size_t i = 0; i < outline.size(); ++i) {
-    const Pass& P = outline[i];
-    ToolpathPass out;
-    for (std::size_t k = 0; k < P.p.size(); ++k) {
-      out.contact.push_back(P.p[k]);
-      out.normal.push_back(P.n[k]);
-      out.uv.push_back(along.uv(P.s, P.t[k]));
-      if (k) length += (P.p[k] - P.p[k - 1]).norm();
-    }
-    points += out.contact.size();
-    tp.passes.push_back(std::move(out));
-  }
   if (planner.forward_floor_hits > 0)
     warnings.push_back(std::to_string(planner.forward_floor_hits) +
                        " forward steps reached the smallest step with the chord still too far "
