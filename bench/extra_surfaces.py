@@ -8,6 +8,7 @@ exactly as they measure the catalog.
   bench/extra_surfaces.py error  NAME cloud.ply   # largest |error| / uncertainty of a denoised cloud
   bench/extra_surfaces.py names
 
+steepcap: a sphere cap with rim slopes from 75 to 88 degrees along an irregular outline.
 Crest family: z = 20 - a sqrt(s^2 + c^2), s = x cos(t) + y sin(t), on a 100 x 60 rectangle: a
 rounded ridge with flanks of slope a and radius c / a at its top (a hyperbola across it).
 """
@@ -39,6 +40,31 @@ for radius in (1, 3, 10):
             EXTRA[name] = surfaces.Surface(
                 name, f"ridge of radius {radius} mm, flank slope {slope}, at {angle} deg",
                 crest(radius, slope, angle), surfaces._rect(100, 60), surfaces._rect_inside(100, 60))
+# Steep cap: a sphere of radius 30 cut by an irregular outline rho(theta) = 30 (0.983 + 0.0165
+# sin 3 theta) whose rim slopes range from 75 to 88 degrees (a face-like patch steep at its rim).
+CAP_R = 30.0
+
+
+def _cap_rho(theta):
+    return CAP_R * (0.983 + 0.0165 * np.sin(3 * theta))
+
+
+def _cap_inside(x, y):
+    return np.hypot(x, y) <= _cap_rho(np.arctan2(y, x))
+
+
+_th = np.arange(1440) * (2 * np.pi / 1440)
+EXTRA["steepcap"] = surfaces.Surface(
+    "steepcap", "sphere cap of radius 30, irregular outline, rim slopes 75-88 degrees",
+    lambda x, y: surfaces.sqrt(CAP_R * CAP_R - x * x - y * y),
+    np.column_stack([_cap_rho(_th) * np.cos(_th), _cap_rho(_th) * np.sin(_th)]), _cap_inside)
+# Its part not steeper than 75 degrees (the disc of radius 30 sin 75 inside the outline): what
+# cloud.trim_steep keeps at max_slope 75, to measure a program for the plannable part.
+EXTRA["steepcap75"] = surfaces.Surface(
+    "steepcap75", "steepcap up to 75 degrees: disc of radius 30 sin 75",
+    lambda x, y: surfaces.sqrt(CAP_R * CAP_R - x * x - y * y),
+    surfaces._circle(CAP_R * math.sin(math.radians(75))),
+    lambda x, y: np.hypot(x, y) <= CAP_R * math.sin(math.radians(75)))
 surfaces.CATALOG.update(EXTRA)
 
 

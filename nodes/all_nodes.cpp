@@ -20,6 +20,7 @@ NodeDecl make_boundary_order_node();
 NodeDecl make_smooth_node();
 NodeDecl make_denoise_node();
 NodeDecl make_height_field_node();
+NodeDecl make_trim_steep_node();
 NodeDecl make_boundary_map_node();
 NodeDecl make_laplacian_node();
 NodeDecl make_harmonic_node();
@@ -49,7 +50,8 @@ void register_builtins(Registry& r) {
 
   for (auto make : {make_read_cloud_node, make_write_cloud_node, make_write_toolpath_node,  // io
                     make_clean_node, make_knn_node, make_normals_node, make_boundary_node,
-                    make_boundary_order_node, make_smooth_node, make_height_field_node, make_denoise_node,  // cloud
+                    make_boundary_order_node, make_smooth_node, make_height_field_node, make_denoise_node,
+                    make_trim_steep_node,  // cloud
                     make_boundary_map_node, make_laplacian_node, make_harmonic_node, make_map_check_node,  // param
                     make_isoparametric_node, make_gouge_guard_node,  // path
                     make_link_node, make_gcode_node, make_simulate_node, make_render_node})  // post

@@ -1,0 +1,96 @@
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+#include "engine/node.h"
+#include "nodes/cloud/trim_steep.h"
+#include "nodes/types/cloud.h"
+#include "nodes/types/document.h"
+
+namespace scallop {
+
+namespace {
+
+std::string fmt(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", x);
+  return b;
+}
+
+nlohmann::json xyz(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
+
+}  // namespace
+
+NodeDecl make_trim_steep_node() {
+  NodeDecl d;
+  d.type = "cloud.trim_steep";
+  d.version = 1;
+  d.description =
+      "trims a patch's steep rim (points steeper than max_slope, and what that cuts off) so the "
+      "rest can be planned and certified; the trimmed band is reported as not machined";
+  d.input("cloud", "Cloud", "the points")
+      .output("cloud", "Cloud", "the largest connected piece of the points not steeper than max_slope, in their order")
+      .output("report", "Report",
+              "{points, kept, steep (steeper than max_slope), cut_off (gentle points in smaller "
+              "pieces), area_mm2, trimmed_area_mm2, trimmed_fraction (of the area), "
+              "max_slope_kept_deg, regions: [{points, area_mm2, centroid, min, max, "
+              "max_slope_deg}] (the trimmed pieces, largest first, at most 10)}")
+      .param_float("max_slope", 90, 1, 90, "deg",
+                   "points whose tangent plane is steeper than this to the xy plane are not "
+                   "machined (90: nothing is trimmed)")
+      .param_int("k", 16, 3, 256, "", "neighbours of the slope estimate and of the connectivity");
+  d.run = [](NodeContext& ctx) {
+    auto cloud = ctx.input<PointCloud>("cloud");
+    TrimSteepOptions o;
+    o.max_slope_deg = ctx.number("max_slope");
+    o.k = static_cast<int>(ctx.integer("k"));
+    TrimSteepResult r;
+    try {
+      r = trim_steep(cloud->points, o);
+    } catch (const std::invalid_argument& e) {
+      throw NodeError(e.what());
+    }
+    const std::size_t trimmed = cloud->size() - r.kept.size();
+    nlohmann::json regions = nlohmann::json::array();
+    for (const TrimmedRegion& g : r.regions)
+      regions.push_back({{"points", g.points}, {"area_mm2", g.area}, {"centroid", xyz(g.centroid)},
+                         {"min", xyz(g.min)}, {"max", xyz(g.max)}, {"max_slope_deg", g.max_slope_deg}});
+    Report report;
+    report.data = {{"points", cloud->size()},
+                   {"kept", r.kept.size()},
+                   {"steep", r.steep},
+                   {"cut_off", r.cut_off},
+                   {"max_slope", o.max_slope_deg},
+                   {"area_mm2", r.area},
+                   {"trimmed_area_mm2", r.trimmed_area},
+                   {"trimmed_fraction", r.area > 0 ? r.trimmed_area / r.area : 0.0},
+                   {"max_slope_kept_deg", r.max_slope_kept_deg},
+                   {"regions", regions}};
+    if (r.kept.size() < 10)
+      throw NodeError("only " + std::to_string(r.kept.size()) + " of " + std::to_string(cloud->size()) +
+                      " points are not steeper than " + fmt(o.max_slope_deg) +
+                      " degrees: nothing left to machine from above (raise max_slope)");
+    if (trimmed > 0) {
+      const TrimmedRegion& g = r.regions.front();
+      ctx.warn("not machined: " + std::to_string(trimmed) + " points (" + fmt(r.trimmed_area) +
+               " mm2, " + fmt(100 * r.trimmed_area / r.area) + " % of the area) steeper than " +
+               fmt(o.max_slope_deg) + " degrees or cut off by them, in " +
+               std::to_string(r.regions.size()) + (r.regions.size() == 10 ? " or more" : "") +
+               " pieces; the largest (" + fmt(g.area) + " mm2) from x " + fmt(g.min.x()) + " to " +
+               fmt(g.max.x()) + ", y " + fmt(g.min.y()) + " to " + fmt(g.max.y()) +
+               "; raise max_slope to keep more");
+    }
+    PointCloud out;
+    out.points.reserve(r.kept.size());
+    for (std::size_t i : r.kept) {
+      out.points.push_back(cloud->points[i]);
+      if (cloud->has_normals()) out.normals.push_back(cloud->normals[i]);
+      if (cloud->has_uncertainty()) out.uncertainty.push_back(cloud->uncertainty[i]);
+    }
+    ctx.set("report", std::move(report));
+    ctx.set("cloud", std::move(out));
+  };
+  return d;
+}
+
+}  // namespace scallop

@@ -1,0 +1,140 @@
+#include "nodes/cloud/trim_steep.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "engine/node.h"
+#include "nodes/all_nodes.h"
+#include "nodes/types/cloud.h"
+#include "nodes/types/document.h"
+
+namespace scallop {
+namespace {
+
+using Eigen::Vector3d;
+constexpr double kPi = std::numbers::pi;
+
+// Uniform by area on the sphere of radius R, polar angles 0 .. theta_max (the slope of the
+// sphere seen from +z is its polar angle).
+std::vector<Vector3d> sphere_cap(double R, double theta_max_deg, int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(std::cos(theta_max_deg * kPi / 180), 1.0), phi(0, 2 * kPi);
+  std::vector<Vector3d> P(n);
+  for (auto& p : P) {
+    const double z = u(rng), f = phi(rng), s = std::sqrt(1 - z * z);
+    p = R * Vector3d(s * std::cos(f), s * std::sin(f), z);
+  }
+  return P;
+}
+
+double polar_deg(const Vector3d& p) { return std::acos(p.z() / p.norm()) * 180 / kPi; }
+
+// A cap of a sphere of radius 30 down to 84 degrees, trimmed at 70: what is kept is the cap down
+// to 70 degrees; the trimmed band's area is 2 pi R^2 (cos 70 - cos 84) of 2 pi R^2 (1 - cos 84).
+TEST(TrimSteep, SphereCapKeepsTheGentleCapAndMeasuresTheBand) {
+  const double R = 30;
+  const auto P = sphere_cap(R, 84, 20000, 1);
+  TrimSteepOptions o;
+  o.max_slope_deg = 70;
+  const TrimSteepResult r = trim_steep(P, o);
+  const double band = 2 * kPi * R * R * (std::cos(70 * kPi / 180) - std::cos(84 * kPi / 180));
+  const double whole = 2 * kPi * R * R * (1 - std::cos(84 * kPi / 180));
+  EXPECT_NEAR(r.area, whole, 0.05 * whole);
+  EXPECT_NEAR(r.trimmed_area, band, 0.05 * band);
+  std::size_t expect_kept = 0;
+  for (const auto& p : P) expect_kept += polar_deg(p) <= 70;
+  EXPECT_NEAR(static_cast<double>(r.kept.size()), expect_kept, 0.01 * expect_kept);
+  for (std::size_t i : r.kept) EXPECT_LT(polar_deg(P[i]), 70.5);
+  EXPECT_LE(r.max_slope_kept_deg, 70);
+  EXPECT_EQ(r.cut_off, 0u);
+  ASSERT_EQ(r.regions.size(), 1u);  // the band is one ring
+  EXPECT_NEAR(r.regions[0].area, r.trimmed_area, 1e-9);
+  EXPECT_NEAR(r.regions[0].centroid.head<2>().norm(), 0, 1);
+  EXPECT_GT(r.regions[0].max_slope_deg, 83);
+  // nothing steeper than 90: nothing trimmed
+  o.max_slope_deg = 90;
+  EXPECT_EQ(trim_steep(P, o).kept.size(), P.size());
+}
+
+// A steep wall across a plane cuts it in two: the larger gentle side is kept, the smaller one is
+// cut off with the wall, and both are reported as one trimmed piece.
+TEST(TrimSteep, AWallCutsOffTheSmallerSide) {
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> ux(0, 40), uy(0, 30);
+  std::vector<Vector3d> P;
+  for (int i = 0; i < 12000; ++i) {
+    const double x = ux(rng), y = uy(rng);
+    // z rises 20 mm between x = 25 and 27 (slope atan(10) = 84 degrees)
+    P.emplace_back(x, y, 10 * std::clamp(x - 25, 0.0, 2.0));
+  }
+  TrimSteepOptions o;
+  o.max_slope_deg = 60;
+  const TrimSteepResult r = trim_steep(P, o);
+  std::size_t left = 0, right = 0;
+  for (const auto& p : P) {
+    if (p.x() < 24.5) ++left;
+    if (p.x() > 27.5) ++right;
+  }
+  for (std::size_t i : r.kept) EXPECT_LT(P[i].x(), 25.5);
+  EXPECT_GE(r.kept.size(), left);
+  EXPECT_GE(r.cut_off, right);
+  ASSERT_EQ(r.regions.size(), 1u);
+  EXPECT_NEAR(r.regions[0].max.x(), 40, 0.5);
+  EXPECT_NEAR(r.regions[0].min.x(), 25, 0.6);
+}
+
+TEST(TrimSteep, BadInputIsAnError) {
+  const auto P = sphere_cap(10, 30, 100, 3);
+  TrimSteepOptions o;
+  o.max_slope_deg = 0;
+  EXPECT_THROW(trim_steep(P, o), std::invalid_argument);
+  o.max_slope_deg = 45;
+  o.k = 2;
+  EXPECT_THROW(trim_steep(P, o), std::invalid_argument);
+  o.k = 16;
+  EXPECT_THROW(trim_steep(std::vector<Vector3d>(P.begin(), P.begin() + 10), o), std::invalid_argument);
+}
+
+TEST(TrimSteepNode, SaysWhatIsNotMachinedAndKeepsTheRest) {
+  const NodeDecl& d = *builtin_registry().find("cloud.trim_steep");
+  PointCloud pc;
+  pc.points = sphere_cap(30, 84, 20000, 1);
+  pc.uncertainty.assign(pc.points.size(), 0.01);
+  nlohmann::json params;
+  for (const auto& p : d.params) params[p.name] = p.default_value;
+  params["max_slope"] = 70.0;
+  std::vector<std::string> said;
+  NodeContext ctx(d, "trim", "cap", params, {{"cloud", std::make_shared<const PointCloud>(pc)}}, nullptr,
+                  [&](const std::string& m) { said.push_back(m); });
+  d.run(ctx);
+  auto out = ctx.take_outputs();
+  auto cloud = std::dynamic_pointer_cast<const PointCloud>(out.at("cloud"));
+  auto report = std::dynamic_pointer_cast<const Report>(out.at("report"));
+  ASSERT_TRUE(cloud && report);
+  EXPECT_EQ(report->data["kept"], cloud->size());
+  EXPECT_EQ(cloud->uncertainty.size(), cloud->size());
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_EQ(said[0].rfind("not machined: " +
+                              std::to_string(pc.size() - cloud->size()) + " points (",
+                          0),
+            0u)
+      << said[0];
+  EXPECT_NE(said[0].find("steeper than 70 degrees or cut off by them, in 1 pieces"), std::string::npos) << said[0];
+
+  params["max_slope"] = 1.0;
+  NodeContext none(d, "trim", "cap", params, {{"cloud", std::make_shared<const PointCloud>(pc)}}, nullptr);
+  try {
+    d.run(none);
+    FAIL() << "no error";
+  } catch (const NodeError& e) {
+    EXPECT_NE(std::string(e.what()).find("are not steeper than 1 degrees: nothing left to machine from above (raise max_slope)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace scallop
