@@ -511,7 +511,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
   res.bias = bias;
   res.uncertainty.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    res.uncertainty[i] = uncertainty_factor(o.scales) * res.standard_error[i] + bias[i];
+    res.uncertainty[i] = std::max(kUncertaintyFloor, uncertainty_factor(o.scales) * res.standard_error[i] + bias[i]);
     if (chosen[i] > 0) ++res.narrowed;
   }
   double moved = 0;

@@ -87,6 +87,11 @@ struct DenoiseResult {
 // (with 5.5: 1.00 on both crests; with 4: 1.31, 1.32). The median uncertainty is then 0.024 mm
 // against 0.0106 with one scale.
 inline constexpr double kUncertaintyFactor = 4.0;
+// No cloud is known better than this (mm): below it, float storage (a float32 coordinate of
+// 100 mm is rounded to 4e-6 mm) and any scanner's resolution. Without it an exact clean cloud's
+// uncertainty, 4 times a noise estimate of rounding errors, was exceeded by its rounding errors
+// (largest |error| / uncertainty 1.01 on the catalog's clean plane).
+inline constexpr double kUncertaintyFloor = 1e-4;
 inline constexpr double kUncertaintyFactorMultiScale = 6.0;
 inline double uncertainty_factor(int scales) {
   return scales > 1 ? kUncertaintyFactorMultiScale : kUncertaintyFactor;

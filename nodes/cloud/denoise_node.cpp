@@ -12,7 +12,7 @@ namespace scallop {
 NodeDecl make_denoise_node() {
   NodeDecl d;
   d.type = "cloud.denoise";
-  d.version = 5;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty
+  d.version = 5;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty, a 0.1 um floor
   d.description =
       "moving-least-squares denoising: each point projected along its local normal onto a "
       "weighted quadric fitted to its neighbours, at the widest of several scales (k, k/2, ... "
@@ -24,7 +24,7 @@ NodeDecl make_denoise_node() {
       .output("cloud", "Cloud",
               "the projected points (the input points when automatic mode finds them smooth "
               "enough), with normals from the fitted quadrics and a per-point uncertainty: "
-              "4 standard errors of the fit (or of the estimated noise); with scales > 1, 6 "
+              "4 standard errors of the fit (or of the estimated noise), at least 0.1 um; with scales > 1, 6 "
               "standard errors of the kept fit plus a bound on its shape bias; path planners "
               "keep it as a margin")
       .output("report", "Report",
@@ -77,7 +77,7 @@ NodeDecl make_denoise_node() {
     }
     // What each point may still be off the real surface: kUncertaintyFactor standard errors of
     // its fit, or of its own noise when the cloud was left as it is.
-    std::vector<double> uncertainty(cloud->size(), uncertainty_factor(o.scales) * r.noise_sigma);
+    std::vector<double> uncertainty(cloud->size(), std::max(kUncertaintyFloor, uncertainty_factor(o.scales) * r.noise_sigma));
     if (!r.skipped)
       uncertainty = r.uncertainty;
     std::size_t worst = 0;
