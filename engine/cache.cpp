@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cctype>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -18,7 +20,12 @@ namespace scallop {
 namespace fs = std::filesystem;
 
 namespace {
-constexpr char kMagic[] = "SCALLOP-CACHE 2\n";
+// Entry layout (format 3): magic, the entry's own key (u64 length + bytes), u64 output count, then
+// per output: port, value type, u64 payload size, payload; last, 32 hex digits of XXH3-128 over
+// everything before them. Format 2 had no key: an entry copied over another key's file passed
+// its checksum and loaded as the wrong value. Entries of another format are a clean miss.
+constexpr char kMagicPrefix[] = "SCALLOP-CACHE ";
+constexpr char kMagic[] = "SCALLOP-CACHE 3\n";
 constexpr std::size_t kMagicLen = sizeof(kMagic) - 1;
 constexpr std::size_t kHashLen = 32;
 
@@ -102,11 +109,25 @@ class AtomicWriter {
 std::string encoded_u64(std::uint64_t v) { return std::string(reinterpret_cast<const char*>(&v), sizeof v); }
 std::string encoded_string(const std::string& s) { return encoded_u64(s.size()) + s; }
 
-// Checks magic and checksum of an entry held in memory; returns "" when it is sound.
-std::string verify_entry(const std::string& bytes) {
-  if (bytes.size() < kMagicLen + kHashLen || bytes.compare(0, kMagicLen, kMagic) != 0) return "bad header";
+// Checks magic, checksum and key of an entry held in memory; returns "" when it is sound, else
+// why not. `body_at` receives where the outputs begin.
+std::string verify_entry(const std::string& bytes, const std::string& key, std::size_t* body_at = nullptr) {
+  if (bytes.compare(0, sizeof(kMagicPrefix) - 1, kMagicPrefix) == 0 && bytes.compare(0, kMagicLen, kMagic) != 0) {
+    std::string version;
+    for (std::size_t i = sizeof(kMagicPrefix) - 1; i < bytes.size() && version.size() < 8 && std::isdigit(static_cast<unsigned char>(bytes[i])); ++i)
+      version += bytes[i];
+    return "entry of another cache format (" + (version.empty() ? std::string("?") : version) + ", now 3)";
+  }
+  if (bytes.size() < kMagicLen + sizeof(std::uint64_t) + kHashLen || bytes.compare(0, kMagicLen, kMagic) != 0)
+    return "damaged entry (bad header)";
   std::string_view body(bytes.data(), bytes.size() - kHashLen);
-  if (hash_bytes(body) != bytes.substr(bytes.size() - kHashLen)) return "checksum mismatch";
+  if (hash_bytes(body) != bytes.substr(bytes.size() - kHashLen)) return "damaged entry (checksum mismatch)";
+  std::uint64_t key_len = 0;
+  std::memcpy(&key_len, bytes.data() + kMagicLen, sizeof key_len);
+  const std::size_t key_at = kMagicLen + sizeof key_len;
+  if (key_len > body.size() - key_at) return "damaged entry (bad header)";
+  if (std::string_view(bytes.data() + key_at, key_len) != key) return "entry holds another key";
+  if (body_at) *body_at = key_at + key_len;
   return "";
 }
 }  // namespace
@@ -123,13 +144,14 @@ std::string DiskCache::entry_path(const std::string& key) const {
   return (fs::path(dir_) / key.substr(0, 2) / (key + ".entry")).string();
 }
 
-bool DiskCache::contains(const std::string& key) const {
+DiskCache::Check DiskCache::check(const std::string& key) const {
   std::string path = entry_path(key);
-  if (!fs::exists(path)) return false;
-  if (verify_entry(read_all(path)).empty()) return true;
+  if (!fs::exists(path)) return {false, "no entry"};
+  std::string why = verify_entry(read_all(path), key);
+  if (why.empty()) return {true, ""};
   std::error_code ec;
-  fs::remove(path, ec);
-  return false;
+  fs::remove(path, ec);  // a bad entry is dropped so the recomputed one replaces it
+  return {false, why};
 }
 
 DiskCache::Lookup DiskCache::load(const std::string& key, const ValueTypes& types) const {
@@ -143,13 +165,14 @@ DiskCache::Lookup DiskCache::load(const std::string& key, const ValueTypes& type
   auto reject = [&](const std::string& why) {
     std::error_code ec;
     fs::remove(path, ec);  // a bad entry is dropped so the recomputed one replaces it
-    r.why = "unreadable entry (" + why + "), recomputed";
+    r.why = why;
     r.outputs.clear();
     return r;
   };
-  if (std::string bad = verify_entry(bytes); !bad.empty()) return reject(bad);
+  std::size_t body_at = 0;
+  if (std::string bad = verify_entry(bytes, key, &body_at); !bad.empty()) return reject(bad);
   try {
-    MemoryBuffer buf(bytes.data() + kMagicLen, bytes.size() - kMagicLen - kHashLen);
+    MemoryBuffer buf(bytes.data() + body_at, bytes.size() - body_at - kHashLen);
     std::istream in(&buf);
     std::uint64_t n = bin::read_u64(in);
     for (std::uint64_t i = 0; i < n; ++i) {
@@ -157,16 +180,16 @@ DiskCache::Lookup DiskCache::load(const std::string& key, const ValueTypes& type
       std::string type = bin::read_string(in);
       std::uint64_t size = bin::read_u64(in);
       const ValueType* vt = types.find(type);
-      if (!vt || !vt->deserialize) return reject("unknown value type " + type);
-      std::size_t at = buf.position() + kMagicLen;
-      if (size > bytes.size() - kHashLen - at) return reject("payload runs past the end");
+      if (!vt || !vt->deserialize) return reject("damaged entry (unknown value type " + type + ")");
+      std::size_t at = buf.position() + body_at;
+      if (size > bytes.size() - kHashLen - at) return reject("damaged entry (payload runs past the end)");
       MemoryBuffer pbuf(bytes.data() + at, size);
       std::istream pin(&pbuf);
       r.outputs[port] = vt->deserialize(pin);
       buf.skip(size);
     }
   } catch (const std::exception& e) {
-    return reject(e.what());
+    return reject(std::string("damaged entry (") + e.what() + ")");
   }
   r.hit = true;
   return r;
@@ -175,6 +198,7 @@ DiskCache::Lookup DiskCache::load(const std::string& key, const ValueTypes& type
 void DiskCache::store(const std::string& key, const std::map<std::string, ValuePtr>& outputs) const {
   AtomicWriter w(dir_, entry_path(key));
   w.put(kMagic, kMagicLen);
+  w.put(encoded_string(key));
   w.put(encoded_u64(outputs.size()));
   if (after_partial_write) after_partial_write(w.temp_path());
   for (const auto& [port, value] : outputs) {
@@ -189,8 +213,10 @@ void DiskCache::store(const std::string& key, const std::map<std::string, ValueP
 std::optional<nlohmann::json> DiskCache::last_manifest(const std::string& identity) const {
   std::string text = read_all((fs::path(dir_) / "manifests" / (hash_bytes(identity) + ".json")).string());
   if (text.size() <= kHashLen) return std::nullopt;
+  std::string_view body(text.data(), text.size() - kHashLen);
+  if (hash_bytes(body) != text.substr(text.size() - kHashLen)) return std::nullopt;  // damaged: as if none
   try {
-    return nlohmann::json::parse(text.substr(0, text.size() - kHashLen));
+    return nlohmann::json::parse(body);
   } catch (const std::exception&) {
     return std::nullopt;
   }

@@ -2,8 +2,10 @@
 //
 // An entry holds every output of one node run under its key (a Merkle chain: hash of node type,
 // node version, canonical parameters and the keys of the inputs). Entries are written to a temp
-// file and renamed into place, and carry a checksum of their body, so a killed or crashed writer
-// never leaves an entry that reads back wrong.
+// file and renamed into place, carry their own key and end with a checksum of everything before
+// it, so a killed or crashed writer never leaves an entry that reads back wrong, and an entry
+// copied over another key's file is a miss, not another node's value. A bad entry is deleted
+// when it is found, so the recomputed one takes its place.
 #pragma once
 
 #include <functional>
@@ -25,11 +27,19 @@ class DiskCache {
   struct Lookup {
     bool hit = false;
     std::map<std::string, ValuePtr> outputs;
-    std::string why;  // for a miss: "no entry", "unreadable entry (...)"
+    std::string why;  // for a miss: as Check::why, or "damaged entry (<what the decoder said>)"
   };
   Lookup load(const std::string& key, const ValueTypes& types) const;
-  // Whether a sound entry exists (checksum verified, values not decoded); drops a bad one.
-  bool contains(const std::string& key) const;
+
+  struct Check {
+    bool sound = false;
+    // for a miss: "no entry", "damaged entry (checksum mismatch)", "damaged entry (bad header)",
+    // "entry holds another key", "entry of another cache format (2, now 3)"
+    std::string why;
+  };
+  // Whether a sound entry exists (header, key and checksum verified; values not decoded); a bad
+  // one is deleted.
+  Check check(const std::string& key) const;
   void store(const std::string& key, const std::map<std::string, ValuePtr>& outputs) const;
 
   // What the last run of a node (by graph and node id) was keyed on, for --explain.

@@ -96,13 +96,29 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
     m["key"] = keys[i];
     manifests[i] = std::move(m);
   }
-  std::vector<char> have(n, 0), needed(n, 0);
+  // What each node does, decided before anything runs:
+  //  have    a sound entry is on disk (header, key and checksum checked; a bad one is deleted);
+  //  runs    computed: it has no sound entry, and something needs its outputs or it is cached on
+  //          disk (the cache heals: an entry that went missing or bad is written again, even when
+  //          its consumers all came from the cache);
+  //  needed  its outputs must be in memory: graph outputs, sinks (side effects), and the inputs of
+  //          every node that runs, however far up a missing entry reaches. A cached node nothing
+  //          needs is never even loaded.
+  std::vector<char> have(n, 0), runs(n, 0), needed(n, 0);
+  std::vector<std::string> bad_entry(n);  // why a node's entry was rejected ("" if none or missing)
   if (options.cache)
-    for (int i = 0; i < n; ++i) have[i] = plan.nodes[i].decl->cache_on_disk && options.cache->contains(keys[i]);
+    for (int i = 0; i < n; ++i)
+      if (plan.nodes[i].decl->cache_on_disk) {
+        DiskCache::Check c = options.cache->check(keys[i]);
+        have[i] = c.sound;
+        if (!c.sound && c.why != "no entry") bad_entry[i] = c.why;
+      }
   for (auto it = plan.order.rbegin(); it != plan.order.rend(); ++it) {
     int i = *it;
     needed[i] = is_graph_output[i] || plan.nodes[i].dependents.empty();
-    for (int d : plan.nodes[i].dependents) needed[i] |= needed[d] && !have[d];
+    for (int d : plan.nodes[i].dependents) needed[i] |= runs[d];
+    const bool heal = options.cache && plan.nodes[i].decl->cache_on_disk;
+    runs[i] = !have[i] && (needed[i] || heal);
   }
 
   auto run_node = [&](int i) {
@@ -116,7 +132,7 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
 
     std::map<std::string, ValuePtr> in;
     std::string skipped_because;
-    if (needed[i] && !have[i]) {
+    if (runs[i]) {
       std::lock_guard lock(output_mutex);
       for (const auto& [port, src] : pn.inputs) {
         if (src.node < 0) {
@@ -132,7 +148,7 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
 
     std::map<std::string, ValuePtr> out;
     std::string identity = plan.graph_path + "#" + plan.graph_name + "#" + pn.id;
-    rec.cache = options.cache ? "miss" : "off";
+    rec.cache = options.cache && pn.decl->cache_on_disk ? "miss" : "off";
     if (!skipped_because.empty()) {
       rec.status = "skipped";
       rec.why = skipped_because;
@@ -153,13 +169,19 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
           out = std::move(hit.outputs);
         } else {  // the entry went bad after it was checked: its inputs were never loaded
           rec.status = "failed";
-          rec.error = "its cache entry became unreadable during the run (" + hit.why + "); run again";
+          rec.error = "its cache entry went bad during the run: " + hit.why + "; run again to recompute it";
         }
       } else {
         rec.why += " (not loaded: nothing downstream needs it)";
       }
+    } else if (!runs[i]) {  // not cached on disk, and every consumer came from the cache
+      rec.status = "skipped";
+      rec.why = "not run: nothing downstream needs it";
     } else {
-      if (options.cache) rec.why = explain_miss(options.cache->last_manifest(identity), manifests[i]);
+      if (options.cache && !pn.decl->cache_on_disk) rec.why = "this node is not cached on disk";
+      else if (options.cache && !bad_entry[i].empty()) rec.why = bad_entry[i];
+      else if (options.cache) rec.why = explain_miss(options.cache->last_manifest(identity), manifests[i]);
+      if (options.cache && !needed[i]) rec.why += "; recomputed so that the cache holds it again";
       try {
         double last_emit = -1;
         std::mutex warn_mutex;
@@ -205,7 +227,7 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
     }
     rec.finish = seconds_since_start();
     emit({{"event", "node_finish"}, {"node", pn.id}, {"type", rec.type}, {"status", rec.status},
-          {"seconds", rec.seconds()}, {"cache", rec.cache}, {"why", rec.why}, {"error", rec.error}});
+          {"seconds", rec.seconds()}, {"cache", rec.cache}, {"why", rec.why}, {"error", rec.error}, {"key", rec.key}});
 
     // Memory tier: free each input's producer once its last consumer is done.
     std::lock_guard lock(output_mutex);

@@ -65,6 +65,49 @@ TEST(Cli, RunWritesEachOutputAndASecondProcessReusesTheDiskCache) {
   EXPECT_EQ(third["normals"], "ok");
 }
 
+std::map<std::string, std::string> finish_field(const fs::path& events, const char* field) {
+  std::map<std::string, std::string> value;
+  for (const auto& e : read_events(events))
+    if (e["event"] == "node_finish") value[e["node"]] = e[field];
+  return value;
+}
+
+TEST(Cli, ADeletedOrSwappedCacheEntryInTheMiddleHealsOnTheNextRun) {
+  // read -> clean -> knn -> normals (which reads clean and knn): knn's consumer is cached
+  test::TempDir dir;
+  write_patch(dir.path / "patch.ply");
+  const std::string base = kScallop + " run " + kGraph + " --input cloud=" + (dir.path / "patch.ply").string() +
+                           " --cache " + (dir.path / "cache").string() + " --explain -o " + (dir.path / "out").string();
+  std::string out;
+  ASSERT_EQ(test::run_command(base + " --events " + (dir.path / "e1.jsonl").string(), &out), 0) << out;
+  const std::string cloud = test::read_file(dir.path / "out" / "cloud.ply");
+  auto key = finish_field(dir.path / "e1.jsonl", "key");
+  auto entry = [&](const std::string& node) {
+    return dir.path / "cache" / key[node].substr(0, 2) / (key[node] + ".entry");
+  };
+  ASSERT_TRUE(fs::exists(entry("knn")));
+
+  // was: "node 'knn' (cloud.knn) failed on part 'patch': input 'cloud' is not connected", every run
+  fs::remove(entry("knn"));
+  ASSERT_EQ(test::run_command(base + " --events " + (dir.path / "e2.jsonl").string(), &out), 0) << out;
+  EXPECT_EQ(finish_status(dir.path / "e2.jsonl"),
+            (std::map<std::string, std::string>{{"read", "cached"}, {"clean", "cached"}, {"knn", "ok"}, {"normals", "cached"}}));
+  EXPECT_EQ(finish_field(dir.path / "e2.jsonl", "why")["clean"], "same type, version, parameters and inputs");
+  EXPECT_NE(out.find("cache miss: entry missing; recomputed so that the cache holds it again\n"), std::string::npos) << out;
+  EXPECT_TRUE(fs::exists(entry("knn")));
+  EXPECT_EQ(test::read_file(dir.path / "out" / "cloud.ply"), cloud);
+
+  // clean's cloud (no normals) copied over normals' entry: same port and type, sound checksum
+  fs::copy_file(entry("clean"), entry("normals"), fs::copy_options::overwrite_existing);
+  ASSERT_EQ(test::run_command(base + " --events " + (dir.path / "e3.jsonl").string(), &out), 0) << out;
+  EXPECT_EQ(finish_status(dir.path / "e3.jsonl")["normals"], "ok");
+  EXPECT_NE(out.find("cache miss: entry holds another key\n"), std::string::npos) << out;
+  EXPECT_EQ(test::read_file(dir.path / "out" / "cloud.ply"), cloud);
+
+  ASSERT_EQ(test::run_command(base + " --events " + (dir.path / "e4.jsonl").string(), &out), 0) << out;
+  for (const auto& [node, status] : finish_status(dir.path / "e4.jsonl")) EXPECT_EQ(status, "cached") << node;
+}
+
 TEST(Cli, BatchWithACorruptPartReturnsTheOthersAndNamesIt) {
   test::TempDir dir;
   write_patch(dir.path / "good_a.ply");

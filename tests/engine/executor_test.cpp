@@ -175,11 +175,120 @@ TEST(Cache, CorruptOrTruncatedEntryIsRejectedAndRecomputed) {
   fs::resize_file(path, fs::file_size(path) - 7);
   auto lookup = cache.load(first.find("twice")->key, reg.values());
   EXPECT_FALSE(lookup.hit);
-  EXPECT_EQ(lookup.why, "unreadable entry (checksum mismatch), recomputed");
+  EXPECT_EQ(lookup.why, "damaged entry (checksum mismatch)");
+  EXPECT_FALSE(fs::exists(path));  // dropped, so the recomputed entry takes its place
   executions().clear();
   RunResult again = run(reg, kChain, &cache);
   EXPECT_EQ(again.executed(), 1);
   EXPECT_EQ(total(again), 10.0);
+
+  // a flipped byte in the middle of the chain, whose consumer is cached: recomputed from its
+  // inputs (loaded from the cache), and the cache holds it again
+  std::string sum = cache.entry_path(first.find("sum")->key);
+  std::string bytes = test::read_file(sum);
+  bytes[bytes.size() / 2] ^= 0x20;
+  test::write_file(sum, bytes);
+  executions().clear();
+  RunResult healed = run(reg, kChain, &cache);
+  ASSERT_TRUE(healed.ok()) << healed.errors[0];
+  EXPECT_EQ(healed.executed(), 1);
+  EXPECT_EQ(executions()["sum"], 1);
+  EXPECT_EQ(healed.find("sum")->why, "damaged entry (checksum mismatch); recomputed so that the cache holds it again");
+  EXPECT_EQ(run(reg, kChain, &cache).executed(), 0);
+}
+
+// kChain, run once with a cache; then `damage` is done to the entries; the next run's result.
+template <class Damage>
+RunResult rerun_after(const Registry& reg, Damage damage) {
+  test::TempDir dir;
+  DiskCache cache(dir.str());
+  RunResult first = run(reg, kChain, &cache);
+  EXPECT_TRUE(first.ok());
+  damage(cache, [&](const char* id) { return cache.entry_path(first.find(id)->key); });
+  executions().clear();
+  RunResult again = run(reg, kChain, &cache);
+  EXPECT_EQ(run(reg, kChain, &cache).executed(), 0) << "the cache is whole again";
+  return again;
+}
+
+TEST(Cache, DeletedMiddleEntryIsRecomputedFromItsInputsWhenItsConsumerIsCached) {
+  // was: 'sum' ran without its inputs ("input 'a' is not connected") on every later run
+  Registry reg = test::make_test_registry();
+  RunResult r = rerun_after(reg, [](DiskCache&, auto entry) { fs::remove(entry("sum")); });
+  ASSERT_TRUE(r.ok()) << r.errors[0];
+  EXPECT_EQ(total(r), 10.0);
+  EXPECT_EQ(r.executed(), 1);
+  EXPECT_EQ(executions()["sum"], 1);
+  EXPECT_EQ(r.find("sum")->status, "ok");
+  EXPECT_EQ(r.find("sum")->why, "entry missing; recomputed so that the cache holds it again");
+  for (const char* id : {"a", "b"}) {  // its inputs: loaded from the cache, not recomputed
+    EXPECT_EQ(r.find(id)->status, "cached") << id;
+    EXPECT_EQ(r.find(id)->why, "same type, version, parameters and inputs") << id;
+  }
+  EXPECT_EQ(r.find("twice")->status, "cached");
+}
+
+TEST(Cache, DeletedEntriesRecomputeExactlyTheMissingAncestry) {
+  // 'sum' and its input 'a' are gone: both run, 'b' is loaded, 'twice' stays cached
+  Registry reg = test::make_test_registry();
+  RunResult r = rerun_after(reg, [](DiskCache&, auto entry) {
+    fs::remove(entry("sum"));
+    fs::remove(entry("a"));
+  });
+  ASSERT_TRUE(r.ok()) << r.errors[0];
+  EXPECT_EQ(total(r), 10.0);
+  std::map<std::string, std::string> status;
+  for (const auto& n : r.nodes) status[n.id] = n.status;
+  EXPECT_EQ(status, (std::map<std::string, std::string>{{"a", "ok"}, {"b", "cached"}, {"sum", "ok"}, {"twice", "cached"}}));
+  EXPECT_EQ(executions(), (std::map<std::string, int>{{"a", 1}, {"sum", 1}}));
+}
+
+TEST(Cache, EntryCopiedOverAnotherKeysFileIsAMissNotTheOtherValue) {
+  // 'sum' (5) copied over 'twice' (10): it passes its checksum, but holds another key
+  Registry reg = test::make_test_registry();
+  RunResult r = rerun_after(reg, [](DiskCache&, auto entry) {
+    fs::copy_file(entry("sum"), entry("twice"), fs::copy_options::overwrite_existing);
+  });
+  ASSERT_TRUE(r.ok()) << r.errors[0];
+  EXPECT_EQ(total(r), 10.0);
+  EXPECT_EQ(r.find("twice")->status, "ok");
+  EXPECT_EQ(r.find("twice")->cache, "miss");
+  EXPECT_EQ(r.find("twice")->why, "entry holds another key");
+  EXPECT_EQ(r.find("sum")->status, "cached");
+  EXPECT_EQ(r.executed(), 1);
+}
+
+TEST(Cache, EntryOfAnOlderFormatIsACleanMiss) {
+  // format 2 had no key in the entry: such an entry is recomputed, never an error
+  Registry reg = test::make_test_registry();
+  RunResult r = rerun_after(reg, [](DiskCache&, auto entry) {
+    test::write_file(entry("twice"), std::string("SCALLOP-CACHE 2\n") + std::string(8, '\0') +
+                                         "0123456789abcdef0123456789abcdef");
+  });
+  ASSERT_TRUE(r.ok()) << r.errors[0];
+  EXPECT_EQ(total(r), 10.0);
+  EXPECT_EQ(r.find("twice")->why, "entry of another cache format (2, now 3)");
+  EXPECT_EQ(r.executed(), 1);
+}
+
+TEST(Cache, NodeNotCachedOnDiskWhoseConsumersAreCachedDoesNotRun) {
+  Registry reg = test::make_test_registry();
+  const char* text = R"({"scallop_graph": 1, "nodes": [
+      {"id": "a", "type": "test.const", "params": {"value": 4}},
+      {"id": "pass", "type": "test.barrier", "params": {"parties": 1}, "inputs": {"a": "a.out"}},
+      {"id": "twice", "type": "test.add", "params": {"times": 2}, "inputs": {"a": "pass.out"}}],
+      "outputs": {"total": "twice.out"}})";
+  test::TempDir dir;
+  DiskCache cache(dir.str());
+  ASSERT_TRUE(run(reg, text, &cache).ok());
+  executions().clear();
+  RunResult r = run(reg, text, &cache);
+  ASSERT_TRUE(r.ok()) << r.errors[0];
+  EXPECT_EQ(total(r), 8.0);
+  EXPECT_EQ(r.executed(), 0);
+  EXPECT_EQ(r.find("pass")->status, "skipped");
+  EXPECT_EQ(r.find("pass")->cache, "off");
+  EXPECT_EQ(r.find("pass")->why, "not run: nothing downstream needs it");
 }
 
 TEST(Cache, KeyDoesNotDependOnInputFileName) {
