@@ -15,69 +15,130 @@ namespace {
 
 using json = nlohmann::json;
 
-// Tracks the JSON path while parsing, to report duplicate keys (nlohmann keeps only the last).
-class DuplicateKeyFinder {
+// A name or value from the graph as messages show it: at most ~kMax bytes (cut at a UTF-8 character
+// boundary, "…" marks the cut) and control characters as \xNN. Every message then has a bounded
+// length, so a graph's errors take space linear in its size, whatever its names and values.
+std::string shown(const std::string& s, std::size_t kMax = 64) {
+  std::size_t n = s.size();
+  if (n > kMax) {
+    n = kMax - 4;
+    while (n > 0 && (static_cast<unsigned char>(s[n]) & 0xC0) == 0x80) --n;  // a continuation byte
+  }
+  std::string out;
+  for (std::size_t i = 0; i < n; ++i) {
+    unsigned char c = static_cast<unsigned char>(s[i]);
+    if (c < 0x20 || c == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return n < s.size() ? out + "…" : out;
+}
+
+std::string in_quotes(const std::string& s) { return "'" + shown(s) + "'"; }
+
+// A JSON path as messages show it: one longer than 160 bytes keeps its first 40 and last 100,
+// "…" between (a path of 64 levels of long keys would otherwise repeat kilobytes per message).
+std::string shown_path(const std::string& path) {
+  if (path.size() <= 160) return path;
+  std::size_t head = 40, tail = path.size() - 100;
+  while (head > 0 && (static_cast<unsigned char>(path[head]) & 0xC0) == 0x80) --head;
+  while (tail < path.size() && (static_cast<unsigned char>(path[tail]) & 0xC0) == 0x80) ++tail;
+  return path.substr(0, head) + "…" + path.substr(tail);
+}
+
+// "a, b, c"; more than 20 names end with "… (N more)", so that a message listing what was
+// expected stays short however many names the graph has.
+template <class Range, class Name>
+std::string join_listed(const Range& range, std::size_t size, Name name) {
+  constexpr std::size_t kMaxListed = 20;
+  std::string s;
+  std::size_t i = 0;
+  for (auto it = range.begin(); it != range.end() && i < kMaxListed; ++it, ++i) s += (i ? ", " : "") + shown(name(*it));
+  if (size > kMaxListed) s += ", … (" + std::to_string(size - kMaxListed) + " more)";
+  return s.empty() ? "(none)" : s;
+}
+
+std::string join_names(const std::vector<std::string>& names) {
+  return join_listed(names, names.size(), [](const std::string& n) -> const std::string& { return n; });
+}
+
+// Finds repeated keys (nlohmann keeps only the last) in a second, SAX pass over text that already
+// parsed: nlohmann's parser with a callback is quadratic in the members of an object (its
+// end_object scans the parent for discarded values; 20 000 graph inputs took 4.7 s). A frame keeps
+// its current key or element index; a JSON path is put together only for a duplicate.
+class DuplicateKeyFinder : public nlohmann::json_sax<json> {
  public:
   std::vector<std::string> duplicates;  // JSON paths of repeated keys
 
-  bool operator()(int, json::parse_event_t event, json& parsed) {
-    switch (event) {
-      case json::parse_event_t::object_start:
-      case json::parse_event_t::array_start:
-        frames_.push_back({event == json::parse_event_t::object_start, child_path(), {}, "", 0});
-        break;
-      case json::parse_event_t::key: {
-        auto& f = frames_.back();
-        std::string key = parsed.get<std::string>();
-        if (!f.keys.insert(key).second) duplicates.push_back(join(f.path, key));
-        f.key = key;
-        break;
-      }
-      case json::parse_event_t::value:
-        if (!frames_.empty() && !frames_.back().is_object) ++frames_.back().count;
-        break;
-      case json::parse_event_t::object_end:
-      case json::parse_event_t::array_end:
-        frames_.pop_back();
-        if (!frames_.empty() && !frames_.back().is_object) ++frames_.back().count;
-        break;
-    }
+  bool null() override { return value(); }
+  bool boolean(bool) override { return value(); }
+  bool number_integer(number_integer_t) override { return value(); }
+  bool number_unsigned(number_unsigned_t) override { return value(); }
+  bool number_float(number_float_t, const string_t&) override { return value(); }
+  bool string(string_t&) override { return value(); }
+  bool binary(binary_t&) override { return value(); }
+  bool start_object(std::size_t) override { return start(true); }
+  bool start_array(std::size_t) override { return start(false); }
+  bool end_object() override { return end(); }
+  bool end_array() override { return end(); }
+  bool key(string_t& k) override {
+    auto& f = frames_.back();
+    if (!f.keys.insert(k).second) duplicates.push_back(path_of(frames_.size() - 1, k));
+    f.key = k;
     return true;
   }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override { return false; }
 
  private:
   struct Frame {
     bool is_object;
-    std::string path;
     std::set<std::string> keys;
     std::string key;
     int count;
   };
   std::vector<Frame> frames_;
 
-  static std::string join(const std::string& path, const std::string& key) {
-    return path.empty() ? key : path + "." + key;
+  bool value() {
+    if (!frames_.empty() && !frames_.back().is_object) ++frames_.back().count;
+    return true;
   }
-  std::string child_path() const {
-    if (frames_.empty()) return "";
-    const auto& f = frames_.back();
-    return f.is_object ? join(f.path, f.key) : f.path + "[" + std::to_string(f.count) + "]";
+  bool start(bool is_object) {
+    frames_.push_back({is_object, {}, "", 0});
+    return true;
+  }
+  bool end() {
+    frames_.pop_back();
+    return value();
+  }
+
+  // "a.b[2].key": the keys and indices of the enclosing frames, then `key`.
+  std::string path_of(std::size_t depth, const std::string& key) const {
+    std::string path;
+    auto add_key = [&](const std::string& k) {
+      if (!path.empty()) path += '.';
+      path += shown(k);
+    };
+    for (std::size_t i = 0; i < depth; ++i) {
+      if (frames_[i].is_object) {
+        add_key(frames_[i].key);
+      } else {
+        path += '[';
+        path += std::to_string(frames_[i].count);
+        path += ']';
+      }
+    }
+    add_key(key);
+    return shown_path(path);
   }
 };
 
-std::string in_quotes(const std::string& s) { return "'" + s + "'"; }
-
-std::string join_names(const std::vector<std::string>& names) {
-  std::string s;
-  for (std::size_t i = 0; i < names.size(); ++i) s += (i ? ", " : "") + names[i];
-  return s.empty() ? "(none)" : s;
-}
-
 template <class Map>
 std::string join_keys(const Map& m) {
-  std::vector<std::string> names;
-  for (const auto& [k, v] : m) names.push_back(k);
-  return join_names(names);
+  return join_listed(m, m.size(), [](const auto& kv) -> const std::string& { return kv.first; });
 }
 
 std::size_t edit_distance(const std::string& a, const std::string& b) {
@@ -96,21 +157,55 @@ std::string node_prefix(const std::string& path, const std::string& id) {
   return path + ": node " + in_quotes(id) + ": ";
 }
 
+// Where JSON text first nests objects and arrays more than `max_depth` deep ("line L, column C"),
+// or "" if it never does; brackets inside strings do not count. One pass, no allocation: this runs
+// before the parser, whose tree (and the duplicate-key finder's frames) would otherwise grow with
+// the depth of whatever file it is given (100 000 levels in 200 KB took 4.3 GB).
+std::string too_deep_at(const std::string& text, int max_depth) {
+  int depth = 0;
+  std::size_t line = 1, line_start = 0;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+      line_start = i + 1;
+    }
+    if (in_string) {
+      if (c == '\\') ++i;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > max_depth)
+        return "line " + std::to_string(line) + ", column " + std::to_string(i - line_start + 1);
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return "";
+}
+
 }  // namespace
 
 Graph parse_graph(const std::string& text, const std::string& path) {
   Graph g;
   g.path = path;
-  DuplicateKeyFinder dups;
+  if (std::string at = too_deep_at(text, kMaxGraphNesting); !at.empty())
+    throw ValidationError({(path.empty() ? std::string("graph") : path) + ": " + at +
+                           ": objects and arrays nested more than " + std::to_string(kMaxGraphNesting) +
+                           " levels deep; expected at most " + std::to_string(kMaxGraphNesting)});
   json j;
   try {
-    j = json::parse(text, std::ref(dups));
+    j = json::parse(text);
   } catch (const json::parse_error& e) {
     std::string what = e.what();
     auto pos = what.find("parse error");
     throw ValidationError({(path.empty() ? std::string("graph") : path) + ": not valid JSON: " +
                            (pos == std::string::npos ? what : what.substr(pos))});
   }
+  DuplicateKeyFinder dups;
+  json::sax_parse(text, &dups);
   auto& errs = g.errors;
   if (!j.is_object()) {
     errs.push_back("(root): expected a JSON object");
@@ -137,7 +232,7 @@ Graph parse_graph(const std::string& text, const std::string& path) {
       for (const auto& [k, v] : j["params"].items()) {
         GraphParam p;
         if (v.is_object()) {
-          if (!v.contains("value")) errs.push_back("params." + k + ": missing \"value\"");
+          if (!v.contains("value")) errs.push_back("params." + shown(k) + ": missing \"value\"");
           p.value = v.value("value", json());
           p.unit = v.value("unit", std::string());
           p.description = v.value("description", std::string());
@@ -157,7 +252,7 @@ Graph parse_graph(const std::string& text, const std::string& path) {
           in.description = v.value("description", std::string());
           in.default_path = v.value("default", std::string());
         }
-        if (in.type != "File") errs.push_back("inputs." + k + ".type: unsupported graph input type " +
+        if (in.type != "File") errs.push_back("inputs." + shown(k) + ".type: unsupported graph input type " +
                                               in_quotes(in.type) + "; expected 'File'");
         g.inputs[k] = in;
       }
@@ -184,7 +279,7 @@ Graph parse_graph(const std::string& text, const std::string& path) {
         node.type = n["type"].get<std::string>();
       for (const auto& [k, v] : n.items())
         if (k != "id" && k != "type" && k != "params" && k != "inputs" && k != "comment")
-          errs.push_back(node_prefix(at + "." + k, node.id) + "unknown key " + in_quotes(k) +
+          errs.push_back(node_prefix(at + "." + shown(k), node.id) + "unknown key " + in_quotes(k) +
                          "; expected one of: comment, id, inputs, params, type");
       if (n.contains("params")) {
         if (n["params"].is_object()) node.params = n["params"];
@@ -196,7 +291,7 @@ Graph parse_graph(const std::string& text, const std::string& path) {
         } else {
           for (const auto& [port, src] : n["inputs"].items()) {
             if (!src.is_string())
-              errs.push_back(node_prefix(at + ".inputs." + port, node.id) +
+              errs.push_back(node_prefix(at + ".inputs." + shown(port), node.id) +
                              "expected a source string '<node id>.<output port>' or '@<graph input>'");
             else
               node.inputs.emplace_back(port, src.get<std::string>());
@@ -210,7 +305,7 @@ Graph parse_graph(const std::string& text, const std::string& path) {
     if (!j["outputs"].is_object()) errs.push_back("outputs: expected an object of name: source");
     else
       for (const auto& [k, v] : j["outputs"].items()) {
-        if (!v.is_string()) errs.push_back("outputs." + k + ": expected a source string '<node id>.<output port>'");
+        if (!v.is_string()) errs.push_back("outputs." + shown(k) + ": expected a source string '<node id>.<output port>'");
         else g.outputs.emplace_back(k, v.get<std::string>());
       }
   }
@@ -256,9 +351,20 @@ json parse_set_value(const std::string& text) {
   }
 }
 
+constexpr std::size_t kMaxStringParam = 4096;
+
+// A parameter value as an error message quotes it: scalars as JSON (a long string cut short),
+// arrays and objects by their size.
+std::string got_text(const json& v) {
+  if (v.is_array()) return "an array of " + std::to_string(v.size()) + " values";
+  if (v.is_object()) return "an object of " + std::to_string(v.size()) + " keys";
+  if (v.is_string()) return "\"" + shown(v.get_ref<const std::string&>()) + "\"";
+  return v.dump();
+}
+
 // Checks one parameter value against its declaration; returns the canonical value or an error.
 std::optional<json> check_param(const ParamDecl& p, const json& v, std::string& error) {
-  auto got = v.dump();
+  const std::string got = got_text(v);
   switch (p.kind) {
     case ParamKind::Int:
       if (!v.is_number_integer() && !(v.is_number_float() && v.get<double>() == std::floor(v.get<double>()))) {
@@ -285,6 +391,12 @@ std::optional<json> check_param(const ParamDecl& p, const json& v, std::string& 
     case ParamKind::String:
       if (!v.is_string()) {
         error = "parameter " + in_quotes(p.name) + " must be a string; got " + got;
+        return std::nullopt;
+      }
+      // bounded, so that a long graph parameter referred to by many nodes cannot blow up the plan
+      if (v.get_ref<const std::string&>().size() > kMaxStringParam) {
+        error = "parameter " + in_quotes(p.name) + " is " + std::to_string(v.get_ref<const std::string&>().size()) +
+                " bytes long; expected at most " + std::to_string(kMaxStringParam);
         return std::nullopt;
       }
       return v;
@@ -339,6 +451,11 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
       continue;
     }
     std::string name = item.substr(0, eq);
+    if (!too_deep_at(item.substr(eq + 1), kMaxGraphNesting).empty()) {
+      errs.push_back("--set " + shown(name) + ": value nested more than " + std::to_string(kMaxGraphNesting) +
+                     " levels deep; expected a number, a string, true or false");
+      continue;
+    }
     json value = parse_set_value(item.substr(eq + 1));
     auto dot = name.find('.');
     if (dot == std::string::npos) {
@@ -369,8 +486,11 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
     if (!pn.decl) {
       std::string best;
       std::size_t best_d = 4;
-      for (const auto& [t, d] : registry.nodes())
+      for (const auto& [t, d] : registry.nodes()) {
+        const std::size_t longer = std::max(t.size(), n.type.size()), shorter = std::min(t.size(), n.type.size());
+        if (longer - shorter >= best_d) continue;  // the distance is at least the difference in length
         if (auto e = edit_distance(t, n.type); e < best_d) best_d = e, best = t;
+      }
       errs.push_back(node_prefix(at + ".type", n.id) + "unknown node type " + in_quotes(n.type) + "; expected " +
                      (best.empty() ? std::string("a registered type") : "a registered type such as " + in_quotes(best)) +
                      " (see 'scallop nodes')");
@@ -379,10 +499,10 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
     const NodeDecl& decl = *pn.decl;
     json given = n.params;
     std::map<std::string, std::string> origin;  // where each value came from, for messages
-    for (const auto& [k, v] : given.items()) origin[k] = at + ".params." + k;
+    for (const auto& [k, v] : given.items()) origin[k] = at + ".params." + shown(k);
     for (const auto& [k, v] : node_sets[n.id]) {
       given[k] = v;
-      origin[k] = "--set " + n.id + "." + k;
+      origin[k] = "--set " + shown(n.id) + "." + shown(k);
     }
     json resolved = json::object();
     for (const auto& [k, v] : given.items()) {
@@ -394,7 +514,7 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
                        join_names(names));
         continue;
       }
-      json value = v;
+      const json* value = &v;  // not copied: a large graph parameter may be referred to by many nodes
       if (v.is_string() && !v.get<std::string>().empty() && v.get<std::string>()[0] == '$') {
         std::string ref = v.get<std::string>().substr(1);
         if (!gparams.count(ref)) {
@@ -402,10 +522,10 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
                          "; expected one of: " + join_keys(gparams));
           continue;
         }
-        value = gparams[ref];
+        value = &gparams[ref];
       }
       std::string error;
-      if (auto ok = check_param(*p, value, error)) resolved[k] = *ok;
+      if (auto ok = check_param(*p, *value, error)) resolved[k] = *ok;
       else errs.push_back(node_prefix(origin[k], n.id) + error);
     }
     for (const auto& p : decl.params) {
@@ -420,7 +540,7 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
 
     std::set<std::string> connected;
     for (const auto& [port, src] : n.inputs) {
-      std::string pat = at + ".inputs." + port;
+      std::string pat = at + ".inputs." + shown(port);
       const PortDecl* pd = decl.find_input(port);
       if (!pd) {
         std::vector<std::string> names;
@@ -490,7 +610,7 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
     auto dot = src.find('.');
     std::string sid = dot == std::string::npos ? src : src.substr(0, dot);
     if (dot == std::string::npos || !index_of.count(sid)) {
-      errs.push_back("outputs." + name + ": unknown source " + in_quotes(src) + "; expected '<node id>.<output port>'");
+      errs.push_back("outputs." + shown(name) + ": unknown source " + in_quotes(src) + "; expected '<node id>.<output port>'");
       continue;
     }
     Source s{index_of[sid], src.substr(dot + 1)};
@@ -498,7 +618,7 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
     if (sd && !sd->find_output(s.port)) {
       std::vector<std::string> names;
       for (const auto& q : sd->outputs) names.push_back(q.name);
-      errs.push_back("outputs." + name + ": node " + in_quotes(sid) + " has no output " + in_quotes(s.port) +
+      errs.push_back("outputs." + shown(name) + ": node " + in_quotes(sid) + " has no output " + in_quotes(s.port) +
                      "; expected one of: " + join_names(names));
       continue;
     }
@@ -509,8 +629,8 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
   if (options.require_inputs)
     for (const auto& [name, in] : graph.inputs)
       if (!options.provided_inputs.count(name) && in.default_path.empty())
-        errs.push_back("inputs." + name + ": graph input " + in_quotes(name) + " is not given; expected --input " + name +
-                       "=PATH");
+        errs.push_back("inputs." + shown(name) + ": graph input " + in_quotes(name) + " is not given; expected --input " +
+                       name + "=PATH");
 
   // Dependencies and a topological order (Kahn); what is left over lies on a cycle.
   const int n = static_cast<int>(plan.nodes.size());

@@ -24,6 +24,9 @@
 namespace scallop {
 
 inline constexpr int kGraphFormat = 1;
+// Objects and arrays nest at most this deep in a graph file (a graph needs 5); a deeper file is
+// refused before it is parsed, naming the line and column where it goes too deep.
+inline constexpr int kMaxGraphNesting = 64;
 
 // All validation errors of a graph, one line each (JSON path, node id, what was expected).
 struct ValidationError : std::runtime_error {

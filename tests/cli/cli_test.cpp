@@ -312,6 +312,17 @@ TEST(Cli, ValidatePrintsEveryErrorAndExits2) {
   EXPECT_EQ(test::run_command(kScallop + " validate " + kGraph, &out), 0) << out;
 }
 
+TEST(Cli, AGraphNestedTooDeepIsRefusedAtOnce) {
+  // 100 000 levels in 200 KB: validate took 4.3 GB and 49 s before bad_alloc
+  test::TempDir dir;
+  test::write_file(dir.path / "deep.json", "{\"scallop_graph\": 1, \"nodes\": " + std::string(100000, '[') +
+                                               std::string(100000, ']') + "}");
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " validate " + (dir.path / "deep.json").string(), &out), 2) << out;
+  EXPECT_EQ(out, "error: " + (dir.path / "deep.json").string() +
+                     ": line 1, column 94: objects and arrays nested more than 64 levels deep; expected at most 64\n");
+}
+
 TEST(Cli, MissingInputFileIsAClearError) {
   std::string out;
   EXPECT_EQ(test::run_command(kScallop + " run " + kGraph + " --no-cache --input cloud=/nonexistent/x.ply", &out), 2);
