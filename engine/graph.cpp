@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <sstream>
 
 namespace scallop {
+namespace fs = std::filesystem;
 
 ValidationError::ValidationError(std::vector<std::string> errs)
     : std::runtime_error(errs.empty() ? "invalid graph" : errs.front()), errors(std::move(errs)) {}
@@ -151,6 +153,21 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
     std::swap(prev, cur);
   }
   return prev[b.size()];
+}
+
+// An absolute path with symbolic links resolved as far as it exists.
+fs::path resolved(const fs::path& p) {
+  std::error_code ec;
+  fs::path r = fs::weakly_canonical(fs::absolute(p, ec), ec);
+  if (ec) r = fs::absolute(p, ec).lexically_normal();
+  if (r.has_filename() || r == r.root_path()) return r;
+  return r.parent_path();  // "a/b/" -> "a/b"
+}
+
+// The folder a graph's relative paths start from: its file's folder, or the working directory for
+// a graph given as text; absolute, symbolic links resolved.
+fs::path graph_folder(const Graph& graph) {
+  return resolved(graph.path.empty() ? fs::path(".") : fs::absolute(graph.path).parent_path());
 }
 
 std::string node_prefix(const std::string& path, const std::string& id) {
@@ -360,6 +377,41 @@ std::string got_text(const json& v) {
   if (v.is_object()) return "an object of " + std::to_string(v.size()) + " keys";
   if (v.is_string()) return "\"" + shown(v.get_ref<const std::string&>()) + "\"";
   return v.dump();
+}
+
+// Whether a graph output's name is a plain file name: it is written as <output folder>/<name>.<ext>,
+// so it must not reach out of that folder ("../../x", "/abs/x") nor name it ("", ".", "..").
+bool plain_file_name(const std::string& name) {
+  if (name.empty() || name == "." || name == "..") return false;
+  for (unsigned char c : name)
+    if (c == '/' || c == '\\' || c < 0x20 || c == 0x7f) return false;
+  return true;
+}
+
+bool lies_inside(const fs::path& file, const fs::path& folder) {
+  auto [f, _] = std::mismatch(folder.begin(), folder.end(), file.begin(), file.end());
+  return f == folder.end() && file != folder;
+}
+
+// scallop's own example parts (examples/ of the source tree this was built from, found only when
+// the compiler gave this file's absolute path): the shipped graphs' default part lies there,
+// beside graphs/, so defaults inside it are allowed too. Were the shipped graphs' default part
+// beside them, this could go.
+const fs::path& bundled_examples() {
+  static const fs::path dir = [] {
+    fs::path source(__FILE__);
+    fs::path examples = source.parent_path().parent_path() / "examples";
+    return source.is_absolute() && fs::is_directory(examples) ? resolved(examples) : fs::path();
+  }();
+  return dir;
+}
+
+// Whether a graph input's default file lies inside the graph's folder (or scallop's examples).
+bool default_inside_graph_folder(const Graph& graph, const std::string& default_path) {
+  fs::path p(default_path);
+  fs::path file = resolved(p.is_absolute() ? p : graph_folder(graph) / p);
+  return lies_inside(file, graph_folder(graph)) ||
+         (!bundled_examples().empty() && lies_inside(file, bundled_examples()));
 }
 
 // Checks one parameter value against its declaration; returns the canonical value or an error.
@@ -607,6 +659,11 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
 
   // Graph outputs.
   for (const auto& [name, src] : graph.outputs) {
+    if (!plain_file_name(name)) {
+      errs.push_back("outputs." + shown(name) + ": output name " + in_quotes(name) +
+                     " is not a plain file name; expected one without '/', '\\' or control characters, not '.' or '..'");
+      continue;
+    }
     auto dot = src.find('.');
     std::string sid = dot == std::string::npos ? src : src.substr(0, dot);
     if (dot == std::string::npos || !index_of.count(sid)) {
@@ -625,12 +682,21 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
     plan.outputs.emplace_back(name, s);
   }
 
-  // Graph inputs the caller must give.
-  if (options.require_inputs)
-    for (const auto& [name, in] : graph.inputs)
-      if (!options.provided_inputs.count(name) && in.default_path.empty())
+  // Graph inputs the caller must give, and the default files of those it does not: they must lie in
+  // the graph's folder (a graph handed over must not read files from elsewhere on the disk;
+  // --input reads any file, that is the user's choice).
+  for (const auto& [name, in] : graph.inputs) {
+    if (options.provided_inputs.count(name)) continue;
+    if (in.default_path.empty()) {
+      if (options.require_inputs)
         errs.push_back("inputs." + shown(name) + ": graph input " + in_quotes(name) + " is not given; expected --input " +
                        name + "=PATH");
+    } else if (!default_inside_graph_folder(graph, in.default_path)) {
+      errs.push_back("inputs." + shown(name) + ".default: default file '" + shown(in.default_path, 1024) +
+                     "' lies outside the graph's folder '" + graph_folder(graph).string() + "'" +
+                     "; expected a file inside it, or one given with --input " + name + "=PATH");
+    }
+  }
 
   // Dependencies and a topological order (Kahn); what is left over lies on a cycle.
   const int n = static_cast<int>(plan.nodes.size());

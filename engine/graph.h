@@ -94,7 +94,7 @@ struct Plan {
 
 struct CompileOptions {
   std::vector<std::string> sets;           // "--set NAME=VALUE" items
-  std::set<std::string> provided_inputs;   // graph inputs the caller will give
+  std::set<std::string> provided_inputs;   // graph inputs the caller gives (others: their defaults)
   bool require_inputs = true;              // false for `scallop validate`
 };
 

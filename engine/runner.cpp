@@ -31,7 +31,7 @@ PartResult run_part(const Graph& graph, const Registry& registry, const PartRequ
   try {
     CompileOptions opt;
     opt.sets = req.sets;
-    for (const auto& [name, path] : paths) opt.provided_inputs.insert(name);
+    for (const auto& [name, path] : req.inputs) opt.provided_inputs.insert(name);  // defaults are checked
     plan = compile(graph, registry, opt);
   } catch (const ValidationError& e) {
     r.errors = e.errors;

@@ -312,6 +312,47 @@ TEST(Cli, ValidatePrintsEveryErrorAndExits2) {
   EXPECT_EQ(test::run_command(kScallop + " validate " + kGraph, &out), 0) << out;
 }
 
+TEST(Cli, AGraphCannotWriteOutsideTheOutputFolderNorReadADefaultOutsideItsOwn) {
+  test::TempDir dir;
+  write_patch(dir.path / "patch.ply");  // beside the graphs' folder, not in it
+  auto graph = [&](const std::string& output_name) {
+    return R"({"scallop_graph": 1, "inputs": {"cloud": {"type": "File", "default": "../patch.ply"}},
+      "nodes": [{"id": "read", "type": "io.read_cloud", "inputs": {"file": "@cloud"}}],
+      "outputs": {")" + output_name + R"(": "read.cloud"}})";
+  };
+  const auto folder = dir.path / "graphs";
+  test::write_file(folder / "escape.json", graph("../../escape"));
+  test::write_file(folder / "absolute.json", graph((dir.path / "abs").string()));
+  test::write_file(folder / "plain.json", graph("cloud"));
+  const std::string refused_default = "error: inputs.cloud.default: default file '../patch.ply' lies outside the graph's "
+                                      "folder '" + fs::weakly_canonical(folder).string() +
+                                      "'; expected a file inside it, or one given with --input cloud=PATH\n";
+  std::string out;
+  // validate names both; run refuses before anything is read or written
+  EXPECT_EQ(test::run_command(kScallop + " validate " + (folder / "escape.json").string(), &out), 2) << out;
+  EXPECT_NE(out.find("error: outputs.../../escape: output name '../../escape' is not a plain file name; expected one "
+                     "without '/', '\\' or control characters, not '.' or '..'\n"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find(refused_default), std::string::npos) << out;
+  const std::string input = " --input cloud=" + (dir.path / "patch.ply").string();
+  EXPECT_EQ(test::run_command(kScallop + " run " + (folder / "escape.json").string() + input + " --no-cache -q -o " +
+                                  (dir.path / "out" / "a").string(), &out), 2) << out;
+  EXPECT_EQ(test::run_command(kScallop + " run " + (folder / "absolute.json").string() + input + " --no-cache -q -o " +
+                                  (dir.path / "out" / "a").string(), &out), 2) << out;
+  EXPECT_NE(out.find("error: outputs." + (dir.path / "abs").string() + ": output name '"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir.path / "escape.ply"));
+  EXPECT_FALSE(fs::exists(dir.path / "abs.ply"));
+
+  // the default outside the graph's folder: refused, unless the file is given on the command line
+  EXPECT_EQ(test::run_command(kScallop + " run " + (folder / "plain.json").string() + " --no-cache -q -o " +
+                                  (dir.path / "out" / "b").string(), &out), 2) << out;
+  EXPECT_EQ(out, refused_default);
+  EXPECT_EQ(test::run_command(kScallop + " run " + (folder / "plain.json").string() + input + " --no-cache -q -o " +
+                                  (dir.path / "out" / "b").string(), &out), 0) << out;
+  EXPECT_TRUE(fs::exists(dir.path / "out" / "b" / "cloud.ply"));
+}
+
 TEST(Cli, AGraphNestedTooDeepIsRefusedAtOnce) {
   // 100 000 levels in 200 KB: validate took 4.3 GB and 49 s before bad_alloc
   test::TempDir dir;

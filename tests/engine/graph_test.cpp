@@ -215,6 +215,60 @@ TEST(Graph, SetValueNestedTooDeepIsAnError) {
                                                             "a number, a string, true or false"});
 }
 
+TEST(Graph, OutputNamesMustBePlainFileNames) {
+  // each is written as <-o folder>/<name>.<extension>: these would land outside it
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [{"id": "a", "type": "test.const"}],
+      "outputs": {"../../escape": "a.out", "/abs/path": "a.out", "..": "a.out", "a\\b": "a.out", "": "a.out",
+                  "new\nline": "a.out", "ok.value-1": "a.out"}})"),
+            (std::vector<std::string>{
+                "outputs.: output name '' is not a plain file name; expected one without '/', '\\' or control "
+                "characters, not '.' or '..'",
+                "outputs...: output name '..' is not a plain file name; expected one without '/', '\\' or control "
+                "characters, not '.' or '..'",
+                "outputs.../../escape: output name '../../escape' is not a plain file name; expected one without '/', "
+                "'\\' or control characters, not '.' or '..'",
+                "outputs./abs/path: output name '/abs/path' is not a plain file name; expected one without '/', '\\' "
+                "or control characters, not '.' or '..'",
+                "outputs.a\\b: output name 'a\\b' is not a plain file name; expected one without '/', '\\' or control "
+                "characters, not '.' or '..'",
+                "outputs.new\\x0aline: output name 'new\\x0aline' is not a plain file name; expected one without '/', "
+                "'\\' or control characters, not '.' or '..'"}));
+}
+
+TEST(Graph, DefaultInputOutsideTheGraphsFolderIsRefusedUnlessGivenExplicitly) {
+  test::TempDir dir;
+  const auto folder = dir.path / "graphs";
+  test::write_file(dir.path / "secret.ply", "not yours");
+  test::write_file(folder / "inside.ply", "yours");
+  std::filesystem::create_directories(folder / "data");
+  std::filesystem::create_symlink(dir.path / "secret.ply", folder / "data" / "link.ply");
+  test::write_file(folder / "g.json", R"({"scallop_graph": 1, "nodes": [],
+      "inputs": {"up": {"type": "File", "default": "../secret.ply"},
+                 "abs": {"type": "File", "default": ")" + (dir.path / "secret.ply").string() + R"("},
+                 "link": {"type": "File", "default": "data/link.ply"},
+                 "round": {"type": "File", "default": "data/../../graphs/inside.ply"},
+                 "here": {"type": "File", "default": "inside.ply"},
+                 "absolute_inside": {"type": "File", "default": ")" + (folder / "inside.ply").string() + R"("}}})");
+  Registry reg = test::make_test_registry();
+  Graph g = load_graph((folder / "g.json").string());
+  const std::string where = std::filesystem::weakly_canonical(folder).string();
+  auto refused = [&](const std::string& name, const std::string& path) {
+    return "inputs." + name + ".default: default file '" + path + "' lies outside the graph's folder '" + where +
+           "'; expected a file inside it, or one given with --input " + name + "=PATH";
+  };
+  try {
+    compile(g, reg);
+    FAIL() << "compiled";
+  } catch (const ValidationError& e) {
+    EXPECT_EQ(e.errors, (std::vector<std::string>{refused("abs", (dir.path / "secret.ply").string()),
+                                                  refused("link", "data/link.ply"), refused("up", "../secret.ply")}));
+  }
+  // given on the command line, any file is the user's choice
+  CompileOptions opt;
+  opt.provided_inputs = {"up", "abs", "link"};
+  EXPECT_NO_THROW(compile(g, reg, opt));
+}
+
 TEST(Graph, ListsOfExpectedNamesAreCutAfterTwenty) {
   std::string params;
   for (int i = 0; i < 25; ++i) params += std::string(i ? ", " : "") + "\"p" + std::to_string(100 + i) + "\": 1";
