@@ -86,10 +86,15 @@ def main():
                 p = run(cmd)
                 plan_s = time.time() - t0
                 gcode = os.path.join(out, "gcode.ngc")
+                denoised = os.path.join(out, "denoised.ply")
+                def error_ratio():
+                    e = run([PY, EXTRA, "error", surface, denoised]) if os.path.exists(denoised) else None
+                    return json.loads(e.stdout) if e and e.returncode == 0 and e.stdout.strip() else {}
                 if p.returncode not in (0, 3) or not os.path.exists(gcode):
                     err = (p.stderr.strip().splitlines() or ["?"])[-1]
-                    emit(f"| {surface} | {noise} | {graph} | refused: {err} |||||||||||||||")
-                    rows.append({"surface": surface, "noise": noise, "graph": graph, "error": err})
+                    ratio = error_ratio().get("max_ratio", float("nan"))
+                    emit(f"| {surface} | {noise} | {graph} | refused: {err} |||||||||| {ratio:.2f} |||||")
+                    rows.append({"surface": surface, "noise": noise, "graph": graph, "error": err, "error_ratio": ratio})
                     continue
                 vj = os.path.join(out, "verify.json")
                 vargs = ["--gcode", gcode, "--tool-radius", str(r), "--scallop", "0.05", "--chord", "0.01",
@@ -100,8 +105,7 @@ def main():
                 plan = json.load(open(os.path.join(out, "plan_report.json")))
                 guard_path = os.path.join(out, "guard_report.json")
                 guard = json.load(open(guard_path)) if os.path.exists(guard_path) else {}
-                e = run([PY, EXTRA, "error", surface, os.path.join(out, "denoised.ply")])
-                err = json.loads(e.stdout) if e.returncode == 0 and e.stdout.strip() else {}
+                err = error_ratio()
                 # the whole patch: scallop <= 1.01 h everywhere on it, rim included
                 vpass = bool(v.get("pass")) and (v.get("scallop_max") or 0) <= 1.01 * 0.05
                 row = {"surface": surface, "noise": noise, "graph": graph, "passes": plan.get("passes"),
