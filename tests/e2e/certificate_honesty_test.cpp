@@ -275,5 +275,42 @@ TEST(CertificateHonesty, CreaseTighterThanTheBallIsReportedAndNotCertified) {
   EXPECT_NE(std::find(warnings.begin(), warnings.end(), warning), warnings.end()) << o.plan["warnings"].dump(1);
 }
 
+// ---- noisy clouds ------------------------------------------------------------------------------
+
+// A wide noisy crease: the single-scale uncertainty suffices and the certificate passes (zig-zag
+// and contour graphs).
+TEST(CertificateHonesty, NoisyWideCreaseSingleScale) {
+  expect_honest({crease(8, 0.3), 0.01, 4000, 0.1});
+}
+
+TEST(CertificateHonesty, NoisyWideCreaseSingleScaleContour) {
+  expect_honest({crease(8, 0.3), 0.01, 4000, 0.1, 1, 17, "isoparametric-contour"});
+}
+
+// A noisy rounded crest of radius 3 mm: one wide fit flattens it, and its single-scale
+// uncertainty does not count that (issue 10); the multi-scale fits of denoise.scales = 5 do.
+TEST(CertificateHonesty, NoisyCrestMultiScale) {
+  expect_honest({crest(3, 0.3), 0.01, 4000, 0.1, 5});
+}
+
+// With more noise the multi-scale uncertainty is too large for h = 0.05: the planner refuses,
+// saying how well the surface is known (the median of the denoised cloud's uncertainty).
+TEST(CertificateHonesty, NoisyCrestMultiScaleRefusesTooSmallAScallop) {
+  const Case c{crest(3, 0.3), 0.02, 4000, 0.05, 5};
+  SCOPED_TRACE(describe(c));
+  const Outcome o = run_case(c);
+  ASSERT_EQ(o.errors.size(), 1u) << summary(o);
+  std::vector<double> u = o.uncertainty;
+  ASSERT_FALSE(u.empty());
+  std::nth_element(u.begin(), u.begin() + u.size() / 2, u.end());
+  char median[64];
+  std::snprintf(median, sizeof median, "%g", u[u.size() / 2]);
+  EXPECT_EQ(o.errors[0], std::string("node 'plan' (path.isoparametric) failed on part 'part': the cloud's surface is "
+                                     "known only to +-") +
+                             median +
+                             " mm (median; cloud.denoise's uncertainty), too much of the scallop height 0.05 mm to "
+                             "promise it: denoise with more neighbours, scan more finely or raise scallop_height");
+}
+
 }  // namespace
 }  // namespace scallop
