@@ -100,6 +100,12 @@ std::vector<int> vertex_slots(const Element& v, bool& has_normals) {
   return slots;
 }
 
+// The end of the trailing-data message: which element was last and how many the header declares.
+std::string trailing_what(const Element& last) {
+  return " '" + last.name + "' (" + std::to_string(last.count) + " declared): the header's count" +
+         " is smaller than the data";
+}
+
 void read_binary(const std::string& path, const std::string& data, std::size_t pos,
                  const std::vector<Element>& elements, bool big, PointCloud& cloud) {
   const std::size_t size = data.size();
@@ -164,6 +170,11 @@ void read_binary(const std::string& path, const std::string& data, std::size_t p
       }
     }
   }
+  // Data past the last element means the header's counts are too small: reading only what they
+  // declare would drop points silently.
+  if (pos < size && !elements.empty())
+    fail_byte(path, pos, std::to_string(size - pos) + " bytes after the last declared element" +
+                             trailing_what(elements.back()));
 }
 
 void read_ascii(const std::string& path, io::LineReader& lines, const std::vector<Element>& elements,
@@ -239,6 +250,16 @@ void read_ascii(const std::string& path, io::LineReader& lines, const std::vecto
       }
     }
   }
+  // Blank lines may follow; anything else means the header's counts are too small.
+  std::size_t first = 0, extra = 0;
+  while (lines.next(line)) {
+    io::split_tokens(line, tok);
+    if (tok.empty()) continue;
+    if (extra++ == 0) first = lines.line();
+  }
+  if (extra > 0 && !elements.empty())
+    fail_line(path, first, std::to_string(extra) + (extra == 1 ? " line" : " lines") +
+                               " after the last declared element" + trailing_what(elements.back()));
 }
 
 }  // namespace

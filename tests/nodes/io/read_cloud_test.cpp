@@ -12,9 +12,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <numbers>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "engine/file_ref.h"
@@ -244,6 +246,39 @@ TEST_F(ReadCloud, PlyBinaryMalformedNeverReadsPastTheEnd) {
   EXPECT_EQ(error_of(p), p + ": byte " + std::to_string(f) + ": file ends inside face 0 of 1");
   p = file("bad.ply", s + le<std::int32_t>(-3));
   EXPECT_EQ(error_of(p), p + ": byte " + std::to_string(f) + ": negative list length -3 in property 'vertex_indices' of face 0");
+}
+
+TEST_F(ReadCloud, PlyDataPastTheLastDeclaredElementIsAnError) {
+  // 5000 points written, the header's count lowered to 2500: the other half must not vanish.
+  PointCloud c;
+  for (int i = 0; i < 5000; ++i) c.points.emplace_back(i, 0.5 * i, 1.0);
+  auto lower_count = [&](const std::string& name, bool binary) {
+    write_ply(path(name), c, binary);
+    std::ifstream in(path(name), std::ios::binary);
+    std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::size_t at = s.find("element vertex 5000\n");
+    EXPECT_NE(at, std::string::npos);
+    s.replace(at, 19, "element vertex 2500");
+    return std::make_pair(file(name, s), s);
+  };
+  auto [p, s] = lower_count("half.ply", true);
+  const std::size_t data = s.find("end_header\n") + 11;
+  EXPECT_EQ(error_of(p), p + ": byte " + std::to_string(data + 2500 * 24) +
+                             ": 60000 bytes after the last declared element 'vertex' (2500 declared): the header's "
+                             "count is smaller than the data");
+  std::tie(p, s) = lower_count("half_ascii.ply", false);
+  const auto header_lines = std::count(s.begin(), s.begin() + s.find("end_header\n") + 11, '\n');
+  EXPECT_EQ(error_of(p), p + ": line " + std::to_string(header_lines + 2500 + 1) +
+                             ": 2500 lines after the last declared element 'vertex' (2500 declared): the header's "
+                             "count is smaller than the data");
+
+  // the last element need not be the vertices; one stray line is named too; blank lines may follow
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                           "element face 1\nproperty list uchar int vertex_indices\nend_header\n1 2 3\n1 0\n";
+  p = file("face.ply", head + "\n7 8 9\n\n");
+  EXPECT_EQ(error_of(p), p + ": line 13: 1 line after the last declared element 'face' (1 declared): the header's "
+                             "count is smaller than the data");
+  expect_points(read_cloud(file("blank.ply", head + "\n  \r\n\n")), {V(1, 2, 3)});
 }
 
 // ---------------------------------------------------------------- PCD
