@@ -27,11 +27,43 @@ void split_fields(std::string_view line, std::vector<std::string_view>& out) {
   }
 }
 
+// True when `line` writes its numbers with decimal commas: "1,5 2,0 3,0" (blank-separated) or
+// "1,5;2,0;3,0" (semicolon-separated), every field a number once its ',' is read as '.'.
+bool has_decimal_commas(std::string_view line) {
+  if (line.find(',') == std::string_view::npos) return false;
+  std::vector<std::string_view> fields;
+  if (line.find(';') != std::string_view::npos) {
+    // the semicolon-separated form: split on ';' alone
+    std::size_t start = 0;
+    while (start <= line.size()) {
+      const std::size_t end = std::min(line.find(';', start), line.size());
+      std::vector<std::string_view> t;
+      io::split_tokens(line.substr(start, end - start), t);
+      if (t.size() != 1) return false;
+      fields.push_back(t[0]);
+      start = end + 1;
+    }
+  } else {
+    io::split_tokens(line, fields);
+  }
+  bool comma = false;
+  for (std::string_view f : fields) {
+    std::string dotted(f);
+    for (char& c : dotted)
+      if (c == ',') c = '.';
+    double v;
+    if (dotted.empty() || dotted.back() == '.' || !io::parse_double(dotted, v)) return false;
+    comma = comma || dotted != f;
+  }
+  return comma && fields.size() >= 3;
+}
+
 }  // namespace
 
 PointCloud read_text_cloud(const std::string& path, bool columns_4_to_6_are_normals) {
   const std::string data = io::read_file_bytes(path);
-  io::LineReader lines(data);
+  // A UTF-8 byte order mark (Windows editors write one) is no part of the first line.
+  io::LineReader lines(data, data.starts_with("\xEF\xBB\xBF") ? 3 : 0);
   std::string_view line;
   std::vector<std::string_view> tok;
   std::vector<double> values;
@@ -41,6 +73,7 @@ PointCloud read_text_cloud(const std::string& path, bool columns_4_to_6_are_norm
   while (lines.next(line)) {
     const std::size_t ln = lines.line();
     if (auto hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+    if (has_decimal_commas(line)) io::fail_line(path, ln, "decimal commas are not supported; use '.'");
     split_fields(line, tok);
     if (tok.empty()) continue;
     values.resize(tok.size());

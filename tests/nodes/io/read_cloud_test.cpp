@@ -417,6 +417,25 @@ TEST_F(ReadCloud, TextMalformed) {
   EXPECT_EQ(error_of(p), p + ": line 2: bad number '5 6' in column 2");
 }
 
+TEST_F(ReadCloud, TextByteOrderMarkIsSkipped) {
+  // the BOM used to make the first point look like a header line, and it was dropped
+  expect_points(read_cloud(file("bom.xyz", "\xEF\xBB\xBF" "1 2 3\n4 5 6\n")), {V(1, 2, 3), V(4, 5, 6)});
+  expect_points(read_cloud(file("bom.csv", "\xEF\xBB\xBF" "x,y,z\r\n1,2,3\r\n")), {V(1, 2, 3)});
+}
+
+TEST_F(ReadCloud, TextDecimalCommasAreNamed) {
+  // blank-separated, a later line, and the European CSV form (which split on both separators
+  // looked like six good columns)
+  for (const auto& [name, text, line] : {std::tuple{"comma.xyz", "1,5 2,0 3,0\n4,5 5,0 6,0\n", 1},
+                                         std::tuple{"comma.txt", "1.5 2 3\n4,5\t5,0  6\n", 2},
+                                         std::tuple{"comma.csv", "x;y;z\n1,5;2,0;3,0\n", 2}}) {
+    const std::string p = file(name, text);
+    EXPECT_EQ(error_of(p), p + ": line " + std::to_string(line) + ": decimal commas are not supported; use '.'");
+  }
+  // commas as separators are still fine, with or without blanks after them
+  expect_points(read_cloud(file("ok.csv", "1, 2, 3\n4,5,6\n")), {V(1, 2, 3), V(4, 5, 6)});
+}
+
 // ---------------------------------------------------------------- meshes
 
 TEST_F(ReadCloud, OffHeaderAloneOrWithCountsAndMixedFaces) {
