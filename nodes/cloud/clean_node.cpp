@@ -37,6 +37,10 @@ NodeDecl make_clean_node() {
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }
+    // Points lost to NaN/Inf are a damaged file or scanner, not noise: say so on the console.
+    if (s.non_finite > 0)
+      ctx.warn("dropped " + std::to_string(s.non_finite) + " of " + std::to_string(s.input) +
+               " points with a NaN or infinite coordinate or normal");
     const std::string counts = std::to_string(s.non_finite) + " were NaN/Inf, " +
                                std::to_string(s.duplicates) + " duplicates, " +
                                std::to_string(s.outliers) + " outliers";

@@ -10,6 +10,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "engine/node.h"
 
@@ -159,6 +160,26 @@ TEST(CleanNode, CleansAndReports) {
   ASSERT_TRUE(c);
   EXPECT_EQ(c->size(), 400u);
   EXPECT_EQ(message, "kept 400 of 403 points (1 were NaN/Inf, 1 duplicates, 1 outliers)");
+}
+
+TEST(CleanNode, WarnsHowManyNonFinitePointsItDropped) {
+  const NodeDecl d = make_clean_node();
+  auto cloud = std::make_shared<PointCloud>(grid(5, 4, 1.0));
+  cloud->points.emplace_back(kNaN, 1, 2);
+  cloud->points.emplace_back(1, kInf, 2);
+  cloud->points.emplace_back(1, 2, -kInf);
+  auto run = [&](std::shared_ptr<PointCloud> c) {
+    std::vector<std::string> warnings;
+    NodeContext ctx(d, "clean", "part", {{"remove_outliers", false}, {"outlier_k", 16}, {"outlier_std_ratio", 2.0},
+                                         {"min_points", 10}},
+                    {{"cloud", c}}, nullptr, [&](const std::string& m) { warnings.push_back(m); });
+    d.run(ctx);
+    return warnings;
+  };
+  EXPECT_EQ(run(cloud), std::vector<std::string>{"dropped 3 of 23 points with a NaN or infinite coordinate or normal"});
+  cloud->points.resize(20);
+  cloud->points.push_back(cloud->points[0]);  // a duplicate is no reason to warn
+  EXPECT_TRUE(run(cloud).empty());
 }
 
 TEST(CleanNode, ErrorTexts) {
