@@ -1,6 +1,7 @@
 // The scallop command end to end: run, disk cache across processes, batch isolation, validate.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -131,6 +132,61 @@ TEST(Cli, BatchWithACorruptPartReturnsTheOthersAndNamesIt) {
   EXPECT_NE(summary["parts"][1]["errors"][0].get<std::string>().find("node 'read' (io.read_cloud) failed on part 'broken'"),
             std::string::npos);
   EXPECT_EQ(summary["parts"][2]["ok"], true);
+}
+
+TEST(Cli, BatchPartsWithTheSameStemGetTheirOwnFoldersAndSaySo) {
+  test::TempDir dir;
+  write_patch(dir.path / "good.ply");
+  // the same patch as text, with two NaN points cloud.clean drops and must say so
+  std::string xyz = "1 nan 2\n";
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 30; ++j) xyz += std::to_string(i * 0.5) + " " + std::to_string(j * 0.5) + " " +
+                                        std::to_string(std::sin(i * 0.1) * std::cos(j * 0.1)) + "\n";
+  test::write_file(dir.path / "good.xyz", xyz + "inf 0 0\n");
+  write_patch(dir.path / "other.ply", 30);
+  const std::string ply = (dir.path / "good.ply").string(), txt = (dir.path / "good.xyz").string();
+  const fs::path out = dir.path / "out";
+  std::string said;
+  ASSERT_EQ(test::run_command(kScallop + " batch " + kGraph + " " + ply + " " + (dir.path / "other.ply").string() +
+                                  " " + txt + " -j 2 --no-cache -q -o " + out.string(),
+                              &said),
+            0)
+      << said;
+  EXPECT_NE(said.find("note: parts " + ply + " and " + txt + " share the name 'good'; their outputs go to " +
+                      (out / "good_ply").string() + "/ and " + (out / "good_xyz").string() +
+                      "/ and they are named so in messages\n"),
+            std::string::npos)
+      << said;
+  EXPECT_NE(said.find("warning: node 'clean' (cloud.clean) on part 'good_xyz': dropped 2 of 902 points with a NaN "
+                      "or infinite coordinate or normal\n"),
+            std::string::npos)
+      << said;
+  EXPECT_TRUE(fs::exists(out / "good_ply" / "cloud.ply"));
+  EXPECT_TRUE(fs::exists(out / "good_xyz" / "cloud.ply"));
+  EXPECT_TRUE(fs::exists(out / "other" / "cloud.ply"));  // no clash: the stem alone
+  EXPECT_FALSE(fs::exists(out / "good"));
+  auto summary = nlohmann::json::parse(test::read_file(out / "summary.json"));
+  ASSERT_EQ(summary["parts"].size(), 3u);
+  EXPECT_EQ(summary["parts"][0]["part"], "good_ply");
+  EXPECT_EQ(summary["parts"][2]["part"], "good_xyz");
+  EXPECT_EQ(summary["parts"][2]["warnings"][0],
+            "node 'clean' (cloud.clean): dropped 2 of 902 points with a NaN or infinite coordinate or normal");
+
+  // the same name and extension in two folders: numbered on
+  fs::create_directories(dir.path / "b");
+  write_patch(dir.path / "b" / "good.ply", 30);
+  const std::string other = (dir.path / "b" / "good.ply").string();
+  ASSERT_EQ(test::run_command(kScallop + " batch " + kGraph + " " + ply + " " + other + " --no-cache -q -o " +
+                                  (dir.path / "out2").string(),
+                              &said),
+            0)
+      << said;
+  EXPECT_NE(said.find("note: parts " + ply + " and " + other + " share the name 'good'; their outputs go to " +
+                      (dir.path / "out2" / "good_ply").string() + "/ and " +
+                      (dir.path / "out2" / "good_ply_2").string() + "/ and they are named so in messages\n"),
+            std::string::npos)
+      << said;
+  EXPECT_TRUE(fs::exists(dir.path / "out2" / "good_ply_2" / "cloud.ply"));
 }
 
 // Plans on the graph input `cloud` (default patch.ply beside the graph) with a 2 mm ball, and
