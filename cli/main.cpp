@@ -166,60 +166,22 @@ int cmd_run(const std::string& graph_path, const std::vector<std::string>& input
   return certified ? kExitDone : kExitCertificateFailed;
 }
 
-// The output folder (and part name) of each batch part: its file's stem, or, where stems clash
-// (good.ply, good.xyz), stem_extension (good_ply, good_xyz), numbered on when even those clash
-// (a/good.ply, b/good.ply: good_ply, good_ply_2). Each clash is said on stderr.
-std::vector<std::string> part_folders(const std::vector<std::string>& parts, const std::string& out_dir) {
+// Says on stderr where parts whose file names share a stem write (batch_part_names).
+void say_shared_names(const std::vector<std::string>& parts, const std::vector<std::string>& names,
+                      const std::string& out_dir) {
   std::map<std::string, std::vector<std::size_t>> by_stem;
   for (std::size_t i = 0; i < parts.size(); ++i) by_stem[fs::path(parts[i]).stem().string()].push_back(i);
-  std::vector<std::string> names(parts.size());
-  std::set<std::string> used;
-  for (const auto& [stem, group] : by_stem)
-    if (group.size() == 1) used.insert(names[group[0]] = stem);
   for (const auto& [stem, group] : by_stem) {
     if (group.size() == 1) continue;
     std::string files, folders;
     for (std::size_t k = 0; k < group.size(); ++k) {
-      const std::string ext = fs::path(parts[group[k]]).extension().string();
-      const std::string base = ext.size() > 1 ? stem + "_" + ext.substr(1) : stem;
-      std::string name = base;
-      for (int n = 2; used.count(name); ++n) name = base + "_" + std::to_string(n);
-      used.insert(names[group[k]] = name);
       const char* sep = k == 0 ? "" : k + 1 == group.size() ? " and " : ", ";
       files += sep + parts[group[k]];
-      folders += sep + (fs::path(out_dir) / name).string() + "/";
+      folders += sep + (fs::path(out_dir) / names[group[k]]).string() + "/";
     }
     std::cerr << "note: parts " << files << " share the name '" << stem << "'; their outputs go to " << folders
               << " and they are named so in messages\n";
   }
-  return names;
-}
-
-// Runs the parts as run_batch does (at most `jobs` in flight, one failure never stops the others),
-// each in the folder part_folders gives it.
-std::vector<PartResult> run_parts(const Graph& graph, const std::string& input_name,
-                                  const std::vector<std::string>& parts, const std::vector<std::string>& folders,
-                                  int jobs, const PartRequest& common) {
-  std::vector<PartResult> results(parts.size());
-  std::atomic<std::size_t> next{0};
-  tbb::task_group group;
-  for (int w = 0; w < std::max(1, jobs); ++w)
-    group.run([&] {
-      for (std::size_t i; (i = next++) < parts.size();) {
-        PartRequest req = common;
-        req.inputs[input_name] = parts[i];
-        req.part = folders[i];
-        req.out_dir = (fs::path(common.out_dir) / folders[i]).string();
-        try {
-          results[i] = run_part(graph, builtin_registry(), req);
-        } catch (const std::exception& e) {  // run_part does not throw; belt and braces
-          results[i].part = req.part;
-          results[i].errors = {e.what()};
-        }
-      }
-    });
-  group.wait();
-  return results;
 }
 
 int cmd_batch(const std::string& graph_path, const std::vector<std::string>& parts, int jobs,
@@ -242,8 +204,8 @@ int cmd_batch(const std::string& graph_path, const std::vector<std::string>& par
   open_sinks(o, sinks, static_cast<int>(graph.nodes.size() * parts.size()));
   common.cache = sinks.cache.get();
   common.events = &sinks.fanout;
-  const std::vector<std::string> folders = part_folders(parts, out_dir);
-  auto results = run_parts(graph, input_name, parts, folders, jobs, common);
+  say_shared_names(parts, batch_part_names(parts), out_dir);
+  auto results = run_batch(graph, builtin_registry(), input_name, parts, jobs, common);
 
   nlohmann::json summary = nlohmann::json::array();
   std::vector<std::string> failed, uncertified;

@@ -1,5 +1,8 @@
 #include "engine/runner.h"
 
+#include <map>
+#include <set>
+
 #include <tbb/task_group.h>
 
 #include <atomic>
@@ -79,9 +82,30 @@ PartResult run_part(const Graph& graph, const Registry& registry, const PartRequ
   return r;
 }
 
+std::vector<std::string> batch_part_names(const std::vector<std::string>& parts) {
+  std::map<std::string, std::vector<std::size_t>> by_stem;
+  for (std::size_t i = 0; i < parts.size(); ++i) by_stem[fs::path(parts[i]).stem().string()].push_back(i);
+  std::vector<std::string> names(parts.size());
+  std::set<std::string> used;
+  for (const auto& [stem, group] : by_stem)
+    if (group.size() == 1) used.insert(names[group[0]] = stem);
+  for (const auto& [stem, group] : by_stem) {
+    if (group.size() == 1) continue;
+    for (std::size_t i : group) {
+      const std::string ext = fs::path(parts[i]).extension().string();
+      const std::string base = ext.size() > 1 ? stem + "_" + ext.substr(1) : stem;
+      std::string name = base;
+      for (int n = 2; used.count(name); ++n) name = base + "_" + std::to_string(n);
+      used.insert(names[i] = name);
+    }
+  }
+  return names;
+}
+
 std::vector<PartResult> run_batch(const Graph& graph, const Registry& registry, const std::string& input_name,
                                   const std::vector<std::string>& parts, int jobs, const PartRequest& common) {
   std::vector<PartResult> results(parts.size());
+  const std::vector<std::string> names = batch_part_names(parts);
   std::atomic<std::size_t> next{0};
   tbb::task_group group;
   // `jobs` workers pull parts one at a time: at most `jobs` parts are in flight.
@@ -90,7 +114,7 @@ std::vector<PartResult> run_batch(const Graph& graph, const Registry& registry, 
       for (std::size_t i; (i = next++) < parts.size();) {
         PartRequest req = common;
         req.inputs[input_name] = parts[i];
-        req.part = fs::path(parts[i]).stem().string();
+        req.part = names[i];
         if (!common.out_dir.empty()) req.out_dir = (fs::path(common.out_dir) / req.part).string();
         try {
           results[i] = run_part(graph, registry, req);

@@ -31,8 +31,14 @@ struct PartResult {
 // <out_dir>/<output name>.<extension of its type>. Never throws: every problem lands in errors.
 PartResult run_part(const Graph& graph, const Registry& registry, const PartRequest& request);
 
+// The name (and output folder) of each batch part: its file's stem, or, where stems clash
+// (good.ply, good.xyz), stem_extension (good_ply, good_xyz), numbered on when even those clash
+// (a/good.ply, b/good.ply: good_ply, good_ply_2).
+std::vector<std::string> batch_part_names(const std::vector<std::string>& parts);
+
 // Runs every part file through the graph (bound to graph input `input_name`), at most `jobs`
-// parts in flight, outputs in <out_dir>/<part stem>/. One part's failure never stops the others.
+// parts in flight, outputs in <out_dir>/<batch_part_names>/. One part's failure never stops the
+// others.
 std::vector<PartResult> run_batch(const Graph& graph, const Registry& registry, const std::string& input_name,
                                   const std::vector<std::string>& parts, int jobs, const PartRequest& common);
 
