@@ -235,8 +235,11 @@ Graph parse_graph(const std::string& text, const std::string& path) {
       errs.push_back(k + ": unknown key " + in_quotes(k) + "; expected one of: " +
                      join_names({top_keys.begin(), top_keys.end()}));
 
-  if (!j.contains("scallop_graph") || !j["scallop_graph"].is_number_integer())
+  if (!j.contains("scallop_graph"))
     errs.push_back("scallop_graph: missing format version; expected \"scallop_graph\": " + std::to_string(kGraphFormat));
+  else if (!j["scallop_graph"].is_number_integer())
+    errs.push_back("scallop_graph: format version must be an integer; got " + j["scallop_graph"].dump() +
+                   ", expected " + std::to_string(kGraphFormat));
   else if ((g.format = j["scallop_graph"].get<int>()) != kGraphFormat)
     errs.push_back("scallop_graph: unsupported format version " + std::to_string(g.format) + "; expected " +
                    std::to_string(kGraphFormat));
@@ -350,6 +353,8 @@ Graph parse_graph(const std::string& text, const std::string& path) {
 }
 
 Graph load_graph(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw ValidationError({path + ": is a folder; expected a graph file (.json)"});
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ValidationError({path + ": cannot open graph file"});
   std::stringstream s;

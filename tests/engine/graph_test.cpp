@@ -168,11 +168,28 @@ TEST(Graph, EveryErrorIsCollected) {
                       "outputs.o: node 's' has no output 'bad'; expected one of: out"}));
 }
 
+// A folder given as the graph was read as an empty file ("unexpected end of input").
+TEST(Graph, AFolderIsNotAGraphFile) {
+  const std::string dir = ::testing::TempDir();
+  try {
+    load_graph(dir);
+    FAIL() << "no error";
+  } catch (const ValidationError& e) {
+    ASSERT_EQ(e.errors.size(), 1u);
+    EXPECT_EQ(e.errors[0], dir + ": is a folder; expected a graph file (.json)");
+  }
+}
+
 TEST(Graph, FormatVersionAndSyntax) {
   EXPECT_EQ(errors_of(R"({"scallop_graph": 2, "nodes": []})"),
             std::vector<std::string>{"scallop_graph: unsupported format version 2; expected 1"});
   EXPECT_EQ(errors_of(R"({"nodes": []})"),
             std::vector<std::string>{"scallop_graph: missing format version; expected \"scallop_graph\": 1"});
+  // a version of the wrong type is not "missing" (issue 11)
+  EXPECT_EQ(errors_of(R"({"scallop_graph": "1", "nodes": []})"),
+            std::vector<std::string>{"scallop_graph: format version must be an integer; got \"1\", expected 1"});
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1.5, "nodes": []})"),
+            std::vector<std::string>{"scallop_graph: format version must be an integer; got 1.5, expected 1"});
   try {
     parse_graph("{\"scallop_graph\": 1,\n \"nodes\": [}", "g.json");
     FAIL();
