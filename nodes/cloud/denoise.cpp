@@ -297,12 +297,20 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
     double R2 = 0;  // squared radius of the last fit_point
     std::vector<Vector3d> sub_pts;
     std::vector<double> sub_pd2;
+    std::vector<Projection> fits;  // fit_scales: one per scale
+    std::vector<double> offsets;
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
-  std::vector<double> reach(n);
+  std::vector<double> reach(n);  // distance from each point to its k-th neighbour (mm)
   std::vector<double> bias(n, 0.0);  // bound on the kept fit's shape bias (mm)
   std::vector<int> chosen(n, 0);     // scales below the widest the kept fit is (0: the widest)
   if (o.scales > 1 && res.noise_sigma < 0) res.noise_sigma = estimate_noise_sigma(P);
+  // The multi-scale rule's neighbour counts, narrowest first: k / 2^(S-1) (at least
+  // kMinScaleNeighbours) ... k.
+  std::vector<int> ks{k};
+  while (static_cast<int>(ks.size()) < o.scales && ks.back() / 2 >= kMinScaleNeighbours)
+    ks.push_back(ks.back() / 2);
+  std::reverse(ks.begin(), ks.end());
 
   for (int it = 0; it < iterations; ++it) {
     const std::vector<Vector3d>& X = res.points;
@@ -401,17 +409,15 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
     // times their bound off the surface).
     auto fit_scales = [&](std::size_t i, Scratch& s) -> Projection {
       const Projection widest = fit_point(i, s, k);
-      std::vector<int> ks{k};
-      while (static_cast<int>(ks.size()) < o.scales && ks.back() / 2 >= kMinScaleNeighbours)
-        ks.push_back(ks.back() / 2);
       bias[i] = 0;
       chosen[i] = 0;
       if (ks.size() == 1 || !widest.moved) return widest;
-      std::reverse(ks.begin(), ks.end());  // narrowest first
-      std::vector<Projection> fits(ks.size());
+      std::vector<Projection>& fits = s.fits;
+      std::vector<double>& a = s.offsets;
+      fits.resize(ks.size());
+      a.resize(ks.size());
       fits.back() = widest;
       for (std::size_t j = 0; j + 1 < ks.size(); ++j) fits[j] = fit_subset(i, s, ks[j]);
-      std::vector<double> a(ks.size());
       for (std::size_t j = 0; j < ks.size(); ++j) a[j] = (fits[j].point - X[i]).dot(widest.normal);
       const double sigma = std::max(0.0, res.noise_sigma);
       std::size_t keep = ks.size();  // none yet
