@@ -745,7 +745,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   passes.push_back(planner.build_pass(0));
   double ds_min = kInf, ds_max = 0, interval_min = kInf, interval_max = 0, scallop_max = 0;
   Eigen::Vector3d scallop_where = Eigen::Vector3d::Zero();
-  int shrunk = 0, formula4 = 0, formula3 = 0, floor_hits = 0;
+  int shrunk = 0, formula4 = 0, formula3 = 0;
   nlohmann::json warnings = nlohmann::json::array();
   nlohmann::json strips_over = nlohmann::json::array();  // strips no side step kept under h
   double strip_over_worst = 0;
@@ -786,7 +786,6 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     if (!accepted) {
       // No step keeps the limit here (a concave place the ball cannot reach, a kink): take the
       // formula's step rather than creep on with vanishing ones, and say so.
-      ++floor_hits;
       const double s_next = s + ds0 >= co.S * (1 - 1e-12) ? co.S : s + ds0;
       B = planner.build_pass(s_next);
       chk = planner.check_strip(A, B);
@@ -924,7 +923,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
       {"side_formula", {{"formula3_points", formula3}, {"formula4_points", formula4},
                         {"conformal_tolerance_deg", o.conformal_tolerance}}},
       {"steps_shrunk_by_check", shrunk},
-      {"strips_over_limit", floor_hits},
+      {"strips_over_limit", strips_over.size()},
       {"strips_over_limit_at", strips_over},
       {"predicted", {{"scallop_max", scallop_max}, {"scallop_max_at", vec(scallop_where)},
                      {"chord_overcut_max", planner.chord_overcut_max},
