@@ -38,13 +38,12 @@ std::string fmt(double x) {
 // (s, t) pass coordinates -> uv; see the header.
 struct Coords {
   bool polar = false;
-  bool transposed = false;  // rectangle: s runs along v and t along u (the outline passes)
   double S = 0;  // side extent: width (zigzag) or radius (contour)
   double T = 0;  // forward extent: height (zigzag) or 2 pi (contour)
   double R = 0;  // contour: disk radius
 
   Eigen::Vector2d uv(double s, double t) const {
-    if (!polar) return transposed ? Eigen::Vector2d(t, s) : Eigen::Vector2d(s, t);
+    if (!polar) return {s, t};
     const double rho = R - s;
     return {rho * std::cos(t), rho * std::sin(t)};
   }
@@ -60,6 +59,7 @@ struct Pass {
   std::vector<double> lift;               // how far the ball was lifted off the interpolant (mm)
   std::vector<double> delta;              // how far the surface may be off there (Margins)
   std::vector<char> unchecked;            // per segment: the forward chord check did not hold
+  std::vector<Eigen::Vector2d> uv;        // the rim pass: uv of each vertex (else from Coords)
 };
 
 // Local geometry at a vertex of a pass, and the side step it allows.
@@ -283,22 +283,53 @@ class Planner {
     return ratio;
   }
 
+  // Appends the vertex at t over the surface point x to P. The contact is moved up with the
+  // ball where the ball would reach into the cloud; a quarter of e is left to the cloud's noise
+  // and the interpolant's error.
+  void push_vertex(Pass& P, double t, const SurfaceSample& x) const {
+    const Margins m = margin(x);
+    const double d = m.stock + lifter_.lift(centre(x), x.normal, lift_tolerance(m.delta, 0.25));
+    P.t.push_back(t);
+    P.p.push_back(x.position + d * x.normal);
+    P.n.push_back(x.normal);
+    P.c.push_back(x.position + (r_ + d) * x.normal);
+    P.lift.push_back(d - m.stock);
+    P.delta.push_back(m.delta);
+  }
+
+  // The rim pass: a closed pass through the outer loop's own points (positions, normals and
+  // uncertainties of the cloud, uv from the map), so the ball reaches every point of the
+  // cloud's outline, corners included (the interpolant, a local fit, rounds a corner of the
+  // outline off by up to half a sampling step, and the passes built from it leave the corner
+  // uncut). Every segment is sampled and lifted as an unchecked one (lift_segments): between
+  // two outline points there is no interpolant to check the chord against, only the cloud.
+  Pass rim_pass(const PointCloud& cloud, const UVMap& map) const {
+    Pass P;
+    P.closed = true;
+    const std::size_t n = map.outer_loop.size();
+    for (std::size_t k = 0; k <= n; ++k) {
+      const int i = map.outer_loop[k % n];
+      SurfaceSample x;
+      x.position = cloud.points[i];
+      x.normal = cloud.normals[i];
+      x.uncertainty = cloud.has_uncertainty() ? cloud.uncertainty[i] : 0.0;
+      push_vertex(P, static_cast<double>(k), x);
+      P.uv.push_back(map.boundary_uv[k % n]);
+      if (k) P.unchecked.push_back(true);
+    }
+    lift_segments(P);
+    // the two ends of the loop are one vertex: both get the higher of their two lifts
+    const std::size_t last = P.c.size() - 1, from = P.lift[last] > P.lift[0] ? last : 0;
+    for (std::size_t j : {std::size_t{0}, last})
+      P.c[j] = P.c[from], P.p[j] = P.p[from], P.n[j] = P.n[from], P.lift[j] = P.lift[from];
+    return P;
+  }
+
   Pass build_pass(double s) {
     Pass P;
     P.s = s;
     P.closed = co_.polar;
-    auto push = [&](double t, const SurfaceSample& x) {
-      // The contact is moved up with the ball where the ball would reach into the cloud.
-      // A quarter of e is left to the cloud's noise and the interpolant's error.
-      const Margins m = margin(x);
-      const double d = m.stock + lifter_.lift(centre(x), x.normal, lift_tolerance(m.delta, 0.25));
-      P.t.push_back(t);
-      P.p.push_back(x.position + d * x.normal);
-      P.n.push_back(x.normal);
-      P.c.push_back(x.position + (r_ + d) * x.normal);
-      P.lift.push_back(d - m.stock);
-      P.delta.push_back(m.delta);
-    };
+    auto push = [&](double t, const SurfaceSample& x) { push_vertex(P, t, x); };
     if (co_.degenerate(s)) {
       P.closed = false;
       push(0, at(s, 0));
@@ -813,24 +844,21 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   info.push_back(planner.infos(passes.back()));
 
   // ---- outline --------------------------------------------------------------------------------
-  // Zig-zag passes end on the rectangle's edges v = 0 and v = H: between two pass ends the rim is
-  // cut only by the balls' ends, and at a corner of the patch's outline not at all. Two passes
-  // along those edges (u = 0 ... W) cut the rim the passes end on; with the first and last pass
-  // (u = 0, W) they follow the whole boundary.
-  Coords along = co;
+  // Zig-zag passes end on the rectangle's edges v = 0 and v = H, and both patterns' outermost
+  // passes follow the interpolant, which rounds the outline's corners off: between two pass
+  // ends the rim is cut only by the balls' ends, and at a corner not at all. The rim pass runs
+  // through the outline's own points (Planner::rim_pass).
   std::vector<Pass> outline;
-  if (o.outline && !co.polar) {
-    along.transposed = true;
-    along.S = co.T;
-    along.T = co.S;
-    Planner edge(interp, lifter, &model, along, o);
-    outline.push_back(edge.build_pass(0));
-    outline.push_back(edge.build_pass(along.S));
-    planner.forward_floor_hits += edge.forward_floor_hits;
-    planner.chord_overcut_max = std::max(planner.chord_overcut_max, edge.chord_overcut_max);
-    planner.chord_undercut_max = std::max(planner.chord_undercut_max, edge.chord_undercut_max);
+  if (o.outline) {
+    const std::size_t n = map.outer_loop.size();
+    bool usable = n >= 3 && map.boundary_uv.size() == n;
+    for (std::size_t k = 0; usable && k < n; ++k)
+      usable = map.outer_loop[k] >= 0 && static_cast<std::size_t>(map.outer_loop[k]) < cloud.size();
+    if (usable) outline.push_back(planner.rim_pass(cloud, map));
+    else
+      warnings.push_back("the map has no usable outer loop (" + std::to_string(n) +
+                         " points): no rim pass, the outline is cut only by the passes' ends");
   }
-
   // ---- concave places the ball cannot reach -----------------------------------------------------
   std::vector<Eigen::Vector3d> concave_pts;
   std::vector<double> concave_r;
@@ -861,7 +889,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     for (std::size_t k = 0; k < P.p.size(); ++k) {
       out.contact.push_back(P.p[k]);
       out.normal.push_back(P.n[k]);
-      out.uv.push_back(c.uv(P.s, P.t[k]));
+      out.uv.push_back(P.uv.empty() ? c.uv(P.s, P.t[k]) : P.uv[k]);
       if (k) length += (P.p[k] - P.p[k - 1]).norm();
     }
     if (reverse) {
@@ -872,9 +900,13 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     points += out.contact.size();
     tp.passes.push_back(std::move(out));
   };
+  // The contour pattern cuts the rim first and goes inwards; the zig-zag cuts it last.
+  if (co.polar)
+    for (const Pass& P : outline) emit(P, co, false);
   for (std::size_t i = 0; i < passes.size(); ++i)
     emit(passes[i], co, o.pattern == "zigzag" && i % 2 == 1);  // zig-zag: alternate directions
-  for (const Pass& P : outline) emit(P, along, false);
+  if (!co.polar)
+    for (const Pass& P : outline) emit(P, co, false);
   if (!strips_over.empty())
     warnings.push_back(std::to_string(strips_over.size()) + " of " +
                        std::to_string(passes.size() - 1) +

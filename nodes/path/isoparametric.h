@@ -6,11 +6,14 @@
 //   zigzag  (rectangle map [0,W] x [0,H]): s = u in [0, W], t = v in [0, H]. Passes are the
 //           iso-u lines u = 0 ... W (the first and last on the boundary), cut forward along v
 //           and in alternate directions (the paper's convention: forward = v, side = u).
-//           With `outline`, two more passes follow the edges v = 0 and v = H (u = 0 ... W), the
-//           rim the passes end on, so that with the first and last pass the whole boundary is cut.
 //   contour (disk map of radius R): s = R - rho, t = theta in [0, 2 pi]. Passes are the circles
 //           rho = R (the boundary) inwards, each closed and cut counter-clockwise in uv; the last
 //           "pass" is the single point at the centre.
+// With `outline` (both patterns), a closed pass runs through the outer loop's own points
+// (the map's outer_loop, with the cloud's positions, normals and uncertainties): the interpolant
+// rounds the outline's corners off, and zig-zag passes end on the edges v = 0, H, so without it
+// the rim between pass ends and at corners is left to the balls' ends. The contour pattern cuts
+// it first, the zig-zag last.
 //
 // Along a pass, the forward step starts from formula (2) (chord deviation e, the pass's own
 // curvature) and is then checked on the ball-centre polyline, at 1/4, 1/2, 3/4 of each segment
@@ -61,8 +64,7 @@ struct IsoparametricOptions {
   double conformal_tolerance = 5.0;  // degrees: |angle(r_s, r_t) - 90| above this uses formula (4)
   double max_segment = 5.0;          // longest forward step (mm), > 0
   int interpolation_k = 20;          // neighbours per local fit (see uv_interpolation.h)
-  bool outline = true;               // zigzag: two more passes along the edges v = 0 and v = H,
-                                     // which the passes end on (the rim between their ends)
+  bool outline = true;               // a last closed pass through the outline's own points
   // Bounds on the work (a degenerate map or a noisy cloud makes the steps vanish): more passes
   // or points than these, or more than min(200000, max_points) points in one pass, stop the
   // planner with std::invalid_argument saying where and why.

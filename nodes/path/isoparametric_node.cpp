@@ -12,7 +12,7 @@ namespace scallop {
 NodeDecl make_isoparametric_node() {
   NodeDecl d;
   d.type = "path.isoparametric";
-  d.version = 5;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field; 5: strips over the limit summarised in one warning (strips_over_limit_at), warnings said on the terminal, outline passes
+  d.version = 6;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field; 5: strips over the limit summarised in one warning (strips_over_limit_at), warnings said on the terminal, outline passes; 6: one rim pass through the outline's points, both patterns
   d.description =
       "iso-parametric finishing passes from a UV-mapped cloud: zig-zag on a rectangle map, "
       "concentric on a disk map; forward step from the chord error, side step from the scallop "
@@ -45,8 +45,8 @@ NodeDecl make_isoparametric_node() {
       .param_float("max_segment", 5.0, 1e-3, 1e3, "mm", "longest forward step")
       .param_int("interpolation_k", 20, 6, 64, "", "neighbours per local (u,v) fit")
       .param_bool("outline", true,
-                  "zigzag: also cut along the two edges of the rectangle the passes end on, so "
-                  "the rim between pass ends and the outline's corners are cut");
+                  "a last closed pass through the outline's own points, so the rim between pass "
+                  "ends and the outline's corners are cut");
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");
     auto neighbors = ctx.input<Neighborhoods>("neighbors");

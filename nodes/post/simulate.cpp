@@ -505,10 +505,12 @@ SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreS
 
   nlohmann::json reasons = nlohmann::json::array();
   char buf[160];
-  if (std::isnan(max_inner)) {
-    reasons.push_back("no interior sample was cut");
-  } else if (max_inner > 1.01 * H) {
-    std::snprintf(buf, sizeof buf, "interior scallop max %.4g > 1.01 H", max_inner);
+  // The whole patch counts, rim included: the rim is part of the part.
+  if (std::isnan(max_all)) {
+    reasons.push_back("no sample was cut");
+  } else if (max_all > 1.01 * H) {
+    std::snprintf(buf, sizeof buf, "scallop max %.4g > 1.01 H (rim included; interior %.4g)",
+                  max_all, max_inner);
     reasons.push_back(buf);
   }
   if (gouge_max > gouge_tol) {

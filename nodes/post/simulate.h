@@ -11,6 +11,8 @@
 // Where the cloud carries an uncertainty delta (PointCloud::uncertainty: the real surface may lie
 // up to delta off it), both are bounds for the real surface: gouge = max(0, r − d(p) + delta),
 // scallop = its value at p + delta.
+// pass: the whole patch (rim included, up to the outline) has scallop <= 1.01 h, gouge within
+// the chord tolerance and nothing uncut; the interior figures are reported beside it.
 // Fractions, percentiles and means are area-weighted. The 1000 highest values are refined with
 // local grids down to 1/16 of the spacing so the maxima do not depend on the grid.
 #pragma once

@@ -12,8 +12,9 @@ namespace scallop {
 NodeDecl make_simulate_node() {
   NodeDecl d;
   d.type = "post.simulate";
-  d.version = 4;  // 3: scallop and gouge are bounds that include the cloud's uncertainty
+  d.version = 5;  // 3: scallop and gouge are bounds that include the cloud's uncertainty
                   // 4: the uncertainty grows at gaps beyond the cloud's edge
+                  // 5: pass asks the whole patch, rim included, not the interior only
   d.description = "cutting simulation over the cloud's surface: scallop, gouge and uncut area (the certificate)";
   d.input("path", "Toolpath", "planned passes (give this or 'linked')", false)
       .input("linked", "LinkedPath", "linked machine moves (give this or 'path')", false)
@@ -21,7 +22,7 @@ NodeDecl make_simulate_node() {
       .input("loops", "Loops", "the patch's boundary loops (outer first, then holes; indices into 'cloud'): "
              "the patch is what lies inside them in xy, and the margin is measured from them; "
              "absent: the outline is guessed from the cloud", false)
-      .output("report", "Report", "scallop/gouge/uncut statistics, pass and fail reasons, the 10 worst places")
+      .output("report", "Report", "scallop/gouge/uncut statistics (whole patch, rim included, and interior), pass (the whole patch within the limits) and fail reasons, the 10 worst places")
       .output("heatmap", "Image", "top view of the scallop left, colour bar 0..1.01 h")
       .param_float("scallop", 0, 0, 100, "mm", "scallop limit h; 0: the path's own")
       .param_float("chord", -1, -1, 100, "mm", "chord tolerance e (gouges up to max(e, 0.001) pass); -1: the path's own")

@@ -42,6 +42,13 @@ Input rect_patch(double W, double H, double d, Z z, G g) {
   in.map.domain = "rectangle";
   in.map.width = W;
   in.map.height = H;
+  // the outer loop, counter-clockwise from the corner at the origin
+  auto id = [&](int i, int j) { return i * (ny + 1) + j; };
+  for (int i = 0; i < nx; ++i) in.map.outer_loop.push_back(id(i, 0));
+  for (int j = 0; j < ny; ++j) in.map.outer_loop.push_back(id(nx, j));
+  for (int i = nx; i > 0; --i) in.map.outer_loop.push_back(id(i, ny));
+  for (int j = ny; j > 0; --j) in.map.outer_loop.push_back(id(0, j));
+  for (int i : in.map.outer_loop) in.map.boundary_uv.push_back(in.map.uv[i]);
   in.nb = compute_knn(in.cloud.points, 12);
   return in;
 }
@@ -61,7 +68,11 @@ Input disk_patch(double R, double d, Z z, G g) {
     for (int j = -n; j <= n; ++j)
       if (std::hypot(i * d, j * d) < R - 0.5 * d) add(i * d, j * d);
   const int m = static_cast<int>(std::ceil(2 * M_PI * R / d));
-  for (int k = 0; k < m; ++k) add(R * std::cos(2 * M_PI * k / m), R * std::sin(2 * M_PI * k / m));
+  for (int k = 0; k < m; ++k) {
+    in.map.outer_loop.push_back(static_cast<int>(in.cloud.points.size()));
+    add(R * std::cos(2 * M_PI * k / m), R * std::sin(2 * M_PI * k / m));
+    in.map.boundary_uv.push_back(in.map.uv.back());
+  }
   in.map.domain = "disk";
   in.map.radius = R;
   in.nb = compute_knn(in.cloud.points, 12);
@@ -91,7 +102,7 @@ TEST(Isoparametric, FlatRectanglePassesAreStraightEvenAndCoverIt) {
   o.scallop_height = 0.01;
   o.chord_error = 0.005;
   o.max_segment = 5;
-  o.outline = false;  // the passes alone (the outline is tested below)
+  o.outline = false;  // the passes alone (the rim pass is tested below)
   const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
   const Toolpath& tp = res.toolpath;
   ASSERT_GE(tp.passes.size(), 3u);
@@ -136,9 +147,9 @@ TEST(Isoparametric, FlatRectanglePassesAreStraightEvenAndCoverIt) {
   EXPECT_LT(r["surface_error"]["fit_gap_max"].get<double>(), 1e-9);
 }
 
-// The rim is part of the part: on a flat rectangle the zig-zag passes and the two outline passes
-// along the edges the passes end on (y = 0 and y = 20) leave at most h everywhere on the
-// rectangle, its edges and corners included (the product's simulation against the exact outline).
+// The rim is part of the part: on a flat rectangle the zig-zag passes and the rim pass through
+// the outline's points leave at most h everywhere on the rectangle, its edges and corners
+// included (the product's simulation against the exact outline).
 TEST(Isoparametric, OutlinePassesCutTheRimTheWholePatchStaysUnderTheLimit) {
   const Input in = flat();
   IsoparametricOptions o;
@@ -148,17 +159,15 @@ TEST(Isoparametric, OutlinePassesCutTheRimTheWholePatchStaysUnderTheLimit) {
   const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
   const Toolpath& tp = res.toolpath;
   const std::size_t n = res.report["passes"].get<std::size_t>();
-  ASSERT_EQ(tp.passes.size(), n + 2);
-  for (std::size_t i = n; i < n + 2; ++i) {
-    const ToolpathPass& edge = tp.passes[i];
-    const double y = i == n ? 0 : 20;
-    EXPECT_NEAR(edge.contact.front().x(), 0, 1e-9);
-    EXPECT_NEAR(edge.contact.back().x(), 30, 1e-9);
-    for (std::size_t k = 0; k < edge.contact.size(); ++k) {
-      EXPECT_NEAR(edge.contact[k].y(), y, 1e-9);
-      EXPECT_NEAR(edge.contact[k].z(), 0, 1e-9);
-      EXPECT_NEAR(edge.uv[k].y(), y, 1e-9);
-    }
+  ASSERT_EQ(tp.passes.size(), n + 1);
+  EXPECT_EQ(res.report["outline_passes"], 1);
+  // the rim pass: every outline point in order, closed, on the plane (nothing to lift)
+  const ToolpathPass& rim = tp.passes[n];
+  ASSERT_EQ(rim.contact.size(), in.map.outer_loop.size() + 1);
+  for (std::size_t k = 0; k < rim.contact.size(); ++k) {
+    const int i = in.map.outer_loop[k % in.map.outer_loop.size()];
+    EXPECT_NEAR((rim.contact[k] - in.cloud.points[i]).norm(), 0, 1e-9) << k;
+    EXPECT_NEAR((rim.uv[k] - in.map.uv[i]).norm(), 0, 1e-12) << k;
   }
   const HeightField plane(in.cloud.points);
   SimulateOptions so;
@@ -271,7 +280,10 @@ TEST(Isoparametric, ContourOnADomeIsConcentricCirclesToTheCentre) {
   o.scallop_height = h;
   o.chord_error = 0.01;
   const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
-  const auto& passes = res.toolpath.passes;
+  // the rim pass through the outline's points comes first; the circles follow
+  ASSERT_EQ(res.report["outline_passes"], 1);
+  const auto passes = std::vector<ToolpathPass>(res.toolpath.passes.begin() + 1, res.toolpath.passes.end());
+  for (const Eigen::Vector2d& q : res.toolpath.passes[0].uv) EXPECT_NEAR(q.norm(), R, 1e-9);
   ASSERT_GE(passes.size(), 5u);
   double prev = R + 1;
   for (std::size_t i = 0; i + 1 < passes.size(); ++i) {
@@ -448,9 +460,9 @@ TEST(Isoparametric, NodeRunsAndReportsErrors) {
   auto tp = std::dynamic_pointer_cast<const Toolpath>(out.at("toolpath"));
   auto rep = std::dynamic_pointer_cast<const Report>(out.at("report"));
   ASSERT_TRUE(tp && rep);
-  EXPECT_EQ(rep->data["passes"].get<std::size_t>() + 2, tp->passes.size());  // and the outline
-  EXPECT_EQ(rep->data["outline_passes"], 2);
-  EXPECT_NEAR(tp->passes[tp->passes.size() - 3].contact[0].x(), 6, 1e-9);
+  EXPECT_EQ(rep->data["passes"].get<std::size_t>() + 1, tp->passes.size());  // and the rim
+  EXPECT_EQ(rep->data["outline_passes"], 1);
+  EXPECT_NEAR(tp->passes[tp->passes.size() - 2].contact[0].x(), 6, 1e-9);
 
   auto disk = std::make_shared<Input>(disk_patch(3, 0.5, [](double, double) { return 0.0; },
                                                  [](double, double) { return Eigen::Vector2d(0, 0); }));
