@@ -60,6 +60,38 @@ struct Pass {
   std::vector<double> delta;              // how far the surface may be off there (Margins)
   std::vector<char> unchecked;            // per segment: the forward chord check did not hold
   std::vector<Eigen::Vector2d> uv;        // the rim pass: uv of each vertex (else from Coords)
+  std::vector<char> off;                  // per vertex: over a hole of the patch, not cut (the
+                                          // segments next to it are not cut either)
+  bool cut(std::size_t k) const { return !off[k] && !off[k + 1]; }  // segment k
+};
+
+// The patch's holes in uv: a point of the domain is over a hole when it lies inside the polygon
+// of a hole loop's uv images (the map leaves no cloud point there; the interpolant would only
+// extrapolate). Passes are not cut there: the tool lifts over the hole (post.link).
+class Holes {
+ public:
+  void add(std::vector<Eigen::Vector2d> polygon) {
+    if (polygon.size() < 3) return;
+    Eigen::AlignedBox2d box;
+    for (const auto& q : polygon) box.extend(q);
+    polygons_.push_back({std::move(polygon), box});
+  }
+  bool empty() const { return polygons_.empty(); }
+  bool contains(const Eigen::Vector2d& q) const {
+    for (const auto& [poly, box] : polygons_) {
+      if (!box.contains(q)) continue;
+      bool in = false;  // even-odd rule
+      for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
+        if ((poly[i].y() > q.y()) != (poly[j].y() > q.y()) &&
+            q.x() < (poly[j].x() - poly[i].x()) * (q.y() - poly[i].y()) / (poly[j].y() - poly[i].y()) + poly[i].x())
+          in = !in;
+      if (in) return true;
+    }
+    return false;
+  }
+
+ private:
+  std::vector<std::pair<std::vector<Eigen::Vector2d>, Eigen::AlignedBox2d>> polygons_;
 };
 
 // Local geometry at a vertex of a pass, and the side step it allows.
@@ -161,8 +193,8 @@ class Planner {
  public:
   // model  the cloud's height field (post.simulate's model), or null
   Planner(const UVInterpolator& f, const BallLifter& lifter, const HeightField* model, Coords co,
-          const IsoparametricOptions& o)
-      : f_(f), lifter_(lifter), model_(model), co_(co), o_(o), r_(o.tool_radius),
+          const IsoparametricOptions& o, const Holes& holes)
+      : f_(f), lifter_(lifter), model_(model), holes_(holes), co_(co), o_(o), r_(o.tool_radius),
         h_(o.scallop_height * o.safety_factor),
         e_under_(std::min(0.98 * o.chord_error, 0.1 * h_)), hfd_(2 * f.uv_spacing()),
         ls0_(std::sqrt(8 * r_ * h_)) {}
@@ -172,6 +204,7 @@ class Planner {
   int forward_floor_hits = 0;
 
   SurfaceSample at(double s, double t) const { return f_(co_.uv(s, t)); }
+  bool over_hole(double s, double t) const { return !holes_.empty() && holes_.contains(co_.uv(s, t)); }
   // How far the planner's fit lies from the cloud's height field (the certificate's model) at x,
   // along the normal; 0 off the field. Where the two disagree the surface is known no better
   // than that: the scallop limit keeps the gap as a margin (Margins). It grows where a fit over
@@ -286,7 +319,17 @@ class Planner {
   // Appends the vertex at t over the surface point x to P. The contact is moved up with the
   // ball where the ball would reach into the cloud; a quarter of e is left to the cloud's noise
   // and the interpolant's error.
-  void push_vertex(Pass& P, double t, const SurfaceSample& x) const {
+  void push_vertex(Pass& P, double t, const SurfaceSample& x, bool off = false) const {
+    P.off.push_back(off);
+    if (off) {  // not cut: nothing to keep off the cloud
+      P.t.push_back(t);
+      P.p.push_back(x.position);
+      P.n.push_back(x.normal);
+      P.c.push_back(x.position + r_ * x.normal);
+      P.lift.push_back(0);
+      P.delta.push_back(0);
+      return;
+    }
     const Margins m = margin(x);
     const double d = m.stock + lifter_.lift(centre(x), x.normal, lift_tolerance(m.delta, 0.25));
     P.t.push_back(t);
@@ -303,18 +346,20 @@ class Planner {
   // outline off by up to half a sampling step, and the passes built from it leave the corner
   // uncut). Every segment is sampled and lifted as an unchecked one (lift_segments): between
   // two outline points there is no interpolant to check the chord against, only the cloud.
-  Pass rim_pass(const PointCloud& cloud, const UVMap& map) const {
+  // loop: point indices of a boundary loop, in order; uv: their uv.
+  Pass rim_pass(const PointCloud& cloud, const std::vector<int>& loop,
+                const std::vector<Eigen::Vector2d>& uv) const {
     Pass P;
     P.closed = true;
-    const std::size_t n = map.outer_loop.size();
+    const std::size_t n = loop.size();
     for (std::size_t k = 0; k <= n; ++k) {
-      const int i = map.outer_loop[k % n];
+      const int i = loop[k % n];
       SurfaceSample x;
       x.position = cloud.points[i];
       x.normal = cloud.normals[i];
       x.uncertainty = cloud.has_uncertainty() ? cloud.uncertainty[i] : 0.0;
       push_vertex(P, static_cast<double>(k), x);
-      P.uv.push_back(map.boundary_uv[k % n]);
+      P.uv.push_back(uv[k % n]);
       if (k) P.unchecked.push_back(true);
     }
     lift_segments(P);
@@ -329,17 +374,38 @@ class Planner {
     Pass P;
     P.s = s;
     P.closed = co_.polar;
-    auto push = [&](double t, const SurfaceSample& x) { push_vertex(P, t, x); };
     if (co_.degenerate(s)) {
       P.closed = false;
-      push(0, at(s, 0));
+      push_vertex(P, 0, at(s, 0), over_hole(s, 0));
       return P;
     }
     double t = 0;
     SurfaceSample x = at(s, 0);
-    push(0, x);
+    bool off = over_hole(s, 0);
+    push_vertex(P, 0, x, off);
     const double dt_floor = 1e-3 * hfd_ / (co_.polar ? std::max(co_.R - s, hfd_) : 1.0);
+    // Over a hole the pass moves on in steps of two sampling steps of the map until it is back
+    // on the patch; the hole's edge is then found by bisection, to a thousandth of a step.
+    const double dt_hole = co_.polar ? hfd_ / std::max(co_.R - s, hfd_) : hfd_;
+    auto edge = [&](double t_in, double t_out) {  // t_in on the patch, t_out over the hole
+      for (int i = 0; i < 10; ++i) {
+        const double m = 0.5 * (t_in + t_out);
+        (over_hole(s, m) ? t_out : t_in) = m;
+      }
+      return std::pair{t_in, t_out};
+    };
     while (t < co_.T) {
+      if (off) {
+        double t1 = std::min(co_.T, t + dt_hole);
+        bool off1 = over_hole(s, t1);
+        if (!off1) t1 = edge(t1, t).first;
+        x = at(s, t1);
+        P.unchecked.push_back(false);
+        push_vertex(P, t1, x, off1);
+        t = t1;
+        off = off1;
+        continue;
+      }
       // Formula (2) from the pass's own curvature gives the first guess.
       const double ht = co_.polar ? std::min(0.25, hfd_ / std::max(co_.R - s, 1e-12)) : hfd_;
       const double tc = co_.polar ? t : std::clamp(t, ht, co_.T - ht);
@@ -366,6 +432,21 @@ class Planner {
       bool last = t + dt * (1 + 1e-6) >= co_.T;
       if (last) dt = co_.T - t;
       else if (t + 1.5 * dt > co_.T) dt = (co_.T - t) / 2;  // no sliver of a last step
+      if (!holes_.empty() && over_hole(s, t + dt)) {
+        // The step would end over a hole: it ends at the hole's edge instead, or, standing on
+        // the edge already, the pass steps into the hole (that segment is not cut).
+        const auto [t_in, t_out] = edge(t, t + dt);
+        if (t_in - t <= 1e-3 * dt) {
+          x = at(s, t_out);
+          P.unchecked.push_back(false);
+          push_vertex(P, t_out, x, true);
+          t = t_out;
+          off = true;
+          continue;
+        }
+        dt = t_in - t;
+        last = false;
+      }
       SurfaceSample x1;
       bool unchecked = folded;
       for (int iter = 0;; ++iter) {
@@ -388,7 +469,7 @@ class Planner {
       t = last ? co_.T : t + dt;
       x = x1;
       P.unchecked.push_back(unchecked);
-      push(t, x);
+      push_vertex(P, t, x);
       const std::size_t cap = std::min<std::size_t>(kMaxPassPoints, o_.max_points);
       if (P.t.size() > cap)
         throw std::invalid_argument(
@@ -423,7 +504,7 @@ class Planner {
         // Only next to lifted vertices and where the forward chord check did not hold:
         // elsewhere that check already bounds the overcut, and lifting for it would only add
         // to the scallop.
-        if (P.lift[k] <= 0 && P.lift[k + 1] <= 0 && !P.unchecked[k]) continue;
+        if (!P.cut(k) || (P.lift[k] <= 0 && P.lift[k + 1] <= 0 && !P.unchecked[k])) continue;
         const Eigen::Vector3d a = P.c[k], b = P.c[k + 1];
         const Eigen::Vector3d n = (P.n[k] + P.n[k + 1]).normalized();
         const int m = std::max(2, static_cast<int>(std::ceil((b - a).norm() / step)));
@@ -457,7 +538,7 @@ class Planner {
                      const Eigen::Vector3d& o, double reach, Fn&& fn) const {
     const int nv = static_cast<int>(V.size());
     if (nv == 1) {
-      fn(V[0], V[0]);
+      if (!P.off[0]) fn(V[0], V[0]);
       return;
     }
     const int nseg = nv - 1;
@@ -469,7 +550,8 @@ class Planner {
       const double y = L2 > 0 ? std::clamp((o - V[j]).dot(ab) / L2, 0.0, 1.0) : 0.0;
       return (o - V[j] - y * ab).norm();
     };
-    fn(V[k], V[k + 1]);
+    // segments over a hole are not cut (the tool lifts there)
+    if (P.cut(k)) fn(V[k], V[k + 1]);
     for (int dir = -1; dir <= 1; dir += 2) {
       for (int step = 1; step < nseg; ++step) {
         int j = k + dir * step;
@@ -477,7 +559,7 @@ class Planner {
         else if (j < 0 || j >= nseg) break;
         if (j == k) break;
         if (step > 1 && seg_dist(j) > reach) break;
-        fn(V[j], V[j + 1]);
+        if (P.cut(j)) fn(V[j], V[j + 1]);
       }
     }
   }
@@ -505,6 +587,10 @@ class Planner {
   StripCheck check_strip(const Pass& A, const Pass& B) const {
     std::vector<double> ts;
     for (std::size_t k = 0; k + 1 < A.t.size(); ++k) {
+      if (!A.cut(k)) {
+        ts.push_back(A.t[k]);
+        continue;
+      }
       const double len = (A.c[k + 1] - A.c[k]).norm();
       const int n = std::max(4, static_cast<int>(std::ceil(len / (0.5 * ls0_))));
       for (int i = 0; i < n; ++i) ts.push_back(A.t[k] + (A.t[k + 1] - A.t[k]) * i / n);
@@ -520,7 +606,12 @@ class Planner {
                       [&](const tbb::blocked_range<std::size_t>& range) {
       for (std::size_t i = range.begin(); i != range.end(); ++i) {
         const double t = ts[i];
+        // over a hole there is no surface to leave a scallop on
         auto g = [&](double f, SurfaceSample* w) {
+          if (over_hole(sA + f * (sB - sA), t)) {
+            if (w) *w = at(sA + f * (sB - sA), t);
+            return Eigen::Vector2d(0, 0);
+          }
           return hits_at(A, B, sA + f * (sB - sA), t, w);
         };
         // Coarse scan across the strip; the cusp is where the first hit passes from A's balls
@@ -571,6 +662,7 @@ class Planner {
 
     // Side interval on the surface: each contact of A to the contact polyline of B.
     for (std::size_t k = 0; k < A.p.size(); ++k) {
+      if (A.off[k]) continue;
       double d = kInf;
       near_segments(B, B.p, A.t[k], A.p[k], kInf, [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
         const Eigen::Vector3d ab = b - a;
@@ -578,6 +670,7 @@ class Planner {
         const double y = L2 > 0 ? std::clamp((A.p[k] - a).dot(ab) / L2, 0.0, 1.0) : 0.0;
         d = std::min(d, (A.p[k] - a - y * ab).norm());
       });
+      if (!std::isfinite(d)) continue;  // B is over a hole there
       out.interval_min = std::min(out.interval_min, d);
       out.interval_max = std::max(out.interval_max, d);
     }
@@ -590,7 +683,7 @@ class Planner {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.t.size(), 4),
                       [&](const tbb::blocked_range<std::size_t>& range) {
                         for (std::size_t i = range.begin(); i != range.end(); ++i)
-                          v[i] = vertex_info(P.s, P.t[i]);
+                          if (!P.off[i]) v[i] = vertex_info(P.s, P.t[i]);
                       });
     return v;
   }
@@ -602,6 +695,7 @@ class Planner {
   const UVInterpolator& f_;
   const BallLifter& lifter_;
   const HeightField* model_;
+  const Holes& holes_;
   mutable std::atomic<double> fit_gap_max_{0};
   Coords co_;
   const IsoparametricOptions& o_;
@@ -697,7 +791,8 @@ void check_options(const IsoparametricOptions& o) {
 }  // namespace
 
 IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborhoods& neighbors,
-                                       const UVMap& map, const IsoparametricOptions& o) {
+                                       const UVMap& map, const IsoparametricOptions& o,
+                                       const BoundaryLoops* loops) {
   // ---- input checks -------------------------------------------------------------------------
   if (o.pattern != "zigzag" && o.pattern != "contour")
     throw std::invalid_argument("unknown pattern '" + o.pattern + "' (zigzag or contour)");
@@ -763,7 +858,23 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
                               cloud.has_uncertainty() ? &cloud.uncertainty : nullptr);
   const BallLifter lifter(cloud.points, o.tool_radius);
   const HeightField model(cloud.points, 20);
-  Planner planner(interp, lifter, &model, co, o);
+  // The holes: every loop after the outer one, as the polygon of its points' uv.
+  Holes holes;
+  std::vector<const std::vector<int>*> hole_loops;
+  if (loops)
+    for (std::size_t h = 1; h < loops->loops.size(); ++h) {
+      std::vector<Eigen::Vector2d> poly;
+      for (int i : loops->loops[h]) {
+        if (i < 0 || static_cast<std::size_t>(i) >= cloud.size())
+          throw std::invalid_argument("hole loop " + std::to_string(h) + " has point index " +
+                                      std::to_string(i) + "; the cloud has " +
+                                      std::to_string(cloud.size()) + " points");
+        poly.push_back(map.uv[i]);
+      }
+      if (poly.size() >= 3) hole_loops.push_back(&loops->loops[h]);
+      holes.add(std::move(poly));
+    }
+  Planner planner(interp, lifter, &model, co, o, holes);
   std::vector<double> nn;
   for (std::size_t i = 0; i < neighbors.size(); i += std::max<std::size_t>(1, neighbors.size() / 4096))
     if (neighbors.k > 0) nn.push_back(std::sqrt(neighbors.sq_dist(i, 0)));
@@ -854,17 +965,23 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     bool usable = n >= 3 && map.boundary_uv.size() == n;
     for (std::size_t k = 0; usable && k < n; ++k)
       usable = map.outer_loop[k] >= 0 && static_cast<std::size_t>(map.outer_loop[k]) < cloud.size();
-    if (usable) outline.push_back(planner.rim_pass(cloud, map));
+    if (usable) outline.push_back(planner.rim_pass(cloud, map.outer_loop, map.boundary_uv));
     else
       warnings.push_back("the map has no usable outer loop (" + std::to_string(n) +
                          " points): no rim pass, the outline is cut only by the passes' ends");
   }
+  for (const std::vector<int>* loop : hole_loops) {  // and around every hole
+    std::vector<Eigen::Vector2d> uv;
+    for (int i : *loop) uv.push_back(map.uv[i]);
+    outline.push_back(planner.rim_pass(cloud, *loop, uv));
+  }
+
   // ---- concave places the ball cannot reach -----------------------------------------------------
   std::vector<Eigen::Vector3d> concave_pts;
   std::vector<double> concave_r;
   for (std::size_t i = 0; i < passes.size(); ++i)
     for (std::size_t k = 0; k < passes[i].p.size(); ++k)
-      if (info[i][k].unreachable) {
+      if (!passes[i].off[k] && info[i][k].unreachable) {
         concave_pts.push_back(passes[i].p[k]);
         concave_r.push_back(-1.0 / info[i][k].kappa_min);
       }
@@ -880,26 +997,43 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   std::size_t points = 0, lifted = 0;
   double length = 0, lift_max = 0;
   // One planned pass into the output (cut backwards when `reverse`), counted in the report.
+  // A pass crossing a hole becomes one output pass per piece on the patch (the tool lifts
+  // between them); a closed pass over a hole starts after it, so its pieces are not split at t = 0.
   auto emit = [&](const Pass& P, const Coords& c, bool reverse) {
-    for (double d : P.lift) {
-      lift_max = std::max(lift_max, d);
-      if (d > 1e-3 * o.chord_error) ++lifted;
+    const std::size_t n = P.p.size();
+    std::vector<std::size_t> order(n);
+    for (std::size_t k = 0; k < n; ++k) order[k] = k;
+    const auto first_off = std::find(P.off.begin(), P.off.end(), 1);
+    if (P.closed && n > 2 && first_off != P.off.end()) {
+      const std::size_t f = first_off - P.off.begin();
+      order.clear();
+      for (std::size_t k = f; k + 1 < n; ++k) order.push_back(k);
+      for (std::size_t k = 0; k <= f; ++k) order.push_back(k);
     }
+    if (reverse) std::reverse(order.begin(), order.end());
     ToolpathPass out;
-    for (std::size_t k = 0; k < P.p.size(); ++k) {
+    auto flush = [&]() {
+      if (out.contact.size() >= 2 || (out.contact.size() == 1 && n == 1)) {
+        points += out.contact.size();
+        tp.passes.push_back(std::move(out));
+      }
+      out = ToolpathPass{};
+    };
+    for (std::size_t k : order) {
+      if (P.off[k]) {
+        flush();
+        continue;
+      }
+      lift_max = std::max(lift_max, P.lift[k]);
+      if (P.lift[k] > 1e-3 * o.chord_error) ++lifted;
+      if (!out.contact.empty()) length += (P.p[k] - out.contact.back()).norm();
       out.contact.push_back(P.p[k]);
       out.normal.push_back(P.n[k]);
       out.uv.push_back(P.uv.empty() ? c.uv(P.s, P.t[k]) : P.uv[k]);
-      if (k) length += (P.p[k] - P.p[k - 1]).norm();
     }
-    if (reverse) {
-      std::reverse(out.contact.begin(), out.contact.end());
-      std::reverse(out.normal.begin(), out.normal.end());
-      std::reverse(out.uv.begin(), out.uv.end());
-    }
-    points += out.contact.size();
-    tp.passes.push_back(std::move(out));
+    flush();
   };
+
   // The contour pattern cuts the rim first and goes inwards; the zig-zag cuts it last.
   if (co.polar)
     for (const Pass& P : outline) emit(P, co, false);

@@ -88,7 +88,11 @@ struct IsoparametricResult {
 // uncertainty (surface_error: median, max, stock, too-uncertain points), and warnings.
 // Throws std::invalid_argument with a clear message for bad input (empty cloud, no normals,
 // size mismatch, wrong domain for the pattern, bad options, a cloud too uncertain for h).
+// loops      optional: the patch's boundary loops (outer first, then holes; indices into cloud).
+//            A hole's uv polygon is not cut: passes crossing it are split into pieces on the
+//            patch (the tool lifts over the hole), and with `outline` a rim pass runs around it.
 IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborhoods& neighbors,
-                                       const UVMap& map, const IsoparametricOptions& options);
+                                       const UVMap& map, const IsoparametricOptions& options,
+                                       const BoundaryLoops* loops = nullptr);
 
 }  // namespace scallop

@@ -12,7 +12,7 @@ namespace scallop {
 NodeDecl make_isoparametric_node() {
   NodeDecl d;
   d.type = "path.isoparametric";
-  d.version = 6;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field; 5: strips over the limit summarised in one warning (strips_over_limit_at), warnings said on the terminal, outline passes; 6: one rim pass through the outline's points, both patterns
+  d.version = 6;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field; 5: strips over the limit summarised in one warning (strips_over_limit_at), warnings said on the terminal, outline passes; 6: one rim pass through the outline's points, both patterns; holes (input loops) are not cut, a rim pass around each
   d.description =
       "iso-parametric finishing passes from a UV-mapped cloud: zig-zag on a rectangle map, "
       "concentric on a disk map; forward step from the chord error, side step from the scallop "
@@ -21,6 +21,10 @@ NodeDecl make_isoparametric_node() {
           "the points, with upward unit normals (and per-point uncertainty, kept as a margin)")
       .input("neighbors", "Neighbors", "k nearest neighbours of each point (sampling scale)")
       .input("map", "UVMap", "uv of every point: rectangle for zigzag, disk for contour")
+      .input("loops", "Loops",
+             "the patch's boundary loops: holes (the loops after the outer one) are not cut, "
+             "passes lift over them and a rim pass runs around each",
+             false)
       .output("toolpath", "Toolpath", "the passes: contact points, normals, uv, in cutting order")
       .output("report", "Report",
               "passes, side and forward intervals, formula (4) use, predicted scallop and chord "
@@ -65,7 +69,9 @@ NodeDecl make_isoparametric_node() {
     o.progress = [&ctx](double f, const std::string& m) { ctx.progress(f, m); };
     IsoparametricResult res;
     try {
-      res = plan_isoparametric(*cloud, *neighbors, *map, o);
+      std::shared_ptr<const BoundaryLoops> loops;
+      if (ctx.has_input("loops")) loops = ctx.input<BoundaryLoops>("loops");
+      res = plan_isoparametric(*cloud, *neighbors, *map, o, loops.get());
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }

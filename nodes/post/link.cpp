@@ -54,7 +54,7 @@ double largest_stepover(const Toolpath& path) {
 }
 
 LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>& surface_in,
-                       const LinkOptions& o) {
+                       const LinkOptions& o, const HeightField* model) {
   path.check_passes();
   const double r = path.tool_radius;
   std::vector<Eigen::Vector3d> own;
@@ -101,6 +101,24 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
       const Eigen::Vector3d& q = surface[i];
       if (seg_dist_xy(q, a, b) > r) continue;
       if (seg_dist(q, a, b) < r - tol) return false;
+    }
+    if (!model) return true;
+    // The model under the ball: ball centres along the link every quarter of the cloud spacing
+    // (at most r / 16), each against its foot point on the model (found by stepping from below
+    // the centre against the normal: the nearest surface point to a ball resting on it lies r
+    // along the normal from its centre).
+    const double step = std::min(0.25 * model->spacing(), r / 16);
+    const int m = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step)));
+    for (int i = 0; i <= m; ++i) {
+      const Eigen::Vector3d c = a + (b - a) * (double(i) / m);
+      Eigen::Vector2d q = c.head<2>();
+      for (int it = 0; it < 4; ++it) {
+        double z, u = 0;
+        Eigen::Vector3d n;
+        if (!model->eval(q.x(), q.y(), z, n, false, &u)) break;
+        if ((c - Eigen::Vector3d(q.x(), q.y(), z)).norm() < r - tol + u) return false;
+        q = c.head<2>() - r * n.head<2>();
+      }
     }
     return true;
   };

@@ -1,3 +1,4 @@
+#include <memory>
 #include <stdexcept>
 
 #include "engine/node.h"
@@ -9,7 +10,8 @@ namespace scallop {
 NodeDecl make_link_node() {
   NodeDecl d;
   d.type = "post.link";
-  d.version = 2;  // 2: fails where the passes rise more than 10 r + the part's height range above it
+  d.version = 3;  // 2: fails where the passes rise more than 10 r + the part's height range above it
+                  // 3: links checked against the cloud's height field too
   d.description = "joins passes in order: short feed links where the ball stays above the surface, else retract to a clearance plane";
   d.input("path", "Toolpath", "the passes, in cutting order")
       .input("cloud", "Cloud", "the surface, for link safety and the clearance plane (else the passes' contact points)", false)
@@ -29,7 +31,11 @@ NodeDecl make_link_node() {
     o.lead_height = ctx.number("lead_height");
     o.tolerance = ctx.number("tolerance");
     try {
-      ctx.set("linked", link_passes(*path, cloud ? cloud->points : none, o));
+      std::unique_ptr<HeightField> model;  // what the certificate measures against
+      if (cloud && cloud->size() >= 10)
+        model = std::make_unique<HeightField>(cloud->points, 20,
+                                              cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
+      ctx.set("linked", link_passes(*path, cloud ? cloud->points : none, o, model.get()));
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }

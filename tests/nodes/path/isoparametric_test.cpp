@@ -10,6 +10,7 @@
 #include "engine/node.h"
 #include "nodes/cloud/knn.h"
 #include "nodes/types/document.h"
+#include "nodes/types/param.h"
 
 namespace scallop {
 NodeDecl make_isoparametric_node();
@@ -181,6 +182,84 @@ TEST(Isoparametric, OutlinePassesCutTheRimTheWholePatchStaysUnderTheLimit) {
   EXPECT_GE(sim.report["scallop_max"].get<double>(), 0.95 * 0.01);  // the cusps are there
   EXPECT_EQ(sim.report["uncut_fraction"].get<double>(), 0.0);
   EXPECT_LT(sim.report["gouge_max"].get<double>(), 1e-9);
+}
+
+// A flat rectangle with a round hole (radius 4 at (15, 10)), its edge sampled by a ring of points:
+// the hole is not cut (no contact point inside it, the tool lifts between the pieces of a pass),
+// a rim pass runs through the ring, and the whole patch, the hole's edge included, stays within
+// h (the product's simulation over the exact outline and hole).
+TEST(Isoparametric, AHoleIsNotCutItsEdgeIsAndTheWholePatchStaysUnderTheLimit) {
+  const double cx = 15, cy = 10, R = 4;
+  for (const std::string pattern : {"zigzag", "contour"}) {
+    SCOPED_TRACE(pattern);
+    Input in = pattern == "zigzag" ? flat() : disk_patch(12, 0.5, [](double, double) { return 0.0; },
+                                                         [](double, double) { return Eigen::Vector2d(0, 0); });
+    const Eigen::Vector2d centre = pattern == "zigzag" ? Eigen::Vector2d(cx, cy) : Eigen::Vector2d(3, 2);
+    // drop the points inside the hole (and those within a third of a spacing of its edge)
+    Input holed;
+    std::vector<int> index(in.cloud.size(), -1);
+    for (std::size_t i = 0; i < in.cloud.size(); ++i)
+      if ((in.cloud.points[i].head<2>() - centre).norm() > R + 0.15) {
+        index[i] = static_cast<int>(holed.cloud.points.size());
+        holed.cloud.points.push_back(in.cloud.points[i]);
+        holed.cloud.normals.push_back(in.cloud.normals[i]);
+        holed.map.uv.push_back(in.map.uv[i]);
+      }
+    BoundaryLoops loops;
+    loops.loops.emplace_back();
+    for (int i : in.map.outer_loop) loops.loops[0].push_back(index[i]);
+    loops.loops.emplace_back();
+    const int m = static_cast<int>(std::ceil(2 * M_PI * R / 0.5));
+    for (int k = 0; k < m; ++k) {
+      const Eigen::Vector2d q = centre + R * Eigen::Vector2d(std::cos(2 * M_PI * k / m), std::sin(2 * M_PI * k / m));
+      loops.loops[1].push_back(static_cast<int>(holed.cloud.points.size()));
+      holed.cloud.points.emplace_back(q.x(), q.y(), 0);
+      holed.cloud.normals.emplace_back(0, 0, 1);
+      holed.map.uv.push_back(q);
+    }
+    holed.map.domain = in.map.domain;
+    holed.map.width = in.map.width;
+    holed.map.height = in.map.height;
+    holed.map.radius = in.map.radius;
+    holed.map.outer_loop = loops.loops[0];
+    holed.map.boundary_uv = in.map.boundary_uv;
+    holed.nb = compute_knn(holed.cloud.points, 12);
+
+    IsoparametricOptions o;
+    o.pattern = pattern;
+    o.tool_radius = 3;
+    o.scallop_height = 0.01;
+    o.chord_error = 0.005;
+    const IsoparametricResult res = plan_isoparametric(holed.cloud, holed.nb, holed.map, o, &loops);
+    const Toolpath& tp = res.toolpath;
+    EXPECT_EQ(res.report["outline_passes"], 2);  // the outline and the hole's edge
+    std::size_t on_ring = 0;
+    for (const ToolpathPass& p : tp.passes)
+      for (const Eigen::Vector3d& c : p.contact) {
+        const double d = (c.head<2>() - centre).norm();
+        EXPECT_GE(d, R * std::cos(M_PI / m) - 1e-9);  // nothing inside the hole (the ring's polygon)
+        if (d < R + 1e-9) ++on_ring;
+      }
+    EXPECT_GE(on_ring, static_cast<std::size_t>(m));  // the rim pass around the hole
+    // zig-zag passes crossing the hole come in two pieces each (a circle over it in one, the
+    // centre in none)
+    if (pattern == "zigzag") EXPECT_GT(tp.passes.size(), res.report["passes"].get<std::size_t>() + 2);
+
+    const HeightField plane(holed.cloud.points);
+    SimulateOptions so;
+    so.tool_radius = 3;
+    so.scallop = 0.01;
+    so.chord = 0.005;
+    so.spacing = 0.05;
+    for (const auto& loop : loops.loops) {
+      so.loops.emplace_back();
+      for (int i : loop) so.loops.back().push_back(holed.cloud.points[i].head<2>());
+    }
+    const auto sim = simulate_cut(plane, feed_centres(tp), 0, so);
+    EXPECT_LE(sim.report["scallop_max"].get<double>(), 1.01 * 0.01) << sim.report["worst"].dump();
+    EXPECT_EQ(sim.report["uncut_fraction"].get<double>(), 0.0);
+    EXPECT_LT(sim.report["gouge_max"].get<double>(), 1e-9);
+  }
 }
 
 // A surface known only to +-delta: on a flat patch the margins have closed forms. With r = 3,

@@ -51,6 +51,32 @@ TEST(Link, ShortSafeLinksAreFeedMoves) {
   EXPECT_EQ(l.moves.size(), 3u + 4 * 10 + 3 + 2);
 }
 
+// A link across a convex dome z = 10 - 0.005 (x^2 + y^2) sampled every 2 mm: the straight move of
+// the ball centre from (-2, 1) to (2, 1) dips about 0.02 mm into the surface midway, between the
+// cloud's points (the nearest lies 1 mm aside, where the ball is 0.16 mm higher). The points alone
+// let it through; the cloud's height field, which the certificate measures against, does not.
+TEST(Link, ALinkThatDipsBetweenSparsePointsIsCaughtByTheHeightField) {
+  auto z = [](double x, double y) { return 10 - 0.005 * (x * x + y * y); };
+  auto normal = [](double x, double y) { return Eigen::Vector3d(0.01 * x, 0.01 * y, 1).normalized(); };
+  std::vector<Eigen::Vector3d> cloud;
+  for (double x = -20; x <= 20; x += 2)
+    for (double y = -20; y <= 20; y += 2) cloud.emplace_back(x, y, z(x, y));
+  Toolpath t;
+  t.tool_radius = 3;
+  t.chord_error = 0.005;
+  for (double x : {-2.0, 2.0}) {
+    ToolpathPass p;
+    p.contact.emplace_back(x, 1, z(x, 1));
+    p.normal.push_back(normal(x, 1));
+    t.passes.push_back(p);
+  }
+  const auto points_only = link_passes(t, cloud, {});
+  EXPECT_EQ(count(points_only, MoveKind::Rapid), 2);  // down ... up: the link is a feed move
+  const HeightField model(cloud, 20);
+  const auto checked = link_passes(t, cloud, {}, &model);
+  EXPECT_EQ(count(checked, MoveKind::Rapid), 4);  // down, up, over, up
+}
+
 TEST(Link, LinksOverABumpOrTooLongRetract) {
   auto cloud = flat_cloud();
   cloud.emplace_back(10.0, 0.5, 0.5);  // a bump between the end of pass 0 and the start of pass 1
