@@ -394,16 +394,19 @@ class Planner {
       }
       return std::pair{t_in, t_out};
     };
+    // a vertex at t1 without a chord check (the segment to it crosses a hole's edge)
+    auto step_over = [&](double t1, bool off1) {
+      x = at(s, t1);
+      P.unchecked.push_back(false);
+      push_vertex(P, t1, x, off1);
+      t = t1;
+      off = off1;
+    };
     while (t < co_.T) {
       if (off) {
-        double t1 = std::min(co_.T, t + dt_hole);
-        bool off1 = over_hole(s, t1);
-        if (!off1) t1 = edge(t1, t).first;
-        x = at(s, t1);
-        P.unchecked.push_back(false);
-        push_vertex(P, t1, x, off1);
-        t = t1;
-        off = off1;
+        const double t1 = std::min(co_.T, t + dt_hole);
+        const bool off1 = over_hole(s, t1);
+        step_over(off1 ? t1 : edge(t1, t).first, off1);
         continue;
       }
       // Formula (2) from the pass's own curvature gives the first guess.
@@ -437,11 +440,7 @@ class Planner {
         // the edge already, the pass steps into the hole (that segment is not cut).
         const auto [t_in, t_out] = edge(t, t + dt);
         if (t_in - t <= 1e-3 * dt) {
-          x = at(s, t_out);
-          P.unchecked.push_back(false);
-          push_vertex(P, t_out, x, true);
-          t = t_out;
-          off = true;
+          step_over(t_out, true);
           continue;
         }
         dt = t_in - t;
