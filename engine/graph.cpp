@@ -398,15 +398,19 @@ bool lies_inside(const fs::path& file, const fs::path& folder) {
   return f == folder.end() && file != folder;
 }
 
-// scallop's own example parts (examples/ of the source tree this was built from, found only when
-// the compiler gave this file's absolute path): the shipped graphs' default part lies there,
-// beside graphs/, so defaults inside it are allowed too. Were the shipped graphs' default part
-// beside them, this could go.
+// scallop's own example parts (examples/ of the source tree this was built from, as CMake gives
+// it; else found only when the compiler gave this file's absolute path, which ccache with
+// CCACHE_BASEDIR does not): the shipped graphs' default part lies there, beside graphs/, so
+// defaults inside it are allowed too. Were the shipped graphs' default part beside them, this
+// could go.
 const fs::path& bundled_examples() {
   static const fs::path dir = [] {
-    fs::path source(__FILE__);
-    fs::path examples = source.parent_path().parent_path() / "examples";
-    return source.is_absolute() && fs::is_directory(examples) ? resolved(examples) : fs::path();
+#ifdef SCALLOP_EXAMPLES_DIR
+    const fs::path examples(SCALLOP_EXAMPLES_DIR);
+#else
+    const fs::path examples = fs::path(__FILE__).parent_path().parent_path() / "examples";
+#endif
+    return examples.is_absolute() && fs::is_directory(examples) ? resolved(examples) : fs::path();
   }();
   return dir;
 }
