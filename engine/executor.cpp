@@ -216,6 +216,12 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
         rec.error = e.what();
       }
     }
+    if (rec.status == "failed" && !pn.set_by.empty()) {
+      // The command line may be the cause: say which of its --set values this node was given.
+      std::string sets;
+      for (const auto& [param, set] : pn.set_by) sets += (sets.empty() ? "" : ", ") + set;
+      rec.error += " (given " + sets + ")";
+    }
     if (rec.status == "failed") {
       std::lock_guard lock(error_mutex);
       result.errors.push_back("node '" + pn.id + "' (" + rec.type + ") failed" +
