@@ -15,6 +15,13 @@ int RunResult::executed() const {
   return n;
 }
 
+bool RunResult::only_bad_input() const {
+  if (ok()) return false;
+  for (const auto& r : nodes)
+    if (r.status == "failed" && !r.bad_input) return false;
+  return true;
+}
+
 const NodeRun* RunResult::find(const std::string& id) const {
   for (const auto& r : nodes)
     if (r.id == id) return &r;
@@ -211,6 +218,10 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
           if (!rec.warnings.empty())
             options.cache->write_manifest(warnings_identity(keys[i]), json{{"warnings", rec.warnings}});
         }
+      } catch (const InputError& e) {
+        rec.status = "failed";
+        rec.error = e.what();
+        rec.bad_input = true;
       } catch (const std::exception& e) {
         rec.status = "failed";
         rec.error = e.what();

@@ -73,6 +73,13 @@ struct NodeError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Thrown by a node for an input file it cannot read or that is malformed (a source node's bad
+// input, not a failed computation): `scallop run` then exits 2 (bad input), as for a missing file,
+// instead of 1.
+struct InputError : NodeError {
+  using NodeError::NodeError;
+};
+
 // What a running node sees: its inputs, its resolved parameters, and where its outputs go.
 class NodeContext {
  public:

@@ -119,7 +119,7 @@ TEST(Cli, BatchWithACorruptPartReturnsTheOthersAndNamesIt) {
                                  (dir.path / "broken.ply").string() + " " + (dir.path / "good_b.ply").string() +
                                  " -j 2 --no-cache -q -o " + (dir.path / "out").string(),
                              &out);
-  EXPECT_EQ(rc, 1) << out;
+  EXPECT_EQ(rc, 2) << out;  // the one failure is a malformed input file: bad input
   EXPECT_NE(out.find("error: 1 part(s) failed: broken"), std::string::npos) << out;
   EXPECT_TRUE(fs::exists(dir.path / "out" / "good_a" / "cloud.ply"));
   EXPECT_TRUE(fs::exists(dir.path / "out" / "good_b" / "cloud.ply"));
@@ -424,6 +424,90 @@ TEST(Cli, MissingInputFileIsAClearError) {
   std::string out;
   EXPECT_EQ(test::run_command(kScallop + " run " + kGraph + " --no-cache --input cloud=/nonexistent/x.ply", &out), 2);
   EXPECT_NE(out.find("error: input 'cloud': file '/nonexistent/x.ply' does not exist"), std::string::npos) << out;
+}
+
+// ---------------------------------------------------------------- issue 11: bad input
+
+const std::string kZigzag = std::string(SCALLOP_SOURCE_DIR) + "/graphs/isoparametric-zigzag.json";
+
+TEST(Cli, MalformedOrOutOfRangeInputFilesExit2) {
+  // a malformed file was exit 1 ("a node failed"); the README says 2, bad input
+  test::TempDir dir;
+  test::write_file(dir.path / "broken.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n");
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " run " + kGraph + " --input cloud=" + (dir.path / "broken.ply").string() +
+                                  " --no-cache -q -o " + (dir.path / "out").string(), &out), 2) << out;
+  EXPECT_NE(out.find("error: node 'read' (io.read_cloud) failed on part 'broken': " + (dir.path / "broken.ply").string() +
+                     ": line 4: header ends without 'end_header'"),
+            std::string::npos) << out;
+  // 1e300 was reported by the normals as "coincident or collinear"
+  std::string xyz;
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 20; ++j) xyz += std::to_string(i) + " " + std::to_string(j) + " 0\n";
+  test::write_file(dir.path / "far.xyz", xyz + "1e300 0 0\n");
+  EXPECT_EQ(test::run_command(kScallop + " run " + kGraph + " --input cloud=" + (dir.path / "far.xyz").string() +
+                                  " --no-cache -q -o " + (dir.path / "out").string(), &out), 2) << out;
+  EXPECT_NE(out.find("error: node 'read' (io.read_cloud) failed on part 'far': " + (dir.path / "far.xyz").string() +
+                     ": point 400 at (1e+300, 0, 0): coordinates out of range (beyond 1e9 mm); the file is damaged "
+                     "or its scale is wrong\n"),
+            std::string::npos) << out;
+}
+
+// A wavy patch `size` mm wide (n x n points), written as XYZ divided by `unit` (1000: metres).
+void write_wavy(const fs::path& path, double size, int n, double unit = 1) {
+  std::string s;
+  char buf[128];
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double x = size * i / (n - 1), y = size * j / (n - 1), z = 3 * std::sin(x / 20) * std::cos(y / 25);
+      std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g\n", x / unit, y / unit, z / unit);
+      s += buf;
+    }
+  test::write_file(path, s);
+}
+
+TEST(Cli, ACloudInMetresIsWarnedAtTheReaderAndRefusedByThePlanner) {
+  // a 100 mm part in metres: 0.1 mm wide under a 4 mm ball got exit 0 and a passing certificate
+  test::TempDir dir;
+  write_wavy(dir.path / "metres.xyz", 100, 60, 1000);
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " run " + kZigzag + " --input cloud=" + (dir.path / "metres.xyz").string() +
+                                  " --no-cache -q -o " + (dir.path / "out").string(), &out), 1) << out;
+  EXPECT_NE(out.find("warning: node 'read' (io.read_cloud) on part 'metres': the cloud is 0.1 mm across with points "
+                     "0.0017 mm apart: is it in metres? coordinates are read as mm; set read.scale to 1000\n"),
+            std::string::npos) << out;
+  EXPECT_NE(out.find("error: node 'plan' (path.isoparametric) failed on part 'metres': the part is 0.1 mm wide, "
+                     "smaller than the 8 mm ball (tool_radius 4 mm): is the cloud in metres? set the reader's scale "
+                     "to 1000 (--set read.scale=1000 with the shipped graphs), or use a smaller tool\n"),
+            std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir.path / "out" / "gcode.ngc"));
+}
+
+TEST(Cli, AFailingNodeNamesTheSetThatGaveItsParameters) {
+  // a 20 mm part and a 30 mm ball, the radius from the command line: the error says so
+  test::TempDir dir;
+  write_wavy(dir.path / "part.xyz", 20, 30);
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " run " + kZigzag + " --input cloud=" + (dir.path / "part.xyz").string() +
+                                  " --set tool_radius=15 --no-cache -q -o " + (dir.path / "out").string(), &out), 1)
+      << out;
+  EXPECT_NE(out.find("error: node 'plan' (path.isoparametric) failed on part 'part': the part is 20 mm wide, smaller "
+                     "than the 30 mm ball (tool_radius 15 mm): use a smaller tool (given --set tool_radius=15)\n"),
+            std::string::npos) << out;
+  // refused before running: the --set is named first
+  EXPECT_EQ(test::run_command(kScallop + " validate " + kZigzag + " --set scallop_height=-1", &out), 2) << out;
+  EXPECT_NE(out.find("error: --set scallop_height=-1 (nodes[13].params.scallop_height): node 'plan': parameter "
+                     "'scallop_height' = -1 is out of range; expected 1e-06 .. 100 mm\n"),
+            std::string::npos) << out;
+}
+
+TEST(Cli, AGraphStringOfAnotherTypeNamesItsPath) {
+  test::TempDir dir;
+  test::write_file(dir.path / "g.json", R"({"scallop_graph": 1, "params": {"h": {"value": 0.01, "unit": 5}}, "nodes": []})");
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " validate " + (dir.path / "g.json").string(), &out), 2) << out;
+  EXPECT_EQ(out, "error: params.h.unit: must be a string, got a number\n1 error(s) in " + (dir.path / "g.json").string() +
+                     "\n");
 }
 
 TEST(Cli, NodesReferenceAndDot) {

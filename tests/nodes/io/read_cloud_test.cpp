@@ -668,6 +668,75 @@ TEST_F(ReadCloud, NodeReadsAndScales) {
   }
 }
 
+// Runs io.read_cloud on `path` with `scale`; returns the cloud and fills `warnings`.
+std::shared_ptr<const PointCloud> run_read_node(const std::string& path, double scale,
+                                                std::vector<std::string>& warnings) {
+  const NodeDecl d = make_read_cloud_node();
+  NodeContext ctx(d, "scan", "part", {{"scale", scale}}, {{"file", std::make_shared<FileRef>(FileRef::open(path))}},
+                  nullptr, [&](const std::string& m) { warnings.push_back(m); });
+  d.run(ctx);
+  return std::dynamic_pointer_cast<const PointCloud>(ctx.take_outputs().at("cloud"));
+}
+
+// n x n grid of side `size` (mm), as XYZ text.
+std::string grid_xyz(int n, double size) {
+  std::string s;
+  char buf[96];
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g\n", size * i / (n - 1), size * j / (n - 1), 0.01 * size * i / n);
+      s += buf;
+    }
+  return s;
+}
+
+TEST_F(ReadCloud, NodeRefusesCoordinatesOutOfRangeAsBadInput) {
+  // 1e300 overflowed the normals' sums: "coincident or collinear" was the message
+  std::vector<std::string> warnings;
+  const std::string p = file("far.xyz", "0 0 0\n1 0 0\n1e300 2 3\n");
+  try {
+    run_read_node(p, 1, warnings);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), p + ": point 2 at (1e+300, 2, 3): coordinates out of range (beyond 1e9 mm); the "
+                                         "file is damaged or its scale is wrong");
+  }
+  // a scale can take a point there too
+  try {
+    run_read_node(file("big.xyz", "0 0 0\n2e6 0 0\n"), 1000, warnings);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), path("big.xyz") + ": point 1 at (2e+09, 0, 0): coordinates out of range (beyond "
+                                                       "1e9 mm); the file is damaged or its scale is wrong");
+  }
+  // and a malformed file is bad input too (scallop exits 2, not 1)
+  EXPECT_THROW(run_read_node(file("bad.xyz", "1 2 3\n4 5 x\n"), 1, warnings), InputError);
+}
+
+TEST_F(ReadCloud, NodeWarnsWhenTheCloudDoesNotLookLikeMillimetres) {
+  std::vector<std::string> warnings;
+  // a 100 mm part written in metres: 0.1 across, points 0.00204 apart
+  auto cloud = run_read_node(file("metres.xyz", grid_xyz(50, 0.1)), 1, warnings);
+  EXPECT_EQ(cloud->size(), 2500u);
+  EXPECT_EQ(warnings, std::vector<std::string>{"the cloud is 0.1 mm across with points 0.00204 mm apart: is it in "
+                                               "metres? coordinates are read as mm; set scan.scale to 1000"});
+  // 2 m across in metres, densely scanned in one corner: only the spacing gives it away
+  warnings.clear();
+  run_read_node(file("fine.xyz", grid_xyz(30, 0.01) + "2 0 0\n"), 1, warnings);
+  EXPECT_EQ(warnings, std::vector<std::string>{"the cloud is 2 mm across with points 0.000345 mm apart: is it in "
+                                               "metres? coordinates are read as mm; set scan.scale to 1000"});
+  // micrometres: a 100 mm part with 50 x 50 points is 1e5 across, points 2040 apart
+  warnings.clear();
+  run_read_node(file("microns.xyz", grid_xyz(50, 1e5)), 1, warnings);
+  EXPECT_EQ(warnings, std::vector<std::string>{"the cloud is 1e+05 mm across with points 2.04e+03 mm apart: is it in "
+                                               "micrometres? coordinates are read as mm; set scan.scale to 0.001"});
+  // the same part scaled right, and a part in mm: nothing to say
+  warnings.clear();
+  run_read_node(path("metres.xyz"), 1000, warnings);
+  run_read_node(file("mm.xyz", grid_xyz(50, 100)), 1, warnings);
+  EXPECT_EQ(warnings, std::vector<std::string>{});
+}
+
 // ---------------------------------------------------------------- real data
 
 TEST(ReadCloudRealData, SharedDataCountsAndBoxes) {
