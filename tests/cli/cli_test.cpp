@@ -501,6 +501,34 @@ TEST(Cli, AFailingNodeNamesTheSetThatGaveItsParameters) {
             std::string::npos) << out;
 }
 
+TEST(Cli, AOneDimensionalCloudIsNamedSo) {
+  // a line with micron jitter got fold-over advice
+  test::TempDir dir;
+  std::string xyz;
+  std::uint32_t r = 1;
+  auto jitter = [&] {
+    r = r * 1664525u + 1013904223u;
+    return 0.002 * (static_cast<double>(r >> 8) / (1u << 24) - 0.5);
+  };
+  char buf[96];
+  for (int i = 0; i < 3000; ++i) {
+    const double x = 50.0 * i / 2999, y = jitter(), z = jitter();
+    std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g\n", x, y, z);
+    xyz += buf;
+  }
+  test::write_file(dir.path / "line.xyz", xyz);
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " run " + kZigzag + " --input cloud=" + (dir.path / "line.xyz").string() +
+                                  " --no-cache -q -o " + (dir.path / "out").string(), &out), 1) << out;
+  // (the first node that looks at its shape, cloud.trim_steep, says so; it "trimmed 89 % as steep")
+  const std::string said = "error: node 'trim' (cloud.trim_steep) failed on part 'line': the cloud is "
+                           "one-dimensional: its points lie along a line 50 mm long and ";
+  ASSERT_NE(out.find(said), std::string::npos) << out;
+  EXPECT_NE(out.find(" mm apart), not on a surface; scallop machines surface patches\n", out.find(said)),
+            std::string::npos) << out;
+  EXPECT_EQ(out.find("fold"), std::string::npos) << out;
+}
+
 TEST(Cli, AGraphStringOfAnotherTypeNamesItsPath) {
   test::TempDir dir;
   test::write_file(dir.path / "g.json", R"({"scallop_graph": 1, "params": {"h": {"value": 0.01, "unit": 5}}, "nodes": []})");
