@@ -206,6 +206,7 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
               }
               emit({{"event", "node_warning"}, {"node", pn.id}, {"type", rec.type}, {"message", msg}});
             });
+        ctx.set_output_dir(options.out_dir);
         pn.decl->run(ctx);
         out = ctx.take_outputs();
         for (const auto& od : pn.decl->outputs)

@@ -19,6 +19,7 @@ struct RunOptions {
   std::string part;               // name of the part (input file stem) for messages
   DiskCache* cache = nullptr;     // null: no disk cache
   EventSink* events = nullptr;    // null: silent
+  std::string out_dir;            // where nodes write files of their own ("" : working directory)
 };
 
 struct NodeRun {

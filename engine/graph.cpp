@@ -7,6 +7,8 @@
 #include <functional>
 #include <sstream>
 
+#include "engine/output_path.h"
+
 namespace scallop {
 namespace fs = std::filesystem;
 
@@ -475,6 +477,13 @@ std::optional<json> check_param(const ParamDecl& p, const json& v, std::string& 
                 " bytes long; expected at most " + std::to_string(kMaxStringParam);
         return std::nullopt;
       }
+      // a file the node writes: refused before anything runs when it would leave the output folder
+      // (an empty one is the node's own error: it says which file it needs)
+      if (p.output_path && !v.get_ref<const std::string&>().empty())
+        if (auto problem = output_path_problem(v.get<std::string>()); !problem.empty()) {
+          error = "parameter " + in_quotes(p.name) + ": " + problem;
+          return std::nullopt;
+        }
       return v;
     case ParamKind::Choice:
       if (!v.is_string() || std::find(p.choices.begin(), p.choices.end(), v.get<std::string>()) == p.choices.end()) {

@@ -63,6 +63,7 @@ PartResult run_part(const Graph& graph, const Registry& registry, const PartRequ
   ro.part = r.part;
   ro.cache = req.cache;
   ro.events = req.events;
+  ro.out_dir = req.out_dir;
   r.run = execute(plan, registry, values, ro);
   r.errors = r.run.errors;
   r.bad_input = r.run.only_bad_input();

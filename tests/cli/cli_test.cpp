@@ -529,6 +529,38 @@ TEST(Cli, AOneDimensionalCloudIsNamedSo) {
   EXPECT_EQ(out.find("fold"), std::string::npos) << out;
 }
 
+TEST(Cli, AWriteNodeCannotWriteOutsideTheOutputFolder) {
+  test::TempDir dir;
+  write_patch(dir.path / "patch.ply");
+  auto graph = [&](const std::string& path) {
+    return R"({"scallop_graph": 1, "inputs": {"cloud": {"type": "File"}},
+      "nodes": [{"id": "read", "type": "io.read_cloud", "inputs": {"file": "@cloud"}},
+                {"id": "save", "type": "io.write_cloud", "params": {"path": ")" + path + R"("},
+                 "inputs": {"cloud": "read.cloud"}}]})";
+  };
+  test::write_file(dir.path / "escape.json", graph("../escaped.ply"));
+  test::write_file(dir.path / "inside.json", graph("clouds/copy.ply"));
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " validate " + (dir.path / "escape.json").string(), &out), 2) << out;
+  EXPECT_NE(out.find("error: nodes[1].params.path: node 'save': parameter 'path': '../escaped.ply' would be written "
+                     "outside the output folder; expected a relative path inside it, without '..'\n"),
+            std::string::npos) << out;
+  const std::string input = " --input cloud=" + (dir.path / "patch.ply").string() + " --no-cache -q -o ";
+  EXPECT_EQ(test::run_command(kScallop + " run " + (dir.path / "escape.json").string() + input +
+                                  (dir.path / "out").string(), &out), 2) << out;
+  EXPECT_EQ(test::run_command(kScallop + " run " + (dir.path / "escape.json").string() + input +
+                                  (dir.path / "out").string() + " --set save.path=/tmp/abs.ply", &out), 2) << out;
+  EXPECT_NE(out.find("error: --set save.path=/tmp/abs.ply: node 'save': parameter 'path': '/tmp/abs.ply' is absolute: "
+                     "it would be written outside the output folder; expected a relative path inside it, without "
+                     "'..'\n"),
+            std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir.path / "escaped.ply"));
+  // a relative path is written inside -o
+  EXPECT_EQ(test::run_command(kScallop + " run " + (dir.path / "inside.json").string() + input +
+                                  (dir.path / "out").string(), &out), 0) << out;
+  EXPECT_TRUE(fs::exists(dir.path / "out" / "clouds" / "copy.ply"));
+}
+
 TEST(Cli, AGraphStringOfAnotherTypeNamesItsPath) {
   test::TempDir dir;
   test::write_file(dir.path / "g.json", R"({"scallop_graph": 1, "params": {"h": {"value": 0.01, "unit": 5}}, "nodes": []})");
