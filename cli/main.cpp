@@ -53,7 +53,8 @@ bool load(const std::string& path, Graph& graph) {
 // Exit statuses of run and batch (README, "The scallop command").
 constexpr int kExitDone = 0;             // done; every certificate passed (or there was none)
 constexpr int kExitNodeFailed = 1;       // a node (or writing an output) failed
-constexpr int kExitInvalid = 2;          // invalid graph, input or arguments
+constexpr int kExitInvalid = 2;          // invalid graph, input file or arguments (also an input file
+                                         // the reader finds malformed: PartResult::bad_input)
 constexpr int kExitCertificateFailed = 3;  // ran to the end, but a certificate failed: do not cut
 
 // A certificate is a graph output of type Report whose JSON has a boolean "pass" (post.simulate's
@@ -162,7 +163,7 @@ int cmd_run(const std::string& graph_path, const std::vector<std::string>& input
     certified &= c.pass;
     if (!c.pass || !o.quiet) std::cerr << verdict_line(c) << "\n";
   }
-  if (!r.ok) return kExitNodeFailed;
+  if (!r.ok) return r.bad_input ? kExitInvalid : kExitNodeFailed;
   return certified ? kExitDone : kExitCertificateFailed;
 }
 
@@ -209,6 +210,7 @@ int cmd_batch(const std::string& graph_path, const std::vector<std::string>& par
 
   nlohmann::json summary = nlohmann::json::array();
   std::vector<std::string> failed, uncertified;
+  bool node_failed = false;  // a part failed for another reason than bad input: exit 1, not 2
   std::vector<std::string> verdicts;  // printed after the table
   std::printf("\n%-32s %-6s %-11s %10s  %s\n", "part", "status", "certificate", "seconds", "outputs / first error");
   for (std::size_t i = 0; i < results.size(); ++i) {
@@ -218,6 +220,7 @@ int cmd_batch(const std::string& graph_path, const std::vector<std::string>& par
     std::printf("%-32s %-6s %-11s %10.3f  %s\n", r.part.c_str(), r.ok ? "ok" : "FAILED", cert.c_str(), r.seconds,
                 r.ok ? std::to_string(r.written.size()).c_str() : r.errors.front().c_str());
     if (!r.ok) failed.push_back(r.part);
+    node_failed |= !r.ok && !r.bad_input;
     if (cert == "FAIL") uncertified.push_back(r.part);
     nlohmann::json reasons = nlohmann::json::array(), warnings = nlohmann::json::array();
     for (const auto& c : certs) {
@@ -252,7 +255,7 @@ int cmd_batch(const std::string& graph_path, const std::vector<std::string>& par
                  names(uncertified).c_str());
   if (!failed.empty()) {
     std::fprintf(stderr, "error: %zu part(s) failed: %s\n", failed.size(), names(failed).c_str());
-    return kExitNodeFailed;
+    return node_failed ? kExitNodeFailed : kExitInvalid;
   }
   return uncertified.empty() ? kExitDone : kExitCertificateFailed;
 }

@@ -15,6 +15,13 @@ int RunResult::executed() const {
   return n;
 }
 
+bool RunResult::only_bad_input() const {
+  if (ok()) return false;
+  for (const auto& r : nodes)
+    if (r.status == "failed" && !r.bad_input) return false;
+  return true;
+}
+
 const NodeRun* RunResult::find(const std::string& id) const {
   for (const auto& r : nodes)
     if (r.id == id) return &r;
@@ -199,6 +206,7 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
               }
               emit({{"event", "node_warning"}, {"node", pn.id}, {"type", rec.type}, {"message", msg}});
             });
+        ctx.set_output_dir(options.out_dir);
         pn.decl->run(ctx);
         out = ctx.take_outputs();
         for (const auto& od : pn.decl->outputs)
@@ -211,10 +219,20 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
           if (!rec.warnings.empty())
             options.cache->write_manifest(warnings_identity(keys[i]), json{{"warnings", rec.warnings}});
         }
+      } catch (const InputError& e) {
+        rec.status = "failed";
+        rec.error = e.what();
+        rec.bad_input = true;
       } catch (const std::exception& e) {
         rec.status = "failed";
         rec.error = e.what();
       }
+    }
+    if (rec.status == "failed" && !pn.set_by.empty()) {
+      // The command line may be the cause: say which of its --set values this node was given.
+      std::string sets;
+      for (const auto& [param, set] : pn.set_by) sets += (sets.empty() ? "" : ", ") + set;
+      rec.error += " (given " + sets + ")";
     }
     if (rec.status == "failed") {
       std::lock_guard lock(error_mutex);

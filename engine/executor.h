@@ -19,6 +19,7 @@ struct RunOptions {
   std::string part;               // name of the part (input file stem) for messages
   DiskCache* cache = nullptr;     // null: no disk cache
   EventSink* events = nullptr;    // null: silent
+  std::string out_dir;            // where nodes write files of their own ("" : working directory)
 };
 
 struct NodeRun {
@@ -27,6 +28,7 @@ struct NodeRun {
   std::string cache;   // hit | miss | off
   std::string why;     // why the cache hit or missed, or why the node was skipped
   std::string error;
+  bool bad_input = false;  // failed with InputError: an input file is unreadable or malformed
   std::vector<std::string> warnings;  // what the node said with ctx.warn (replayed on a cache hit)
   std::string key;
   double start = 0, finish = 0;  // seconds since process start
@@ -38,6 +40,8 @@ struct RunResult {
   std::vector<NodeRun> nodes;               // in plan order
   std::vector<std::string> errors;          // "node 'id' (type) failed on part 'p': message"
   bool ok() const { return errors.empty(); }
+  // Failed, and only because input files are unreadable or malformed (every failed node says so).
+  bool only_bad_input() const;
   int executed() const;                     // nodes that actually ran (not cached, not skipped)
   const NodeRun* find(const std::string& id) const;
 };

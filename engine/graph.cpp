@@ -7,6 +7,8 @@
 #include <functional>
 #include <sstream>
 
+#include "engine/output_path.h"
+
 namespace scallop {
 namespace fs = std::filesystem;
 
@@ -203,6 +205,19 @@ std::string too_deep_at(const std::string& text, int max_depth) {
   return "";
 }
 
+// The string member `key` of object `j` ("" when absent). Any other type is an error naming its
+// JSON path ("params.h.unit: must be a string, got a number"), not nlohmann's pathless
+// "type must be string, but is number".
+std::string string_member(const json& j, const char* key, const std::string& path, std::vector<std::string>& errs) {
+  auto it = j.find(key);
+  if (it == j.end()) return "";
+  if (it->is_string()) return it->get<std::string>();
+  const std::string type = it->type_name();
+  const bool vowel = std::string("aeiou").find(type[0]) != std::string::npos;
+  errs.push_back(shown_path(path) + ": must be a string, got " + (it->is_null() ? "null" : (vowel ? "an " : "a ") + type));
+  return "";
+}
+
 }  // namespace
 
 Graph parse_graph(const std::string& text, const std::string& path) {
@@ -243,8 +258,8 @@ Graph parse_graph(const std::string& text, const std::string& path) {
   else if ((g.format = j["scallop_graph"].get<int>()) != kGraphFormat)
     errs.push_back("scallop_graph: unsupported format version " + std::to_string(g.format) + "; expected " +
                    std::to_string(kGraphFormat));
-  g.name = j.value("name", std::string());
-  g.description = j.value("description", std::string());
+  g.name = string_member(j, "name", "name", errs);
+  g.description = string_member(j, "description", "description", errs);
 
   if (j.contains("params")) {
     if (!j["params"].is_object()) errs.push_back("params: expected an object of graph parameters");
@@ -254,8 +269,8 @@ Graph parse_graph(const std::string& text, const std::string& path) {
         if (v.is_object()) {
           if (!v.contains("value")) errs.push_back("params." + shown(k) + ": missing \"value\"");
           p.value = v.value("value", json());
-          p.unit = v.value("unit", std::string());
-          p.description = v.value("description", std::string());
+          p.unit = string_member(v, "unit", "params." + shown(k) + ".unit", errs);
+          p.description = string_member(v, "description", "params." + shown(k) + ".description", errs);
         } else {
           p.value = v;
         }
@@ -268,9 +283,11 @@ Graph parse_graph(const std::string& text, const std::string& path) {
       for (const auto& [k, v] : j["inputs"].items()) {
         GraphInput in;
         if (v.is_object()) {
-          in.type = v.value("type", std::string("File"));
-          in.description = v.value("description", std::string());
-          in.default_path = v.value("default", std::string());
+          const std::string at = "inputs." + shown(k);
+          if (std::string t = string_member(v, "type", at + ".type", errs); v.contains("type") && v["type"].is_string())
+            in.type = t;  // a type of another kind is reported by string_member; keep the default
+          in.description = string_member(v, "description", at + ".description", errs);
+          in.default_path = string_member(v, "default", at + ".default", errs);
         }
         if (in.type != "File") errs.push_back("inputs." + shown(k) + ".type: unsupported graph input type " +
                                               in_quotes(in.type) + "; expected 'File'");
@@ -398,15 +415,19 @@ bool lies_inside(const fs::path& file, const fs::path& folder) {
   return f == folder.end() && file != folder;
 }
 
-// scallop's own example parts (examples/ of the source tree this was built from, found only when
-// the compiler gave this file's absolute path): the shipped graphs' default part lies there,
-// beside graphs/, so defaults inside it are allowed too. Were the shipped graphs' default part
-// beside them, this could go.
+// scallop's own example parts (examples/ of the source tree this was built from, as CMake gives
+// it; else found only when the compiler gave this file's absolute path, which ccache with
+// CCACHE_BASEDIR does not): the shipped graphs' default part lies there, beside graphs/, so
+// defaults inside it are allowed too. Were the shipped graphs' default part beside them, this
+// could go.
 const fs::path& bundled_examples() {
   static const fs::path dir = [] {
-    fs::path source(__FILE__);
-    fs::path examples = source.parent_path().parent_path() / "examples";
-    return source.is_absolute() && fs::is_directory(examples) ? resolved(examples) : fs::path();
+#ifdef SCALLOP_EXAMPLES_DIR
+    const fs::path examples(SCALLOP_EXAMPLES_DIR);
+#else
+    const fs::path examples = fs::path(__FILE__).parent_path().parent_path() / "examples";
+#endif
+    return examples.is_absolute() && fs::is_directory(examples) ? resolved(examples) : fs::path();
   }();
   return dir;
 }
@@ -456,6 +477,13 @@ std::optional<json> check_param(const ParamDecl& p, const json& v, std::string& 
                 " bytes long; expected at most " + std::to_string(kMaxStringParam);
         return std::nullopt;
       }
+      // a file the node writes: refused before anything runs when it would leave the output folder
+      // (an empty one is the node's own error: it says which file it needs)
+      if (p.output_path && !v.get_ref<const std::string&>().empty())
+        if (auto problem = output_path_problem(v.get<std::string>()); !problem.empty()) {
+          error = "parameter " + in_quotes(p.name) + ": " + problem;
+          return std::nullopt;
+        }
       return v;
     case ParamKind::Choice:
       if (!v.is_string() || std::find(p.choices.begin(), p.choices.end(), v.get<std::string>()) == p.choices.end()) {
@@ -492,6 +520,10 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
   std::map<std::string, json> gparams;
   for (const auto& [k, p] : graph.params) gparams[k] = p.value;
   std::map<std::string, std::map<std::string, json>> node_sets;
+  // "--set NAME=VALUE" as given, by graph parameter and by node id and parameter: a value it set
+  // that is refused (or a node it makes fail) is named by the --set, not only by the node.
+  std::map<std::string, std::string> gparam_set_text;
+  std::map<std::string, std::map<std::string, std::string>> node_set_text;
   std::map<std::string, int> index_of;
   for (std::size_t i = 0; i < graph.nodes.size(); ++i) {
     const auto& n = graph.nodes[i];
@@ -514,19 +546,24 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
       continue;
     }
     json value = parse_set_value(item.substr(eq + 1));
+    const std::string set_text = "--set " + shown(name) + "=" + shown(item.substr(eq + 1));
     auto dot = name.find('.');
     if (dot == std::string::npos) {
       if (!gparams.count(name))
         errs.push_back("--set " + name + ": unknown graph parameter " + in_quotes(name) + "; expected one of: " +
                        join_keys(gparams));
-      else
+      else {
         gparams[name] = value;
+        gparam_set_text[name] = set_text;
+      }
     } else {
       std::string id = name.substr(0, dot), key = name.substr(dot + 1);
       if (!index_of.count(id))
         errs.push_back("--set " + name + ": unknown node " + in_quotes(id) + "; expected one of: " + join_keys(index_of));
-      else
+      else {
         node_sets[id][key] = value;
+        node_set_text[id][key] = set_text;
+      }
     }
   }
   plan.graph_params = json(gparams);
@@ -559,7 +596,8 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
     for (const auto& [k, v] : given.items()) origin[k] = at + ".params." + shown(k);
     for (const auto& [k, v] : node_sets[n.id]) {
       given[k] = v;
-      origin[k] = "--set " + shown(n.id) + "." + shown(k);
+      origin[k] = node_set_text[n.id][k];
+      pn.set_by[k] = origin[k];
     }
     json resolved = json::object();
     for (const auto& [k, v] : given.items()) {
@@ -580,6 +618,10 @@ Plan compile(const Graph& graph, const Registry& registry, const CompileOptions&
           continue;
         }
         value = &gparams[ref];
+        if (auto set = gparam_set_text.find(ref); set != gparam_set_text.end()) {
+          origin[k] = set->second + " (" + origin[k] + ")";  // the --set gave the value, the node refuses it
+          pn.set_by[k] = set->second;
+        }
       }
       std::string error;
       if (auto ok = check_param(*p, *value, error)) resolved[k] = *ok;

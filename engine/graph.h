@@ -80,6 +80,7 @@ struct PlanNode {
   std::vector<std::pair<std::string, Source>> inputs;     // connected ports, in declaration order
   std::vector<int> deps;                                  // producing nodes (unique)
   std::vector<int> dependents;                            // consuming nodes (unique)
+  std::map<std::string, std::string> set_by;              // parameter -> the "--set NAME=VALUE" that gave it
 };
 
 struct Plan {

@@ -44,6 +44,11 @@ NodeDecl& NodeDecl::param_string(std::string name, std::string def, std::string 
   params.push_back({std::move(name), ParamKind::String, def, {}, {}, "", std::move(desc), {}});
   return *this;
 }
+NodeDecl& NodeDecl::param_output_path(std::string name, std::string desc) {
+  param_string(std::move(name), "", std::move(desc));
+  params.back().output_path = true;
+  return *this;
+}
 NodeDecl& NodeDecl::param_choice(std::string name, std::string def, std::vector<std::string> choices,
                                  std::string desc) {
   params.push_back({std::move(name), ParamKind::Choice, def, {}, {}, "", std::move(desc), std::move(choices)});

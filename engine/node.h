@@ -29,6 +29,8 @@ struct ParamDecl {
   std::string unit;                      // "mm", "" for none
   std::string description;
   std::vector<std::string> choices;      // for Choice
+  bool output_path = false;              // String: a file the node writes, relative to the output
+                                         // folder; validation refuses one that leaves it
 };
 
 struct PortDecl {
@@ -61,6 +63,8 @@ struct NodeDecl {
   NodeDecl& param_string(std::string name, std::string def, std::string description);
   NodeDecl& param_choice(std::string name, std::string def, std::vector<std::string> choices,
                          std::string description);
+  // A String naming a file the node writes inside the output folder (engine/output_path.h).
+  NodeDecl& param_output_path(std::string name, std::string description);
 
   const PortDecl* find_input(const std::string& name) const;
   const PortDecl* find_output(const std::string& name) const;
@@ -71,6 +75,13 @@ struct NodeDecl {
 // The executor adds node id, node type and part.
 struct NodeError : std::runtime_error {
   using std::runtime_error::runtime_error;
+};
+
+// Thrown by a node for an input file it cannot read or that is malformed (a source node's bad
+// input, not a failed computation): `scallop run` then exits 2 (bad input), as for a missing file,
+// instead of 1.
+struct InputError : NodeError {
+  using NodeError::NodeError;
 };
 
 // What a running node sees: its inputs, its resolved parameters, and where its outputs go.
@@ -109,6 +120,11 @@ class NodeContext {
   // handler is (the executor's is).
   void warn(const std::string& message) const;
 
+  // The run's output folder ("" : the working directory); files a node writes go inside it
+  // (output_file in engine/output_path.h).
+  const std::string& output_dir() const { return output_dir_; }
+  void set_output_dir(std::string dir) { output_dir_ = std::move(dir); }
+
   const std::string& node_id() const { return node_id_; }
   const std::string& part() const { return part_; }
   const NodeDecl& decl() const { return decl_; }
@@ -116,7 +132,7 @@ class NodeContext {
 
  private:
   const NodeDecl& decl_;
-  std::string node_id_, part_;
+  std::string node_id_, part_, output_dir_;
   nlohmann::json params_;
   std::map<std::string, ValuePtr> inputs_, outputs_;
   std::function<void(double, const std::string&)> progress_;

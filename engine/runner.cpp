@@ -38,6 +38,7 @@ PartResult run_part(const Graph& graph, const Registry& registry, const PartRequ
     plan = compile(graph, registry, opt);
   } catch (const ValidationError& e) {
     r.errors = e.errors;
+    r.bad_input = true;
     r.seconds = seconds_since_start() - t0;
     return r;
   }
@@ -54,6 +55,7 @@ PartResult run_part(const Graph& graph, const Registry& registry, const PartRequ
     }
   }
   if (!r.errors.empty()) {
+    r.bad_input = true;
     r.seconds = seconds_since_start() - t0;
     return r;
   }
@@ -61,8 +63,10 @@ PartResult run_part(const Graph& graph, const Registry& registry, const PartRequ
   ro.part = r.part;
   ro.cache = req.cache;
   ro.events = req.events;
+  ro.out_dir = req.out_dir;
   r.run = execute(plan, registry, values, ro);
   r.errors = r.run.errors;
+  r.bad_input = r.run.only_bad_input();
   if (!req.out_dir.empty()) {
     try {
       fs::create_directories(req.out_dir);
@@ -75,6 +79,7 @@ PartResult run_part(const Graph& graph, const Registry& registry, const PartRequ
       }
     } catch (const std::exception& e) {
       r.errors.push_back(std::string("writing outputs: ") + e.what());
+      r.bad_input = false;
     }
   }
   r.ok = r.errors.empty();

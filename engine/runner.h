@@ -22,6 +22,9 @@ struct PartResult {
   std::string part;
   bool ok = false;
   std::vector<std::string> errors;   // validation, input and node errors
+  // The errors are all about bad input: an invalid graph or --set, a missing input file, or one
+  // a node could not read (InputError). `scallop` exits 2 for these, 1 for other failures.
+  bool bad_input = false;
   std::vector<std::string> written;  // output files
   RunResult run;
   double seconds = 0;

@@ -170,22 +170,9 @@ HeightFieldStats analyze_height_field(const std::vector<Eigen::Vector3d>& P,
   s.points = n;
   s.k = nbrs.k;
 
-  // Spacing: median nearest-neighbour distance (exact duplicates skipped).
-  {
-    std::vector<double> d;
-    d.reserve(n);
-    for (std::size_t i = 0; i < n; ++i)
-      for (int j = 0; j < nbrs.k; ++j)
-        if (nbrs.sq_dist(i, j) > 0) {
-          d.push_back(std::sqrt(nbrs.sq_dist(i, j)));
-          break;
-        }
-    if (!d.empty()) {
-      std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-      s.spacing = d[d.size() / 2];
-    }
-  }
+  s.spacing = median_spacing(nbrs);  // exact duplicates skipped
 
+  s.extents = principal_extents(P);
   s.component = knn_components(nbrs, s.component_sizes);
   const double speck_limit = limits.min_component_fraction * static_cast<double>(n);
   std::vector<char> speck(n, 0);
@@ -272,6 +259,8 @@ std::string height_field_problem(const HeightFieldStats& s, const HeightFieldLim
   if (s.points < static_cast<std::size_t>(std::max(limits.min_points, 0)))
     return "the cloud has " + std::to_string(s.points) + " points; at least " +
            std::to_string(limits.min_points) + " are needed to describe a patch to machine";
+  // First: a line gets normals of any tilt around it, so every later check would mislead.
+  if (auto line = one_dimensional_problem(s.extents, s.spacing); !line.empty()) return line;
   const std::string graph = std::to_string(s.k) + "-nearest-neighbour graph";
   if (s.significant_components == 0)
     return "the cloud falls apart into " + std::to_string(s.component_sizes.size()) +
@@ -329,6 +318,7 @@ nlohmann::json to_json(const HeightFieldStats& s, const HeightFieldLimits& limit
   return {
       {"points", s.points},
       {"spacing_mm", s.spacing},
+      {"extents_mm", {s.extents.length, s.extents.width, s.extents.thickness}},
       {"neighbours", s.k},
       {"components",
        {{"count", s.component_sizes.size()},

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "nodes/cloud/principal_extents.h"
 #include "nodes/types/cloud.h"
 
 namespace scallop {
@@ -32,6 +33,7 @@ struct HeightFieldLimits {
 struct HeightFieldStats {
   std::size_t points = 0;
   double spacing = 0;  // median distance to the nearest neighbour (mm)
+  PrincipalExtents extents;  // length, width, thickness along the principal axes (mm)
   int k = 0;           // neighbours per point of the graph used
   // Components of the symmetric k-nearest-neighbour graph, largest first.
   std::vector<std::size_t> component_sizes;

@@ -10,7 +10,7 @@ namespace scallop {
 NodeDecl make_height_field_node() {
   NodeDecl d;
   d.type = "cloud.height_field_check";
-  d.version = 1;
+  d.version = 2;  // 2: a one-dimensional cloud refused; extents_mm in the report
   d.description =
       "checks that the cloud is one open height-field patch a 3-axis machine reaches from +Z "
       "(one part, no overlapping layers, no walls too steep) and passes it through";

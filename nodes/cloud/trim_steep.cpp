@@ -7,6 +7,7 @@
 #include <string>
 
 #include "nodes/cloud/knn.h"
+#include "nodes/cloud/principal_extents.h"
 #include "nodes/cloud/normals.h"
 
 namespace scallop {
@@ -58,6 +59,9 @@ TrimSteepResult trim_steep(const std::vector<Eigen::Vector3d>& P, const TrimStee
     throw std::invalid_argument("the cloud has " + std::to_string(P.size()) +
                                 " points; trimming needs more than k = " + std::to_string(o.k));
   const Neighborhoods nbrs = compute_knn(P, o.k);
+  // A line's normals tilt any way around it: it would be "trimmed as steep", not named.
+  if (auto line = one_dimensional_problem(principal_extents(P), median_spacing(nbrs)); !line.empty())
+    throw std::invalid_argument(line);
   const std::vector<Eigen::Vector3d> N = pca_normals(P, nbrs);
   const std::size_t n = P.size();
   std::vector<double> slope(n), area(n);

@@ -65,6 +65,11 @@ PointCloud read_stl_binary(const std::string& path, const std::string& data) {
     const std::size_t k = left / 50;
     fail_byte(path, 84 + 50 * k, "file ends inside triangle " + std::to_string(k) + " of " + std::to_string(n));
   }
+  // More bytes than the triangles take: the count is smaller than the data (or this is no binary
+  // STL at all), and reading only what it declares would drop triangles silently.
+  if (const std::size_t end = 84 + 50 * static_cast<std::size_t>(n); end < data.size())
+    fail_byte(path, end, std::to_string(data.size() - end) + " bytes after the last declared triangle (" +
+                             std::to_string(n) + " declared): the header's count is smaller than the data");
   PointCloud cloud;
   Welder weld(3 * static_cast<std::size_t>(n));
   for (std::size_t t = 0; t < n; ++t) {
@@ -79,7 +84,7 @@ PointCloud read_stl_binary(const std::string& path, const std::string& data) {
 }
 
 PointCloud read_stl_ascii(const std::string& path, const std::string& data) {
-  io::LineReader lines(data);
+  io::LineReader lines(data, io::bom_size(data));
   std::vector<std::string_view> tok;
   std::string_view line;
   PointCloud cloud;
@@ -101,7 +106,8 @@ PointCloud read_stl_ascii(const std::string& path, const std::string& data) {
       double v[3];
       if (tok.size() != 4) fail_line(path, ln, "expected 'vertex x y z'");
       for (int k = 0; k < 3; ++k)
-        if (!io::parse_double(tok[k + 1], v[k])) fail_line(path, ln, "bad number " + quote(tok[k + 1]));
+        if (!io::parse_double(tok[k + 1], v[k]))
+          fail_line(path, ln, io::bad_number(tok[k + 1], "bad number " + quote(tok[k + 1])));
       weld.add(v[0], v[1], v[2], cloud);
       ++in_loop;
     } else if (key == "outer") {
@@ -124,7 +130,7 @@ PointCloud read_stl_ascii(const std::string& path, const std::string& data) {
 
 PointCloud read_off_vertices(const std::string& path) {
   const std::string data = io::read_file_bytes(path);
-  io::LineReader lines(data);
+  io::LineReader lines(data, io::bom_size(data));
   std::vector<std::string_view> tok;
   if (!next_tokens(lines, tok)) fail(path, "no OFF header");
   const std::string_view head = tok[0];
@@ -159,7 +165,7 @@ PointCloud read_off_vertices(const std::string& path) {
     double v[6];
     for (std::size_t k = 0; k < need; ++k)
       if (!io::parse_double(tok[k], v[k]))
-        fail_line(path, ln, "bad number " + quote(tok[k]) + " for vertex " + std::to_string(i));
+        fail_line(path, ln, io::bad_number(tok[k], "bad number " + quote(tok[k]) + " for vertex " + std::to_string(i)));
     cloud.points.emplace_back(v[0], v[1], v[2]);
     if (normals) cloud.normals.emplace_back(v[3], v[4], v[5]);
   }
@@ -180,12 +186,22 @@ PointCloud read_off_vertices(const std::string& path) {
                                 " vertices");
     }
   }
+  // Anything after the last face means the counts are smaller than the data: its vertices would
+  // be dropped silently.
+  if (next_tokens(lines, tok)) {
+    const std::size_t first = lines.line();
+    std::size_t extra = 1;
+    while (next_tokens(lines, tok)) ++extra;
+    fail_line(path, first, std::to_string(extra) + (extra == 1 ? " line" : " lines") +
+                               " after the last declared face (" + std::to_string(nv) + " vertices, " +
+                               std::to_string(nf) + " faces declared): the header's counts are smaller than the data");
+  }
   return cloud;
 }
 
 PointCloud read_obj_vertices(const std::string& path) {
   const std::string data = io::read_file_bytes(path);
-  io::LineReader lines(data);
+  io::LineReader lines(data, io::bom_size(data));
   std::vector<std::string_view> tok;
   PointCloud cloud;
   while (next_tokens(lines, tok)) {
@@ -194,7 +210,8 @@ PointCloud read_obj_vertices(const std::string& path) {
     if (tok.size() < 4) fail_line(path, ln, "expected 'v x y z', found " + std::to_string(tok.size() - 1) + " values");
     double v[3];
     for (int k = 0; k < 3; ++k)
-      if (!io::parse_double(tok[k + 1], v[k])) fail_line(path, ln, "bad number " + quote(tok[k + 1]));
+      if (!io::parse_double(tok[k + 1], v[k]))
+        fail_line(path, ln, io::bad_number(tok[k + 1], "bad number " + quote(tok[k + 1])));
     cloud.points.emplace_back(v[0], v[1], v[2]);
   }
   return cloud;
@@ -208,7 +225,7 @@ PointCloud read_stl_vertices(const std::string& path) {
   }
   // Ascii when it starts with "solid" and looks like text; binary headers may say "solid" too, but
   // their triangle count and float data nearly always hold a zero byte early on.
-  std::size_t i = data.find_first_not_of(" \t\r\n");
+  std::size_t i = data.find_first_not_of(" \t\r\n", io::bom_size(data));
   const bool solid = i != std::string::npos && data.compare(i, 5, "solid") == 0;
   const bool text = std::memchr(data.data(), 0, std::min<std::size_t>(data.size(), 1024)) == nullptr;
   if (solid && text) return read_stl_ascii(path, data);

@@ -48,11 +48,16 @@ double read_value(const char* p, const Field& f) {
   }
 }
 
+// The end of the trailing-data message: how many points the header declares.
+std::string trailing_what(std::uint64_t points) {
+  return " (" + std::to_string(points) + " declared): the header's POINTS is smaller than the data";
+}
+
 }  // namespace
 
 PointCloud read_pcd(const std::string& path) {
   const std::string data = io::read_file_bytes(path);
-  io::LineReader lines(data);
+  io::LineReader lines(data, io::bom_size(data));
   std::string_view line;
   std::vector<std::string_view> tok;
 
@@ -192,14 +197,25 @@ PointCloud read_pcd(const std::string& path) {
           const std::string_view t = tok[first[f] + c];
           double x;
           if (!io::parse_double(t, x))
-            fail_line(path, ln, "bad value " + quote(t) + " for field '" + fs[f].name + "' of point " +
-                                    std::to_string(i));
+            fail_line(path, ln, io::bad_number(t, "bad value " + quote(t) + " for field '" + fs[f].name +
+                                                      "' of point " + std::to_string(i)));
           for (int k = 0; k < 6; ++k)
             if (slot[k] == static_cast<int>(f) && c == 0) v[k] = x;
         }
       cloud.points.emplace_back(v[0], v[1], v[2]);
       if (has_normals) cloud.normals.emplace_back(v[3], v[4], v[5]);
     }
+    // Blank lines may follow; anything else means POINTS is smaller than the data, and reading
+    // only what it declares would drop points silently.
+    std::size_t first_extra = 0, extra = 0;
+    while (lines.next(line)) {
+      io::split_tokens(line, tok);
+      if (tok.empty()) continue;
+      if (extra++ == 0) first_extra = lines.line();
+    }
+    if (extra > 0)
+      fail_line(path, first_extra, std::to_string(extra) + (extra == 1 ? " line" : " lines") + " after the last point" +
+                                 trailing_what(points));
     return cloud;
   }
 
@@ -208,6 +224,8 @@ PointCloud read_pcd(const std::string& path) {
       const std::size_t k = left / point_step;
       fail_byte(path, start + k * point_step, "file ends inside point " + std::to_string(k) + of);
     }
+    if (const std::size_t end = start + points * point_step; end < data.size())
+      fail_byte(path, end, std::to_string(data.size() - end) + " bytes after the last point" + trailing_what(points));
     reserve(points);
     for (std::size_t i = 0; i < points; ++i) {
       const char* p = data.data() + start + i * point_step;
@@ -236,6 +254,9 @@ PointCloud read_pcd(const std::string& path) {
   if (usize / 88 > csize)
     fail_byte(path, start + 4, "uncompressed size " + std::to_string(usize) + " is impossible for " +
                                    std::to_string(csize) + " compressed bytes");
+  // Bytes after the compressed block are not an error: PCL's own writer leaves some (the file is
+  // sized for the worst-case compression; shared/data/milk_kinect/milk.pcd has 3913), and the
+  // point count is checked against the uncompressed size above.
   std::vector<char> raw(usize);
   if (usize > 0) {
     const unsigned got = lzf_decompress(data.data() + start + 8, csize, raw.data(), usize);

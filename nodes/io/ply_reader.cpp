@@ -231,12 +231,14 @@ void read_ascii(const std::string& path, io::LineReader& lines, const std::vecto
           for (long long k = 0; k < n; ++k, ++t) {
             double x;
             if (!io::parse_double(tok[t], x))
-              fail_line(path, ln, "bad value " + quote(tok[t]) + " for property '" + p.name + "' of " + item);
+              fail_line(path, ln, io::bad_number(tok[t], "bad value " + quote(tok[t]) + " for property '" + p.name +
+                                                           "' of " + item));
           }
         } else {
           double x;
           if (!io::parse_double(tok[t], x))
-            fail_line(path, ln, "bad value " + quote(tok[t]) + " for property '" + p.name + "' of " + item);
+            fail_line(path, ln, io::bad_number(tok[t], "bad value " + quote(tok[t]) + " for property '" + p.name +
+                                                         "' of " + item));
           if (is_vertex && slots[j] >= 0) v[slots[j]] = x;
           ++t;
         }
@@ -266,7 +268,7 @@ void read_ascii(const std::string& path, io::LineReader& lines, const std::vecto
 
 PointCloud read_ply(const std::string& path) {
   const std::string data = io::read_file_bytes(path);
-  io::LineReader lines(data);
+  io::LineReader lines(data, io::bom_size(data));
   std::string_view line;
   std::vector<std::string_view> tok;
 

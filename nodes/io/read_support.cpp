@@ -82,6 +82,22 @@ bool parse_uint(std::string_view s, std::uint64_t& v) {
   return ec == std::errc() && p == s.data() + s.size();
 }
 
+std::size_t bom_size(std::string_view data) { return data.starts_with("\xEF\xBB\xBF") ? 3 : 0; }
+
+bool decimal_comma(std::string_view token) {
+  if (token.find(',') == std::string_view::npos) return false;
+  std::string dotted(token);
+  for (char& c : dotted)
+    if (c == ',') c = '.';
+  double v;
+  // "1," is a number followed by a separator, not a decimal comma
+  return dotted.back() != '.' && parse_double(dotted, v);
+}
+
+std::string bad_number(std::string_view token, const std::string& otherwise) {
+  return decimal_comma(token) ? "decimal commas are not supported; use '.'" : otherwise;
+}
+
 std::string quote(std::string_view token) {
   std::string q = "'";
   const std::size_t n = std::min<std::size_t>(token.size(), 32);

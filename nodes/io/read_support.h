@@ -46,6 +46,16 @@ bool parse_double(std::string_view s, double& v);
 bool parse_int(std::string_view s, long long& v);
 bool parse_uint(std::string_view s, std::uint64_t& v);
 
+// Bytes of a UTF-8 byte order mark at the start of `data` (3), else 0. Windows editors write one;
+// it is no part of the first line (it made the first point a header line, or the magic word wrong).
+std::size_t bom_size(std::string_view data);
+
+// Whether `token`, not a number as it stands, is one once its ',' is read as '.' ("1,5"): the file
+// writes decimal commas, and the message should say so rather than "bad number".
+bool decimal_comma(std::string_view token);
+// "decimal commas are not supported; use '.'" when decimal_comma(token), else `otherwise`.
+std::string bad_number(std::string_view token, const std::string& otherwise);
+
 // A token fit to quote in a message: 'abc', with non-printable bytes as '?' and at most 32 chars.
 std::string quote(std::string_view token);
 

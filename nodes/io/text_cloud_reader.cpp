@@ -48,12 +48,10 @@ bool has_decimal_commas(std::string_view line) {
   }
   bool comma = false;
   for (std::string_view f : fields) {
-    std::string dotted(f);
-    for (char& c : dotted)
-      if (c == ',') c = '.';
     double v;
-    if (dotted.empty() || dotted.back() == '.' || !io::parse_double(dotted, v)) return false;
-    comma = comma || dotted != f;
+    const bool dc = io::decimal_comma(f);
+    if (!dc && !io::parse_double(f, v)) return false;
+    comma = comma || dc;
   }
   return comma && fields.size() >= 3;
 }
@@ -63,7 +61,7 @@ bool has_decimal_commas(std::string_view line) {
 PointCloud read_text_cloud(const std::string& path, bool columns_4_to_6_are_normals) {
   const std::string data = io::read_file_bytes(path);
   // A UTF-8 byte order mark (Windows editors write one) is no part of the first line.
-  io::LineReader lines(data, data.starts_with("\xEF\xBB\xBF") ? 3 : 0);
+  io::LineReader lines(data, io::bom_size(data));
   std::string_view line;
   std::vector<std::string_view> tok;
   std::vector<double> values;

@@ -2,6 +2,7 @@
 
 #include "engine/file_ref.h"
 #include "engine/node.h"
+#include "engine/output_path.h"
 #include "nodes/io/ply_writer.h"
 #include "nodes/types/cloud.h"
 
@@ -10,23 +11,27 @@ namespace scallop {
 NodeDecl make_write_cloud_node() {
   NodeDecl d;
   d.type = "io.write_cloud";
-  d.version = 1;
+  d.version = 2;  // 2: path relative to the output folder, and kept inside it
   d.description = "writes a cloud as PLY (x y z [nx ny nz] as double), binary little-endian or ascii";
   // Writing a file is a side effect, so nothing is gained by keeping the result on disk.
   d.cache_on_disk = false;
   d.input("cloud", "Cloud", "the points to write")
       .output("file", "File", "the written file")
-      .param_string("path", "", "where to write the PLY file (required)")
+      .param_output_path("path", "the PLY file to write (required), relative to the output folder (-o); "
+                                 "a path that would leave it ('../x', '/abs') is refused")
       .param_bool("binary", true, "binary little-endian PLY; false for ascii");
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");
-    const std::string path = ctx.text("path");
-    if (path.empty()) throw NodeError("parameter 'path' is empty: give the file to write");
+    const std::string param = ctx.text("path");
+    if (param.empty()) throw NodeError("parameter 'path' is empty: give the file to write");
     try {
+      const std::string path = output_file(ctx.output_dir(), param);
       write_ply(path, *cloud, ctx.flag("binary"));
       ctx.set("file", FileRef::open(path));
     } catch (const NodeError&) {
       throw;
+    } catch (const std::invalid_argument& e) {
+      throw NodeError("parameter 'path': " + std::string(e.what()));
     } catch (const std::runtime_error& e) {
       throw NodeError(e.what());
     }

@@ -2,6 +2,7 @@
 
 #include "engine/node.h"
 #include "nodes/path/isoparametric.h"
+#include "nodes/path/part_fits_tool.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
 #include "nodes/types/param.h"
@@ -69,6 +70,7 @@ NodeDecl make_isoparametric_node() {
     o.progress = [&ctx](double f, const std::string& m) { ctx.progress(f, m); };
     IsoparametricResult res;
     try {
+      if (auto m = part_narrower_than_ball(cloud->points, o.tool_radius); !m.empty()) throw std::invalid_argument(m);
       std::shared_ptr<const BoundaryLoops> loops;
       if (ctx.has_input("loops")) loops = ctx.input<BoundaryLoops>("loops");
       res = plan_isoparametric(*cloud, *neighbors, *map, o, loops.get());

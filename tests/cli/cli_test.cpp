@@ -119,7 +119,7 @@ TEST(Cli, BatchWithACorruptPartReturnsTheOthersAndNamesIt) {
                                  (dir.path / "broken.ply").string() + " " + (dir.path / "good_b.ply").string() +
                                  " -j 2 --no-cache -q -o " + (dir.path / "out").string(),
                              &out);
-  EXPECT_EQ(rc, 1) << out;
+  EXPECT_EQ(rc, 2) << out;  // the one failure is a malformed input file: bad input
   EXPECT_NE(out.find("error: 1 part(s) failed: broken"), std::string::npos) << out;
   EXPECT_TRUE(fs::exists(dir.path / "out" / "good_a" / "cloud.ply"));
   EXPECT_TRUE(fs::exists(dir.path / "out" / "good_b" / "cloud.ply"));
@@ -424,6 +424,150 @@ TEST(Cli, MissingInputFileIsAClearError) {
   std::string out;
   EXPECT_EQ(test::run_command(kScallop + " run " + kGraph + " --no-cache --input cloud=/nonexistent/x.ply", &out), 2);
   EXPECT_NE(out.find("error: input 'cloud': file '/nonexistent/x.ply' does not exist"), std::string::npos) << out;
+}
+
+// ---------------------------------------------------------------- issue 11: bad input
+
+const std::string kZigzag = std::string(SCALLOP_SOURCE_DIR) + "/graphs/isoparametric-zigzag.json";
+
+TEST(Cli, MalformedOrOutOfRangeInputFilesExit2) {
+  // a malformed file was exit 1 ("a node failed"); the README says 2, bad input
+  test::TempDir dir;
+  test::write_file(dir.path / "broken.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n");
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " run " + kGraph + " --input cloud=" + (dir.path / "broken.ply").string() +
+                                  " --no-cache -q -o " + (dir.path / "out").string(), &out), 2) << out;
+  EXPECT_NE(out.find("error: node 'read' (io.read_cloud) failed on part 'broken': " + (dir.path / "broken.ply").string() +
+                     ": line 4: header ends without 'end_header'"),
+            std::string::npos) << out;
+  // 1e300 was reported by the normals as "coincident or collinear"
+  std::string xyz;
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 20; ++j) xyz += std::to_string(i) + " " + std::to_string(j) + " 0\n";
+  test::write_file(dir.path / "far.xyz", xyz + "1e300 0 0\n");
+  EXPECT_EQ(test::run_command(kScallop + " run " + kGraph + " --input cloud=" + (dir.path / "far.xyz").string() +
+                                  " --no-cache -q -o " + (dir.path / "out").string(), &out), 2) << out;
+  EXPECT_NE(out.find("error: node 'read' (io.read_cloud) failed on part 'far': " + (dir.path / "far.xyz").string() +
+                     ": point 400 at (1e+300, 0, 0): coordinates out of range (beyond 1e9 mm); the file is damaged "
+                     "or its scale is wrong\n"),
+            std::string::npos) << out;
+}
+
+// A wavy patch `size` mm wide (n x n points), written as XYZ divided by `unit` (1000: metres).
+void write_wavy(const fs::path& path, double size, int n, double unit = 1) {
+  std::string s;
+  char buf[128];
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double x = size * i / (n - 1), y = size * j / (n - 1), z = 3 * std::sin(x / 20) * std::cos(y / 25);
+      std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g\n", x / unit, y / unit, z / unit);
+      s += buf;
+    }
+  test::write_file(path, s);
+}
+
+TEST(Cli, ACloudInMetresIsWarnedAtTheReaderAndRefusedByThePlanner) {
+  // a 100 mm part in metres: 0.1 mm wide under a 4 mm ball got exit 0 and a passing certificate
+  test::TempDir dir;
+  write_wavy(dir.path / "metres.xyz", 100, 60, 1000);
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " run " + kZigzag + " --input cloud=" + (dir.path / "metres.xyz").string() +
+                                  " --no-cache -q -o " + (dir.path / "out").string(), &out), 1) << out;
+  EXPECT_NE(out.find("warning: node 'read' (io.read_cloud) on part 'metres': the cloud is 0.1 mm across with points "
+                     "0.0017 mm apart: is it in metres? coordinates are read as mm; set read.scale to 1000\n"),
+            std::string::npos) << out;
+  EXPECT_NE(out.find("error: node 'plan' (path.isoparametric) failed on part 'metres': the part is 0.1 mm wide, "
+                     "smaller than the 8 mm ball (tool_radius 4 mm): is the cloud in metres? set the reader's scale "
+                     "to 1000 (--set read.scale=1000 with the shipped graphs), or use a smaller tool\n"),
+            std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir.path / "out" / "gcode.ngc"));
+}
+
+TEST(Cli, AFailingNodeNamesTheSetThatGaveItsParameters) {
+  // a 20 mm part and a 30 mm ball, the radius from the command line: the error says so
+  test::TempDir dir;
+  write_wavy(dir.path / "part.xyz", 20, 30);
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " run " + kZigzag + " --input cloud=" + (dir.path / "part.xyz").string() +
+                                  " --set tool_radius=15 --no-cache -q -o " + (dir.path / "out").string(), &out), 1)
+      << out;
+  EXPECT_NE(out.find("error: node 'plan' (path.isoparametric) failed on part 'part': the part is 20 mm wide, smaller "
+                     "than the 30 mm ball (tool_radius 15 mm): use a smaller tool (given --set tool_radius=15)\n"),
+            std::string::npos) << out;
+  // refused before running: the --set is named first
+  EXPECT_EQ(test::run_command(kScallop + " validate " + kZigzag + " --set scallop_height=-1", &out), 2) << out;
+  EXPECT_NE(out.find("error: --set scallop_height=-1 (nodes[13].params.scallop_height): node 'plan': parameter "
+                     "'scallop_height' = -1 is out of range; expected 1e-06 .. 100 mm\n"),
+            std::string::npos) << out;
+}
+
+TEST(Cli, AOneDimensionalCloudIsNamedSo) {
+  // a line with micron jitter got fold-over advice
+  test::TempDir dir;
+  std::string xyz;
+  std::uint32_t r = 1;
+  auto jitter = [&] {
+    r = r * 1664525u + 1013904223u;
+    return 0.002 * (static_cast<double>(r >> 8) / (1u << 24) - 0.5);
+  };
+  char buf[96];
+  for (int i = 0; i < 3000; ++i) {
+    const double x = 50.0 * i / 2999, y = jitter(), z = jitter();
+    std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g\n", x, y, z);
+    xyz += buf;
+  }
+  test::write_file(dir.path / "line.xyz", xyz);
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " run " + kZigzag + " --input cloud=" + (dir.path / "line.xyz").string() +
+                                  " --no-cache -q -o " + (dir.path / "out").string(), &out), 1) << out;
+  // (the first node that looks at its shape, cloud.trim_steep, says so; it "trimmed 89 % as steep")
+  const std::string said = "error: node 'trim' (cloud.trim_steep) failed on part 'line': the cloud is "
+                           "one-dimensional: its points lie along a line 50 mm long and ";
+  ASSERT_NE(out.find(said), std::string::npos) << out;
+  EXPECT_NE(out.find(" mm apart), not on a surface; scallop machines surface patches\n", out.find(said)),
+            std::string::npos) << out;
+  EXPECT_EQ(out.find("fold"), std::string::npos) << out;
+}
+
+TEST(Cli, AWriteNodeCannotWriteOutsideTheOutputFolder) {
+  test::TempDir dir;
+  write_patch(dir.path / "patch.ply");
+  auto graph = [&](const std::string& path) {
+    return R"({"scallop_graph": 1, "inputs": {"cloud": {"type": "File"}},
+      "nodes": [{"id": "read", "type": "io.read_cloud", "inputs": {"file": "@cloud"}},
+                {"id": "save", "type": "io.write_cloud", "params": {"path": ")" + path + R"("},
+                 "inputs": {"cloud": "read.cloud"}}]})";
+  };
+  test::write_file(dir.path / "escape.json", graph("../escaped.ply"));
+  test::write_file(dir.path / "inside.json", graph("clouds/copy.ply"));
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " validate " + (dir.path / "escape.json").string(), &out), 2) << out;
+  EXPECT_NE(out.find("error: nodes[1].params.path: node 'save': parameter 'path': '../escaped.ply' would be written "
+                     "outside the output folder; expected a relative path inside it, without '..'\n"),
+            std::string::npos) << out;
+  const std::string input = " --input cloud=" + (dir.path / "patch.ply").string() + " --no-cache -q -o ";
+  EXPECT_EQ(test::run_command(kScallop + " run " + (dir.path / "escape.json").string() + input +
+                                  (dir.path / "out").string(), &out), 2) << out;
+  EXPECT_EQ(test::run_command(kScallop + " run " + (dir.path / "escape.json").string() + input +
+                                  (dir.path / "out").string() + " --set save.path=/tmp/abs.ply", &out), 2) << out;
+  EXPECT_NE(out.find("error: --set save.path=/tmp/abs.ply: node 'save': parameter 'path': '/tmp/abs.ply' is absolute: "
+                     "it would be written outside the output folder; expected a relative path inside it, without "
+                     "'..'\n"),
+            std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir.path / "escaped.ply"));
+  // a relative path is written inside -o
+  EXPECT_EQ(test::run_command(kScallop + " run " + (dir.path / "inside.json").string() + input +
+                                  (dir.path / "out").string(), &out), 0) << out;
+  EXPECT_TRUE(fs::exists(dir.path / "out" / "clouds" / "copy.ply"));
+}
+
+TEST(Cli, AGraphStringOfAnotherTypeNamesItsPath) {
+  test::TempDir dir;
+  test::write_file(dir.path / "g.json", R"({"scallop_graph": 1, "params": {"h": {"value": 0.01, "unit": 5}}, "nodes": []})");
+  std::string out;
+  EXPECT_EQ(test::run_command(kScallop + " validate " + (dir.path / "g.json").string(), &out), 2) << out;
+  EXPECT_EQ(out, "error: params.h.unit: must be a string, got a number\n1 error(s) in " + (dir.path / "g.json").string() +
+                     "\n");
 }
 
 TEST(Cli, NodesReferenceAndDot) {

@@ -320,7 +320,8 @@ TEST(CertificateHonesty, NoisyCrestMultiScaleRefusesTooSmallAScallop) {
                                      "known only to +-") +
                              median +
                              " mm (median; cloud.denoise's uncertainty), too much of the scallop height 0.05 mm to "
-                             "promise it: denoise with more neighbours, scan more finely or raise scallop_height");
+                             "promise it: denoise with more neighbours, scan more finely or raise scallop_height "
+                             "(given --set chord_error=0.01, --set scallop_height=0.05, --set tool_radius=4)");
 }
 
 }  // namespace

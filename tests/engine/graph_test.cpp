@@ -137,7 +137,41 @@ TEST(Graph, OutOfRangeThroughSetNamesTheOverride) {
   opt.sets = {"sum.times=11", "nope=1"};
   EXPECT_EQ(errors_of(kGood, opt),
             (std::vector<std::string>{"--set nope: unknown graph parameter 'nope'; expected one of: v",
-                                      "--set sum.times: node 'sum': parameter 'times' = 11 is out of range; expected 1 .. 10"}));
+                                      "--set sum.times=11: node 'sum': parameter 'times' = 11 is out of range; expected 1 .. 10"}));
+}
+
+TEST(Graph, AGraphParameterSetOutOfRangeNamesTheSetNotOnlyTheNode) {
+  // was "nodes[1].params.times: node 'sum': ...": the graph file is fine, the command line is not
+  const char* text = R"({"scallop_graph": 1, "params": {"t": {"value": 2}},
+    "nodes": [{"id": "a", "type": "test.const"},
+              {"id": "sum", "type": "test.add", "params": {"times": "$t"}, "inputs": {"a": "a.out"}}]})";
+  CompileOptions opt;
+  opt.sets = {"t=11"};
+  EXPECT_EQ(errors_of(text, opt), std::vector<std::string>{"--set t=11 (nodes[1].params.times): node 'sum': parameter "
+                                                           "'times' = 11 is out of range; expected 1 .. 10"});
+  // the plan remembers which --set gave a node's parameters, so a node that fails can say so
+  Registry reg = test::make_test_registry();
+  opt.sets = {"t=3", "a.value=5"};
+  Plan plan = compile(parse_graph(text), reg, opt);
+  EXPECT_EQ(plan.nodes[0].set_by, (std::map<std::string, std::string>{{"value", "--set a.value=5"}}));
+  EXPECT_EQ(plan.nodes[1].set_by, (std::map<std::string, std::string>{{"times", "--set t=3"}}));
+}
+
+TEST(Graph, StringMembersOfAnotherTypeNameTheirPath) {
+  // was nlohmann's "[json.exception.type_error.302] type must be string, but is number", no path
+  const char* text = R"({"scallop_graph": 1, "name": 5, "description": true,
+    "params": {"h": {"value": 0.01, "unit": 5, "description": [1, 2]}},
+    "inputs": {"cloud": {"type": 3, "description": null, "default": 7}},
+    "nodes": []})";
+  CompileOptions opt;
+  opt.require_inputs = false;
+  EXPECT_EQ(errors_of(text, opt), (std::vector<std::string>{"name: must be a string, got a number",
+                                                            "description: must be a string, got a boolean",
+                                                            "params.h.unit: must be a string, got a number",
+                                                            "params.h.description: must be a string, got an array",
+                                                            "inputs.cloud.type: must be a string, got a number",
+                                                            "inputs.cloud.description: must be a string, got null",
+                                                            "inputs.cloud.default: must be a string, got a number"}));
 }
 
 TEST(Graph, MissingGraphInput) {

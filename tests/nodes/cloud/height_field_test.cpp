@@ -112,6 +112,19 @@ TEST(HeightField, ClosedSphereIsNotAHeightField) {
             "-20.0) with a layer 40.0 mm above it; a 3-axis machine cannot reach them");
 }
 
+TEST(HeightField, ALineIsOneDimensionalBeforeAnythingElse) {
+  // a line with micron jitter: its normals tilt any way, so "walls" or "layers" would be reported
+  HeightFieldStats s;
+  s.points = 200;
+  s.spacing = 0.25;
+  s.significant_components = 1;
+  s.steep_points = 150;
+  s.extents.length = 50, s.extents.width = 0.004;
+  EXPECT_EQ(height_field_problem(s, HeightFieldLimits{}),
+            "the cloud is one-dimensional: its points lie along a line 50 mm long and 0.004 mm wide (points 0.25 mm "
+            "apart), not on a surface; scallop machines surface patches");
+}
+
 TEST(HeightField, TwoSeparatePatchesFail) {
   auto P = grid(0, 0, 30, 20, 0, 1.0);         // 31 x 21 = 651 points
   const auto Q = grid(50, 0, 20, 20, 3, 1.0);  // 21 x 21 = 441 points

@@ -98,6 +98,19 @@ TEST(TrimSteep, BadInputIsAnError) {
   EXPECT_THROW(trim_steep(std::vector<Vector3d>(P.begin(), P.begin() + 10), o), std::invalid_argument);
 }
 
+TEST(TrimSteep, ALineIsNamedOneDimensionalNotTrimmedAsSteep) {
+  // a line with micron jitter: its normals tilt any way around it, 89 % was "trimmed as steep"
+  std::vector<Vector3d> P;
+  for (int i = 0; i <= 500; ++i) P.emplace_back(0.1 * i, i % 2 ? 0.001 : -0.001, i % 3 ? 0.0005 : 0.0);
+  try {
+    trim_steep(P, TrimSteepOptions{});
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "the cloud is one-dimensional: its points lie along a line 50 mm long and 0.002 mm wide "
+                           "(points 0.1 mm apart), not on a surface; scallop machines surface patches");
+  }
+}
+
 TEST(TrimSteepNode, SaysWhatIsNotMachinedAndKeepsTheRest) {
   const NodeDecl& d = *builtin_registry().find("cloud.trim_steep");
   PointCloud pc;

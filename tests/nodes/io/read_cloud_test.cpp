@@ -513,6 +513,70 @@ TEST_F(ReadCloud, MeshMalformed) {
   EXPECT_EQ(error_of(p), p + ": line 5: file ends inside facet 0");
 }
 
+// ---------------------------------------------------------------- issue 11: BOM, trailing data, decimal commas
+
+TEST_F(ReadCloud, PlyByteOrderMarkAndDecimalCommas) {
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                           "end_header\n";
+  // the BOM made the magic word wrong: "not a PLY file"
+  expect_points(read_cloud(file("bom.ply", "\xEF\xBB\xBF" + head + "1 2 3\n")), {V(1, 2, 3)});
+  const std::string p = file("comma.ply", head + "1,5 2 3\n");
+  EXPECT_EQ(error_of(p), p + ": line 8: decimal commas are not supported; use '.'");
+}
+
+TEST_F(ReadCloud, PcdByteOrderMarkTrailingDataAndDecimalCommas) {
+  const std::string head = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n";
+  // the BOM made the first line "not a PCD file"
+  expect_points(read_cloud(file("bom.pcd", "\xEF\xBB\xBF# .PCD v0.7\n" + head + "DATA ascii\n1 2 3\n4 5 6\n")),
+                {V(1, 2, 3), V(4, 5, 6)});
+  // POINTS smaller than the data: was read silently, the rest dropped
+  std::string p = file("more.pcd", head + "DATA ascii\n1 2 3\n4 5 6\n7 8 9\n\n10 11 12\n");
+  EXPECT_EQ(error_of(p), p + ": line 12: 2 lines after the last point (2 declared): the header's POINTS is smaller "
+                             "than the data");
+  expect_points(read_cloud(file("blank.pcd", head + "DATA ascii\n1 2 3\n4 5 6\n\n \n")), {V(1, 2, 3), V(4, 5, 6)});
+  const std::string hb = head + "DATA binary\n";
+  std::string s = hb;
+  for (float f : {1.f, 2.f, 3.f, 4.f, 5.f, 6.f, 7.f, 8.f, 9.f}) s += le(f);
+  p = file("more_binary.pcd", s);
+  EXPECT_EQ(error_of(p), p + ": byte " + std::to_string(hb.size() + 24) +
+                             ": 12 bytes after the last point (2 declared): the header's POINTS is smaller than the data");
+  // binary_compressed: PCL's writer leaves bytes after the block (milk.pcd: 3913); its count is
+  // checked against the uncompressed size instead
+  expect_points(read_cloud(file("pad.pcd", compressed_pcd({V(1, 2, 3)}, {V(0, 0, 1)}) + std::string(16, '\0'))),
+                {V(1, 2, 3)});
+  p = file("comma.pcd", head + "DATA ascii\n1 2 3\n4,5 5 6\n");
+  EXPECT_EQ(error_of(p), p + ": line 11: decimal commas are not supported; use '.'");
+}
+
+TEST_F(ReadCloud, MeshByteOrderMarkTrailingDataAndDecimalCommas) {
+  // OFF: the BOM made it "not an OFF file"; counts smaller than the data dropped vertices silently
+  expect_points(read_cloud(file("bom.off", "\xEF\xBB\xBFOFF\n1 0 0\n1 2 3\n")), {V(1, 2, 3)});
+  std::string p = file("more.off", "OFF\n2 0 0\n1 2 3\n4 5 6\n7 8 9\n10 11 12\n\n");
+  EXPECT_EQ(error_of(p), p + ": line 5: 2 lines after the last declared face (2 vertices, 0 faces declared): the "
+                             "header's counts are smaller than the data");
+  p = file("more_faces.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 2 1 0\n");
+  EXPECT_EQ(error_of(p), p + ": line 7: 1 line after the last declared face (3 vertices, 1 faces declared): the "
+                             "header's counts are smaller than the data");
+  expect_points(read_cloud(file("comment.off", "OFF\n1 0 0\n1 2 3\n# end\n\n")), {V(1, 2, 3)});
+  p = file("comma.off", "OFF\n1 0 0\n1,5 2 3\n");
+  EXPECT_EQ(error_of(p), p + ": line 3: decimal commas are not supported; use '.'");
+
+  // OBJ: the BOM hid the first 'v' line, and its point was lost
+  expect_points(read_cloud(file("bom.obj", "\xEF\xBB\xBFv 1 2 3\nv 4 5 6\n")), {V(1, 2, 3), V(4, 5, 6)});
+  p = file("comma.obj", "v 1 2 3\nv 4,5 5,0 6,0\n");
+  EXPECT_EQ(error_of(p), p + ": line 2: decimal commas are not supported; use '.'");
+
+  // STL: an ASCII file with a BOM was taken for a binary one
+  const std::vector<V> square = {V(0, 0, 0), V(1, 0, 0), V(1, 1, 0), V(0, 1, 0)};
+  expect_points(read_cloud(file("bom.stl", std::string("\xEF\xBB\xBF") + kSquareAscii)), square);
+  p = file("comma.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1,5 0 0\n");
+  EXPECT_EQ(error_of(p), p + ": line 5: decimal commas are not supported; use '.'");
+  // a binary STL with more bytes than its triangle count says: was read silently
+  p = file("more.stl", square_binary("binary square") + std::string(50, '\0'));
+  EXPECT_EQ(error_of(p), p + ": byte 184: 50 bytes after the last declared triangle (2 declared): the header's count "
+                             "is smaller than the data");
+}
+
 // ---------------------------------------------------------------- dispatch
 
 TEST_F(ReadCloud, ScaleAndExtensionCase) {
@@ -602,6 +666,75 @@ TEST_F(ReadCloud, NodeReadsAndScales) {
   } catch (const NodeError& e) {
     EXPECT_EQ(std::string(e.what()), bad + ": line 2: bad number 'x' in column 3");
   }
+}
+
+// Runs io.read_cloud on `path` with `scale`; returns the cloud and fills `warnings`.
+std::shared_ptr<const PointCloud> run_read_node(const std::string& path, double scale,
+                                                std::vector<std::string>& warnings) {
+  const NodeDecl d = make_read_cloud_node();
+  NodeContext ctx(d, "scan", "part", {{"scale", scale}}, {{"file", std::make_shared<FileRef>(FileRef::open(path))}},
+                  nullptr, [&](const std::string& m) { warnings.push_back(m); });
+  d.run(ctx);
+  return std::dynamic_pointer_cast<const PointCloud>(ctx.take_outputs().at("cloud"));
+}
+
+// n x n grid of side `size` (mm), as XYZ text.
+std::string grid_xyz(int n, double size) {
+  std::string s;
+  char buf[96];
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g\n", size * i / (n - 1), size * j / (n - 1), 0.01 * size * i / n);
+      s += buf;
+    }
+  return s;
+}
+
+TEST_F(ReadCloud, NodeRefusesCoordinatesOutOfRangeAsBadInput) {
+  // 1e300 overflowed the normals' sums: "coincident or collinear" was the message
+  std::vector<std::string> warnings;
+  const std::string p = file("far.xyz", "0 0 0\n1 0 0\n1e300 2 3\n");
+  try {
+    run_read_node(p, 1, warnings);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), p + ": point 2 at (1e+300, 2, 3): coordinates out of range (beyond 1e9 mm); the "
+                                         "file is damaged or its scale is wrong");
+  }
+  // a scale can take a point there too
+  try {
+    run_read_node(file("big.xyz", "0 0 0\n2e6 0 0\n"), 1000, warnings);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), path("big.xyz") + ": point 1 at (2e+09, 0, 0): coordinates out of range (beyond "
+                                                       "1e9 mm); the file is damaged or its scale is wrong");
+  }
+  // and a malformed file is bad input too (scallop exits 2, not 1)
+  EXPECT_THROW(run_read_node(file("bad.xyz", "1 2 3\n4 5 x\n"), 1, warnings), InputError);
+}
+
+TEST_F(ReadCloud, NodeWarnsWhenTheCloudDoesNotLookLikeMillimetres) {
+  std::vector<std::string> warnings;
+  // a 100 mm part written in metres: 0.1 across, points 0.00204 apart
+  auto cloud = run_read_node(file("metres.xyz", grid_xyz(50, 0.1)), 1, warnings);
+  EXPECT_EQ(cloud->size(), 2500u);
+  EXPECT_EQ(warnings, std::vector<std::string>{"the cloud is 0.1 mm across with points 0.00204 mm apart: is it in "
+                                               "metres? coordinates are read as mm; set scan.scale to 1000"});
+  // 2 m across in metres, densely scanned in one corner: only the spacing gives it away
+  warnings.clear();
+  run_read_node(file("fine.xyz", grid_xyz(30, 0.01) + "2 0 0\n"), 1, warnings);
+  EXPECT_EQ(warnings, std::vector<std::string>{"the cloud is 2 mm across with points 0.000345 mm apart: is it in "
+                                               "metres? coordinates are read as mm; set scan.scale to 1000"});
+  // micrometres: a 100 mm part with 50 x 50 points is 1e5 across, points 2040 apart
+  warnings.clear();
+  run_read_node(file("microns.xyz", grid_xyz(50, 1e5)), 1, warnings);
+  EXPECT_EQ(warnings, std::vector<std::string>{"the cloud is 1e+05 mm across with points 2.04e+03 mm apart: is it in "
+                                               "micrometres? coordinates are read as mm; set scan.scale to 0.001"});
+  // the same part scaled right, and a part in mm: nothing to say
+  warnings.clear();
+  run_read_node(path("metres.xyz"), 1000, warnings);
+  run_read_node(file("mm.xyz", grid_xyz(50, 100)), 1, warnings);
+  EXPECT_EQ(warnings, std::vector<std::string>{});
 }
 
 // ---------------------------------------------------------------- real data

@@ -117,10 +117,13 @@ TEST_F(WriteCloud, Errors) {
   EXPECT_FALSE(fs::exists(path("n.ply")));
 }
 
-// Runs the io.write_cloud node on `cloud` with `params`; returns its File output.
-std::shared_ptr<const FileRef> run_node(const PointCloud& cloud, const nlohmann::json& params) {
+// Runs the io.write_cloud node on `cloud` with `params` and output folder `out_dir`; returns its
+// File output.
+std::shared_ptr<const FileRef> run_node(const PointCloud& cloud, const nlohmann::json& params,
+                                        const std::string& out_dir) {
   const NodeDecl d = make_write_cloud_node();
   NodeContext ctx(d, "write", "part", params, {{"cloud", std::make_shared<PointCloud>(cloud)}}, nullptr);
+  ctx.set_output_dir(out_dir);
   d.run(ctx);
   return std::dynamic_pointer_cast<const FileRef>(ctx.take_outputs().at("file"));
 }
@@ -140,7 +143,7 @@ TEST_F(WriteCloud, NodeDeclaration) {
 
 TEST_F(WriteCloud, NodeWritesAndReturnsTheFile) {
   const PointCloud c = two_points(true);
-  auto f = run_node(c, {{"path", path("out.ply")}, {"binary", false}});
+  auto f = run_node(c, {{"path", "out.ply"}, {"binary", false}}, dir_.string());
   ASSERT_TRUE(f);
   EXPECT_EQ(f->path, path("out.ply"));
   EXPECT_EQ(f->content_hash.size(), 32u);
@@ -149,24 +152,45 @@ TEST_F(WriteCloud, NodeWritesAndReturnsTheFile) {
   EXPECT_EQ(r.points[0], c.points[0]);
   EXPECT_EQ(r.normals[1], c.normals[1]);
   // Same cloud, binary: a different file, so a different content hash.
-  auto g = run_node(c, {{"path", path("out.ply")}, {"binary", true}});
+  auto g = run_node(c, {{"path", "out.ply"}, {"binary", true}}, dir_.string());
+  // a relative path with folders: they are made inside the output folder
+  auto h = run_node(c, {{"path", "sub/dir/out.ply"}, {"binary", true}}, dir_.string());
+  EXPECT_EQ(h->path, path("sub/dir/out.ply"));
+  EXPECT_EQ(h->content_hash, g->content_hash);
   EXPECT_NE(g->content_hash, f->content_hash);
 }
 
 TEST_F(WriteCloud, NodeErrors) {
   try {
-    run_node(two_points(false), {{"path", ""}, {"binary", true}});
+    run_node(two_points(false), {{"path", ""}, {"binary", true}}, dir_.string());
     ADD_FAILURE() << "no error";
   } catch (const NodeError& e) {
     EXPECT_EQ(std::string(e.what()), "parameter 'path' is empty: give the file to write");
   }
-  const std::string bad = path("missing/x.ply");
+  // a file where a folder should be
+  std::ofstream(path("file")) << "x";
   try {
-    run_node(two_points(false), {{"path", bad}, {"binary", true}});
+    run_node(two_points(false), {{"path", "file/x.ply"}, {"binary", true}}, dir_.string());
     ADD_FAILURE() << "no error";
   } catch (const NodeError& e) {
-    EXPECT_EQ(std::string(e.what()), "cannot write '" + bad + "': No such file or directory");
+    EXPECT_EQ(std::string(e.what()), "cannot create folder '" + path("file") + "': Not a directory");
   }
+  // paths that would leave the output folder (issue 11): refused, nothing written
+  fs::create_directories(path("out"));
+  for (const auto& [bad, why] :
+       {std::pair<std::string, std::string>{"../x.ply", "'../x.ply' would be written outside the output folder"},
+        {"a/../../x.ply", "'a/../../x.ply' would be written outside the output folder"},
+        {path("abs.ply"), "'" + path("abs.ply") + "' is absolute: it would be written outside the output folder"},
+        {".", "'.' names the output folder itself, not a file in it"}}) {
+    try {
+      run_node(two_points(false), {{"path", bad}, {"binary", true}}, path("out"));
+      ADD_FAILURE() << "no error for " << bad;
+    } catch (const NodeError& e) {
+      EXPECT_EQ(std::string(e.what()), "parameter 'path': " + why + "; expected a relative path inside it, without '..'");
+    }
+  }
+  EXPECT_FALSE(fs::exists(path("x.ply")));
+  EXPECT_FALSE(fs::exists(path("abs.ply")));
 }
 
 }  // namespace

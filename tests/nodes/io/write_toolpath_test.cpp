@@ -8,7 +8,13 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "engine/node.h"
+#include "nodes/types/document.h"
+#include "tests/test_support.h"
+
 namespace scallop {
+NodeDecl make_write_toolpath_node();
+
 namespace {
 
 Toolpath two_passes() {
@@ -63,6 +69,33 @@ TEST(WriteToolpath, BadFormatAndPath) {
     EXPECT_STREQ(e.what(), "unknown tool path format 'xml' (json or csv)");
   }
   EXPECT_THROW(write_toolpath(two_passes(), "/nonexistent-dir/x.csv", "csv"), std::runtime_error);
+}
+
+// The node writes inside the run's output folder and refuses a path that would leave it (issue 11).
+TEST(WriteToolpath, NodeWritesInsideTheOutputFolderOnly) {
+  test::TempDir dir;
+  const NodeDecl d = make_write_toolpath_node();
+  auto run = [&](const std::string& path) {
+    NodeContext ctx(d, "export", "part", {{"path", path}, {"format", "csv"}},
+                    {{"path", std::make_shared<Toolpath>(two_passes())}}, nullptr);
+    ctx.set_output_dir((dir.path / "out").string());
+    d.run(ctx);
+    return std::dynamic_pointer_cast<const Report>(ctx.take_outputs().at("report"))->data;
+  };
+  const auto report = run("paths/toolpath.csv");
+  EXPECT_EQ(report["file"], (dir.path / "out" / "paths" / "toolpath.csv").string());
+  EXPECT_TRUE(std::filesystem::exists(dir.path / "out" / "paths" / "toolpath.csv"));
+  for (const auto& [bad, why] :
+       {std::pair<std::string, std::string>{"../x.csv", "'../x.csv' would be written outside the output folder"},
+        {"/tmp/x.csv", "'/tmp/x.csv' is absolute: it would be written outside the output folder"}}) {
+    try {
+      run(bad);
+      ADD_FAILURE() << "no error for " << bad;
+    } catch (const NodeError& e) {
+      EXPECT_EQ(std::string(e.what()), "parameter 'path': " + why + "; expected a relative path inside it, without '..'");
+    }
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.path / "x.csv"));
 }
 
 }  // namespace
