@@ -787,6 +787,41 @@ void check_options(const IsoparametricOptions& o) {
                                 fmt(o.conformal_tolerance) + ")");
 }
 
+// How much a plan will take, estimated before planning from the cloud's area and the side interval
+// on a plane at the median uncertainty: lower bounds (curvature only shortens the intervals).
+struct WorkEstimate {
+  double area = 0;           // mm^2: sum over the points of pi D^2 / k, D the k-th neighbour's distance
+  double side_interval = 0;  // mm
+  double side_extent = 0;    // mm the passes are stepped across: the rectangle's edges along u, or
+                             // the disk's perimeter / 2 pi
+  double passes = 0, length = 0, points = 0;  // passes: lines, ceil(extent / interval) + 1;
+                                               // length = area / interval, points = length / max_segment
+};
+
+WorkEstimate estimate_work(const PointCloud& cloud, const Neighborhoods& nb, const UVMap& map,
+                           const IsoparametricOptions& o, const Margins& m) {
+  WorkEstimate w;
+  if (nb.k > 0)
+    for (std::size_t i = 0; i < nb.size(); ++i) w.area += M_PI * nb.sq_dist(i, nb.k - 1) / nb.k;
+  const double h = o.scallop_height * o.safety_factor;
+  w.side_interval = side_interval(std::max(m.scallop - m.stock, 0.1 * h), o.tool_radius, 0);
+  const std::size_t n = map.outer_loop.size();
+  double along_u = 0, perimeter = 0;
+  for (std::size_t k = 0; k < n && map.boundary_uv.size() == n; ++k) {
+    const int a = map.outer_loop[k], b = map.outer_loop[(k + 1) % n];
+    if (a < 0 || b < 0 || static_cast<std::size_t>(std::max(a, b)) >= cloud.size()) continue;
+    const double len = (cloud.points[a] - cloud.points[b]).norm();
+    perimeter += len;
+    const Eigen::Vector2d d = map.boundary_uv[(k + 1) % n] - map.boundary_uv[k];
+    if (std::abs(d.x()) > std::abs(d.y())) along_u += len;
+  }
+  w.side_extent = map.domain == "disk" ? perimeter / (2 * M_PI) : along_u / 2;
+  w.passes = std::ceil(w.side_extent / w.side_interval) + 1;  // pass lines, both ends included
+  w.length = w.area / w.side_interval;
+  w.points = w.length / o.max_segment;
+  return w;
+}
+
 }  // namespace
 
 IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborhoods& neighbors,
@@ -853,6 +888,14 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
         "the cloud's surface is known only to +-" + fmt(delta_median) + " mm (median; cloud.denoise's "
         "uncertainty), too much of the scallop height " + fmt(o.scallop_height) +
         " mm to promise it: denoise with more neighbours, scan more finely or raise scallop_height");
+  const WorkEstimate work = estimate_work(cloud, neighbors, map, o, margins(o, delta_median));
+  if (work.passes > o.max_passes)
+    throw std::invalid_argument(
+        "these limits need at least " + fmt(work.passes) + " passes (a side interval of " +
+        fmt(work.side_interval) + " mm across a patch " + fmt(work.side_extent) +
+        " mm wide; at least " + fmt(std::round(work.points)) + " points), more than max_passes " +
+        std::to_string(o.max_passes) + ": raise scallop_height or tool_radius, or max_passes if "
+        "the time is worth it (planning takes roughly 0.01 to 0.2 s per pass)");
   const UVInterpolator interp(cloud.points, cloud.normals, map.uv, domain, o.interpolation_k,
                               cloud.has_uncertainty() ? &cloud.uncertainty : nullptr);
   const BallLifter lifter(cloud.points, o.tool_radius);
@@ -1078,6 +1121,9 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
                          {"fit_gap_max", planner.fit_gap_max()}}},
       {"passes", passes.size()},
       {"outline_passes", outline.size()},
+      {"estimate", {{"passes", work.passes}, {"points_at_least", work.points},
+                    {"side_interval", work.side_interval}, {"side_extent", work.side_extent},
+                    {"area", work.area}}},
       {"points", points},
       {"contact_length", length},
       {"cloud_spacing", cloud_spacing},

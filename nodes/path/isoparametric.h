@@ -67,8 +67,10 @@ struct IsoparametricOptions {
   bool outline = true;               // a last closed pass through the outline's own points
   // Bounds on the work (a degenerate map or a noisy cloud makes the steps vanish): more passes
   // or points than these, or more than min(200000, max_points) points in one pass, stop the
-  // planner with std::invalid_argument saying where and why.
-  std::size_t max_passes = 20000;
+  // planner with std::invalid_argument saying where and why. More passes than max_passes
+  // estimated before planning (the report's "estimate": the side interval on a plane across the
+  // patch) refuse at once, with the estimate.
+  std::size_t max_passes = 5000;
   std::size_t max_points = 5000000;
   std::function<void(double, const std::string&)> progress;  // optional
 };

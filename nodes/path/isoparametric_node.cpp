@@ -49,6 +49,9 @@ NodeDecl make_isoparametric_node() {
                    "the corrected formula (4) instead of (3)")
       .param_float("max_segment", 5.0, 1e-3, 1e3, "mm", "longest forward step")
       .param_int("interpolation_k", 20, 6, 64, "", "neighbours per local (u,v) fit")
+      .param_int("max_passes", 5000, 1, 1000000, "",
+                 "the work budget: more passes than this, estimated before planning (or met "
+                 "while planning), refuse with the estimate")
       .param_bool("outline", true,
                   "a last closed pass through the outline's own points, so the rim between pass "
                   "ends and the outline's corners are cut");
@@ -67,6 +70,7 @@ NodeDecl make_isoparametric_node() {
     o.max_segment = ctx.number("max_segment");
     o.interpolation_k = static_cast<int>(ctx.integer("interpolation_k"));
     o.outline = ctx.flag("outline");
+    o.max_passes = static_cast<std::size_t>(ctx.integer("max_passes"));
     o.progress = [&ctx](double f, const std::string& m) { ctx.progress(f, m); };
     IsoparametricResult res;
     try {

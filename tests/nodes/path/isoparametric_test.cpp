@@ -262,6 +262,26 @@ TEST(Isoparametric, AHoleIsNotCutItsEdgeIsAndTheWholePatchStaysUnderTheLimit) {
   }
 }
 
+// The work is estimated before planning and refused over the budget: on the 30 x 20 plane with
+// r = 3, h = 0.01 the side interval on a plane is sqrt(8 r h) = 0.489898 mm, so at least
+// ceil(30 / 0.489898) + 1 = 63 passes; with max_passes 62 the planner says so at once, with 63 it
+// plans them.
+TEST(Isoparametric, WorkOverTheBudgetIsRefusedBeforePlanningWithTheEstimate) {
+  const Input in = flat();
+  IsoparametricOptions o;
+  o.tool_radius = 3;
+  o.scallop_height = 0.01;
+  o.chord_error = 0.005;
+  o.max_passes = 62;
+  const std::string e = error_of(in, o);
+  EXPECT_EQ(e.rfind("these limits need at least 63 passes (a side interval of 0.489898 mm across a patch 30 mm wide; at least ", 0), 0u) << e;
+  EXPECT_NE(e.find(" points), more than max_passes 62: raise scallop_height or tool_radius, or max_passes if the time is worth it"), std::string::npos) << e;
+  o.max_passes = 63;
+  const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  EXPECT_EQ(res.report["estimate"]["passes"], 63);
+  EXPECT_EQ(res.report["passes"], 63);
+}
+
 // A surface known only to +-delta: on a flat patch the margins have closed forms. With r = 3,
 // h = 0.01, e = 0.005 and delta = 0.004: the chord overcut allowed is max(e/4, 0.9 e - delta) =
 // 0.00125, the ball is kept stock = 0.00125 + 1.5 delta - 0.9 e = 0.00275 above the estimate, and
@@ -527,7 +547,7 @@ TEST(Isoparametric, NodeRunsAndReportsErrors) {
                            {"safety_factor", 1.0},     {"surface_error", 0.0},
                            {"conformal_tolerance", 5.0},
                            {"max_segment", 5.0},       {"interpolation_k", 20},
-                           {"outline", true}};
+                           {"max_passes", 5000},       {"outline", true}};
   auto in = std::make_shared<Input>(flat(6, 4));
   std::map<std::string, ValuePtr> inputs = {
       {"cloud", std::make_shared<PointCloud>(in->cloud)},
@@ -562,25 +582,32 @@ TEST(Isoparametric, NodeRunsAndReportsErrors) {
 // A degenerate map (or a noisy cloud) makes the steps vanish: the planner must stop with a clear
 // error rather than run on, and report progress while it works.
 TEST(Isoparametric, StopsWithAClearErrorWhenThePathNeedsTooManyPasses) {
-  const Input in = flat();
+  // a convex cylinder z = -x^2 / 20: curvature shortens the side interval below the estimate
+  // made on a plane, so a budget of the estimate passes the check before planning and is met
+  // while planning
+  const Input in = rect_patch(30, 20, 0.5, [](double x, double) { return -x * x / 20; },
+                              [](double x, double) { return Eigen::Vector2d(-x / 10, 0); });
   IsoparametricOptions o;
   o.tool_radius = 3;
   o.scallop_height = 0.01;
   o.chord_error = 0.005;
+  const IsoparametricResult full = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  const auto estimate = full.report["estimate"]["passes"].get<std::size_t>();
+  ASSERT_LT(estimate, full.report["passes"].get<std::size_t>());
   int calls = 0;
   o.progress = [&](double f, const std::string&) {
     EXPECT_GE(f, 0);
     EXPECT_LE(f, 1);
     ++calls;
   };
-  o.max_passes = 5;  // the flat patch needs 31
+  o.max_passes = estimate;
   const std::string e = error_of(in, o);
-  EXPECT_NE(e.find("the path needs more than 5 passes (stopped at s = "), std::string::npos) << e;
+  EXPECT_NE(e.find("the path needs more than " + std::to_string(estimate) + " passes (stopped at s = "), std::string::npos) << e;
   EXPECT_NE(e.find("the UV map is degenerate or the cloud too noisy"), std::string::npos) << e;
   EXPECT_GT(calls, 0);
 
   o.max_passes = 20000;
-  o.max_points = 50;  // 31 passes of 5 points
+  o.max_points = 50;
   const std::string e2 = error_of(in, o);
   EXPECT_NE(e2.find("the path needs more than 50 points"), std::string::npos) << e2;
 
