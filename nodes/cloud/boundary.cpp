@@ -1,4 +1,5 @@
 #include "nodes/cloud/boundary.h"
+#include "nodes/parallel_progress.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -34,7 +35,8 @@ double largest_angular_gap(const std::vector<Eigen::Vector3d>& P, const Eigen::V
 
 std::vector<std::uint8_t> detect_boundary(const std::vector<Eigen::Vector3d>& P,
                                           const std::vector<Eigen::Vector3d>& N,
-                                          const Neighborhoods& nbrs, double angle, bool clean) {
+                                          const Neighborhoods& nbrs, double angle, bool clean,
+                                          const std::function<void(double)>& progress) {
   const std::size_t n = P.size();
   if (N.size() != n)
     throw std::invalid_argument("boundary detection needs normals (the cloud has " +
@@ -51,6 +53,7 @@ std::vector<std::uint8_t> detect_boundary(const std::vector<Eigen::Vector3d>& P,
       throw std::invalid_argument("a neighbour index is out of range");
 
   std::vector<std::uint8_t> b(n, 0);
+  ParallelProgress done(progress, n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
     std::vector<int> ring;
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -65,6 +68,7 @@ std::vector<std::uint8_t> detect_boundary(const std::vector<Eigen::Vector3d>& P,
       ring.erase(std::remove(ring.begin(), ring.end(), static_cast<int>(i)), ring.end());
       b[i] = largest_angular_gap(P, N[i], i, ring) > angle ? 1 : 0;
     }
+    done.done(r.size());  // the cleaning pass below is quick
   });
   if (!clean) return b;
 

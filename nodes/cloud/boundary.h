@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "nodes/types/cloud.h"
@@ -27,10 +28,12 @@ namespace scallop {
 // near 180 degrees on the boundary, so it rejects the false positives; the one-ring test keeps
 // the flagged band thin (only points within ~0.7 neighbour radius of the edge pass it).
 // A point is on the boundary when both gaps exceed `angle`.
+// progress: optional, called with the fraction done, in [0, 1].
 // Throws std::invalid_argument for mismatched sizes (normals missing), k < 3 or bad indices.
 std::vector<std::uint8_t> detect_boundary(const std::vector<Eigen::Vector3d>& P,
                                           const std::vector<Eigen::Vector3d>& N,
-                                          const Neighborhoods& nbrs, double angle, bool clean = true);
+                                          const Neighborhoods& nbrs, double angle, bool clean = true,
+                                          const std::function<void(double)>& progress = {});
 
 // The largest angular gap (radians, in [0, 2 pi]) between the directions from P[i] to the points
 // `around`, projected on the plane through P[i] normal to `normal`; 2 pi when no point has a

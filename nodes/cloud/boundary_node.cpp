@@ -27,7 +27,8 @@ NodeDecl make_boundary_node() {
     BoundaryLoops out;
     try {
       out.is_boundary = detect_boundary(cloud->points, cloud->normals, *nbrs,
-                                        ctx.number("angle") * std::numbers::pi / 180, ctx.flag("clean"));
+                                        ctx.number("angle") * std::numbers::pi / 180, ctx.flag("clean"),
+                                        [&ctx](double f) { ctx.progress(f); });
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }

@@ -1,4 +1,5 @@
 #include "nodes/cloud/denoise.h"
+#include "nodes/parallel_progress.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -287,7 +288,6 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
   const int iterations = o.iterations;
   std::vector<Vector3d> next(n), next_normals(n);
   std::vector<double> spread(n, 0.0);
-  std::mutex progress_lock;
 
   struct Scratch {
     std::vector<int> idx;
@@ -445,7 +445,9 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
       chosen[i] = static_cast<int>(ks.size() - 1 - keep);
       return fits[keep];
     };
-    std::atomic<std::size_t> kept{0}, done{0};
+    std::atomic<std::size_t> kept{0};
+    ParallelProgress done(progress, n, static_cast<double>(it) / iterations,
+                          static_cast<double>(it + 1) / iterations);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const auto& range) {
       Scratch& s = scratch.local();
       std::size_t kept_here = 0;
@@ -455,12 +457,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
         if (!p.moved) ++kept_here;
       }
       kept += kept_here;
-      const std::size_t d = done += range.size();
-      // The callback need not be thread-safe: one thread reports at a time, the others skip.
-      if (progress && progress_lock.try_lock()) {
-        progress((it + static_cast<double>(d) / n) / iterations);
-        progress_lock.unlock();
-      }
+      done.done(range.size());
     });
     // Near the rim of the cloud the neighbourhood is one-sided: half (a quarter at a corner) of
     // the points, and an offset extrapolated to the edge of the fit, so the projected point is

@@ -1,4 +1,5 @@
 #include "nodes/cloud/knn.h"
+#include "nodes/parallel_progress.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -122,7 +123,8 @@ int KnnIndex::nearest(const Eigen::Vector3d& q) const {
   return i;
 }
 
-Neighborhoods compute_knn(const std::vector<Eigen::Vector3d>& P, int k) {
+Neighborhoods compute_knn(const std::vector<Eigen::Vector3d>& P, int k,
+                          const std::function<void(double)>& progress) {
   if (k < 1) throw std::invalid_argument("k must be at least 1 (got " + std::to_string(k) + ")");
   if (static_cast<std::size_t>(k) >= P.size())
     throw std::invalid_argument("k = " + std::to_string(k) + " needs at least " +
@@ -142,6 +144,7 @@ Neighborhoods compute_knn(const std::vector<Eigen::Vector3d>& P, int k) {
   // leaves, which keeps the walk in cache. On a cloud stored in scan or random order this is
   // several times faster than querying in index order.
   const auto& order = tree.vAcc;
+  ParallelProgress done(progress, P.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 1024),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t q = r.begin(); q != r.end(); ++q) {
@@ -150,6 +153,7 @@ Neighborhoods compute_knn(const std::vector<Eigen::Vector3d>& P, int k) {
                                                 &out.indices[i * k], &out.sq_dists[i * k]);
                         tree.findNeighbors(result, P[i].data(), nanoflann::SearchParams());
                       }
+                      done.done(r.size());
                     });
   return out;
 }

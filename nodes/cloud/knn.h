@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <functional>
 #include <vector>
 
 #include "nodes/types/cloud.h"
@@ -20,7 +21,9 @@ namespace scallop {
 // duplicate of a point is its neighbour at squared distance 0.
 // Throws std::invalid_argument for k < 1, k >= #P ("k = 12 needs at least 13 points; the cloud
 // has 5"), #P >= 2^31, or a non-finite coordinate.
-Neighborhoods compute_knn(const std::vector<Eigen::Vector3d>& P, int k);
+// progress  optional, called with the fraction of the queries done, in [0, 1].
+Neighborhoods compute_knn(const std::vector<Eigen::Vector3d>& P, int k,
+                          const std::function<void(double)>& progress = {});
 
 // A k-d tree over fixed points for queries at arbitrary positions (e.g. projecting tool
 // positions onto the cloud). Keeps a reference to P: P must outlive the index and not change.

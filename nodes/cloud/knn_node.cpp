@@ -18,7 +18,8 @@ NodeDecl make_knn_node() {
     auto cloud = ctx.input<PointCloud>("cloud");
     if (cloud->size() == 0) throw NodeError("the cloud is empty");
     try {
-      ctx.set("neighbors", compute_knn(cloud->points, static_cast<int>(ctx.integer("k"))));
+      ctx.set("neighbors", compute_knn(cloud->points, static_cast<int>(ctx.integer("k")),
+                                       [&ctx](double f) { ctx.progress(f); }));
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }

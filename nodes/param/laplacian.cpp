@@ -1,4 +1,5 @@
 #include "nodes/param/laplacian.h"
+#include "nodes/parallel_progress.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -86,7 +87,8 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<E
                                                              const std::vector<Eigen::Vector3d>& N,
                                                              const Neighborhoods& nbrs,
                                                              LaplacianScheme scheme, double t,
-                                                             double regularization) {
+                                                             double regularization,
+                                                             const std::function<void(double)>& progress) {
   const std::size_t n = P.size();
   const int k = nbrs.k;
   if (n == 0) throw std::invalid_argument("the cloud is empty");
@@ -113,6 +115,7 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<E
   if (scheme == LaplacianScheme::Heat && !(t > 0)) t = 1.0;  // all points coincide: any t works
 
   std::vector<double> W(n * static_cast<std::size_t>(k));
+  ParallelProgress done(progress, n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
     Eigen::VectorXd w(k);
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -134,6 +137,7 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<E
       }
       for (int j = 0; j < k; ++j) W[i * k + j] = w(j) / s;
     }
+    done.done(r.size());
   });
 
   Eigen::SparseMatrix<double, Eigen::RowMajor> L(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));

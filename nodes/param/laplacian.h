@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -42,12 +43,14 @@ double mean_sq_neighbor_distance(const Neighborhoods& nbrs);
 // constraints sum_j w_j d_j = 0, sum_j w_j = 1. The projection gives linear precision: on a
 // plane, sum_j w_ij p_j = p_i exactly, so affine functions are harmonic. It is skipped when the
 // neighbours are (nearly) collinear in the tangent plane.
+// progress: optional, called with the fraction of the rows done, in [0, 1].
 // Throws std::invalid_argument for mismatched sizes, k too small, bad indices, non-finite
 // positions or a non-positive regularization.
 Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<Eigen::Vector3d>& P,
                                                              const std::vector<Eigen::Vector3d>& N,
                                                              const Neighborhoods& nbrs,
                                                              LaplacianScheme scheme, double t = 0,
-                                                             double regularization = 1e-3);
+                                                             double regularization = 1e-3,
+                                                             const std::function<void(double)>& progress = {});
 
 }  // namespace scallop

@@ -29,7 +29,8 @@ NodeDecl make_laplacian_node() {
       LaplacianScheme s = parse_laplacian_scheme(ctx.text("scheme"));
       out.scheme = to_string(s);
       out.L = build_laplacian(cloud->points, cloud->has_normals() ? cloud->normals : std::vector<Eigen::Vector3d>{},
-                              *nbrs, s, ctx.number("t"), ctx.number("regularization"));
+                              *nbrs, s, ctx.number("t"), ctx.number("regularization"),
+                              [&ctx](double f) { ctx.progress(f); });
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }
