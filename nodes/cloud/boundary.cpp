@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "nodes/param/tangent_frame.h"
+#include "nodes/geom/tangent_frame.h"
 
 namespace scallop {
 

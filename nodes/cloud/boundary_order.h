@@ -45,9 +45,4 @@ std::vector<std::vector<int>> order_boundary_loops(const std::vector<Eigen::Vect
 double projected_loop_area(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& loop,
                            const Eigen::Vector3d& c, const Eigen::Vector3d& n);
 
-// Least-squares plane of P: centroid c and unit normal n (smallest principal direction),
-// oriented along the sum of N when N is not empty, else with n_z >= 0.
-void best_fit_plane(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
-                    Eigen::Vector3d& c, Eigen::Vector3d& n);
-
 }  // namespace scallop

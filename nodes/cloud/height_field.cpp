@@ -14,7 +14,7 @@
 #include <string>
 
 #include "nodes/cloud/knn.h"
-#include "nodes/cloud/kd_tree.h"
+#include "nodes/geom/kd_tree.h"
 
 namespace scallop {
 

@@ -11,7 +11,7 @@
 #include <nanoflann.hpp>
 #include <stdexcept>
 #include <string>
-#include "nodes/cloud/kd_tree.h"
+#include "nodes/geom/kd_tree.h"
 
 namespace scallop {
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "nodes/cloud/kd_tree.h"
+#include "nodes/geom/kd_tree.h"
 
 namespace scallop {
 namespace {

@@ -9,8 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "nodes/cloud/boundary_order.h"
 #include "nodes/cloud/knn.h"
+#include "nodes/geom/best_fit_plane.h"
 
 namespace scallop {
 

@@ -11,7 +11,7 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "nodes/param/tangent_frame.h"
+#include "nodes/geom/tangent_frame.h"
 
 namespace scallop {
 

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "nodes/param/tangent_frame.h"
+#include "nodes/geom/tangent_frame.h"
 
 namespace scallop {
 

@@ -11,23 +11,23 @@
 #include <stdexcept>
 #include <string>
 
-#include "nodes/cloud/kd_tree.h"
+#include "nodes/geom/kd_tree.h"
 
 namespace scallop {
 
 struct BallClearance::Impl {
-  const HeightField& surface;
+  const HeightFieldModel& surface;
   const std::vector<Eigen::Vector3d>& points;
   double r;
   PointsAdaptor<Eigen::Vector3d> adaptor{points};
   KdTree<Eigen::Vector3d, 2> tree{2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
-  Impl(const HeightField& s, const std::vector<Eigen::Vector3d>& p, double radius)
+  Impl(const HeightFieldModel& s, const std::vector<Eigen::Vector3d>& p, double radius)
       : surface(s), points(p), r(radius) {
     tree.buildIndex();
   }
 };
 
-BallClearance::BallClearance(const HeightField& surface, const std::vector<Eigen::Vector3d>& points,
+BallClearance::BallClearance(const HeightFieldModel& surface, const std::vector<Eigen::Vector3d>& points,
                              double r)
     : impl_(nullptr) {
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");

@@ -7,7 +7,7 @@
 // where the map squeezes a narrow spike, at a sparse steep rim) a contact point can be off the
 // surface by more than the chord budget and the ball cuts into the part. The guard measures each
 // ball centre c against two independent witnesses: the height field fitted to the cloud in xy
-// (HeightField, what post.simulate certifies against), via the foot point of c on it, and the
+// (HeightFieldModel, what post.simulate certifies against), via the foot point of c on it, and the
 // cloud's points themselves within r of c. clearance(c) = distance to the surface − r, and the
 // ball must clear the surface by its uncertainty δ there (0 on a clean cloud; grown beyond the
 // cloud's edge, where the field is extrapolated): the real surface may be δ higher. A position
@@ -25,7 +25,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
-#include "nodes/cloud/surface_fit.h"
+#include "nodes/geom/height_field_model.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
@@ -34,7 +34,7 @@ namespace scallop {
 class BallClearance {
  public:
   // surface  the height field of `points`; points  the cloud (mm). Both must outlive this.
-  BallClearance(const HeightField& surface, const std::vector<Eigen::Vector3d>& points, double r);
+  BallClearance(const HeightFieldModel& surface, const std::vector<Eigen::Vector3d>& points, double r);
   ~BallClearance();
   BallClearance(const BallClearance&) = delete;
   BallClearance& operator=(const BallClearance&) = delete;

@@ -1,7 +1,7 @@
 #include <stdexcept>
 
 #include "engine/node.h"
-#include "nodes/cloud/surface_fit.h"
+#include "nodes/geom/height_field_model.h"
 #include "nodes/path/gouge_guard.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
@@ -40,7 +40,7 @@ NodeDecl make_gouge_guard_node() {
     o.max_splits = static_cast<int>(ctx.integer("max_splits"));
     o.progress = [&ctx](double f) { ctx.progress(f, "checking the ball against the surface"); };
     try {
-      HeightField surface(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
+      HeightFieldModel surface(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
       BallClearance clearance(surface, cloud->points, path->tool_radius);
       auto res = guard_gouges(*path, clearance, o);
       for (const auto& w : res.report["warnings"]) ctx.warn(w.get<std::string>());  // lifts, in one line each

@@ -14,10 +14,10 @@
 #include <unordered_map>
 #include <vector>
 
-#include "nodes/cloud/surface_fit.h"
+#include "nodes/geom/height_field_model.h"
 #include "nodes/path/step_size.h"
 #include "nodes/path/uv_interpolation.h"
-#include "nodes/cloud/kd_tree.h"
+#include "nodes/geom/kd_tree.h"
 
 namespace scallop {
 
@@ -192,7 +192,7 @@ bool too_uncertain(const IsoparametricOptions& o, const Margins& m) {
 class Planner {
  public:
   // model  the cloud's height field (post.simulate's model), or null
-  Planner(const UVInterpolator& f, const BallLifter& lifter, const HeightField* model, Coords co,
+  Planner(const UVInterpolator& f, const BallLifter& lifter, const HeightFieldModel* model, Coords co,
           const IsoparametricOptions& o, const Holes& holes)
       : f_(f), lifter_(lifter), model_(model), holes_(holes), co_(co), o_(o), r_(o.tool_radius),
         h_(o.scallop_height * o.safety_factor),
@@ -693,7 +693,7 @@ class Planner {
  private:
   const UVInterpolator& f_;
   const BallLifter& lifter_;
-  const HeightField* model_;
+  const HeightFieldModel* model_;
   const Holes& holes_;
   mutable std::atomic<double> fit_gap_max_{0};
   Coords co_;
@@ -899,7 +899,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   const UVInterpolator interp(cloud.points, cloud.normals, map.uv, domain, o.interpolation_k,
                               cloud.has_uncertainty() ? &cloud.uncertainty : nullptr);
   const BallLifter lifter(cloud.points, o.tool_radius);
-  const HeightField model(cloud.points, 20);
+  const HeightFieldModel model(cloud.points, 20);
   // The holes: every loop after the outer one, as the polygon of its points' uv.
   Holes holes;
   std::vector<const std::vector<int>*> hole_loops;

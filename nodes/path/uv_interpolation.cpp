@@ -9,7 +9,7 @@
 #include <nanoflann.hpp>
 #include <stdexcept>
 #include <string>
-#include "nodes/cloud/kd_tree.h"
+#include "nodes/geom/kd_tree.h"
 
 namespace scallop {
 

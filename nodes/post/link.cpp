@@ -7,7 +7,7 @@
 #include <nanoflann.hpp>
 #include <stdexcept>
 #include <string>
-#include "nodes/cloud/kd_tree.h"
+#include "nodes/geom/kd_tree.h"
 
 namespace scallop {
 namespace {
@@ -54,7 +54,7 @@ double largest_stepover(const Toolpath& path) {
 }
 
 LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>& surface_in,
-                       const LinkOptions& o, const HeightField* model) {
+                       const LinkOptions& o, const HeightFieldModel* model) {
   path.check_passes();
   const double r = path.tool_radius;
   std::vector<Eigen::Vector3d> own;

@@ -11,7 +11,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "nodes/cloud/surface_fit.h"
+#include "nodes/geom/height_field_model.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
@@ -34,7 +34,7 @@ struct LinkOptions {
 // do not match its points, or non-finite coordinates, and std::runtime_error (saying where) when a
 // pass rises more than 10 r + the surface's height range above the surface's highest point.
 LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>& surface,
-                       const LinkOptions& options, const HeightField* model = nullptr);
+                       const LinkOptions& options, const HeightFieldModel* model = nullptr);
 
 // Largest distance between consecutive passes: for each pair, the distance from the middle point
 // of the later pass to the nearest contact point of the earlier one (mm); 0 for a single pass.

@@ -31,9 +31,9 @@ NodeDecl make_link_node() {
     o.lead_height = ctx.number("lead_height");
     o.tolerance = ctx.number("tolerance");
     try {
-      std::unique_ptr<HeightField> model;  // what the certificate measures against
+      std::unique_ptr<HeightFieldModel> model;  // what the certificate measures against
       if (cloud && cloud->size() >= 10)
-        model = std::make_unique<HeightField>(cloud->points, 20,
+        model = std::make_unique<HeightFieldModel>(cloud->points, 20,
                                               cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
       ctx.set("linked", link_passes(*path, cloud ? cloud->points : none, o, model.get()));
     } catch (const std::invalid_argument& e) {

@@ -38,7 +38,7 @@ NodeDecl make_render_node() {
         o.tool_radius = path->tool_radius;
         o.scallop = ctx.number("scallop") > 0 ? ctx.number("scallop") : path->scallop_height;
         o.chord = ctx.number("chord") >= 0 ? ctx.number("chord") : path->chord_error;
-        HeightField surf(cloud->points);
+        HeightFieldModel surf(cloud->points);
         auto sim = simulate_cut(surf, feed_centres(*path), 0, o, [&](double f) { ctx.progress(f, "simulating"); });
         double gt = std::max(o.chord, 1e-3);
         img.png = render_scallop_png(sim, o.scallop, gt, width);

@@ -13,7 +13,7 @@
 #include <nanoflann.hpp>
 #include <numeric>
 #include <stdexcept>
-#include "nodes/cloud/kd_tree.h"
+#include "nodes/geom/kd_tree.h"
 
 namespace scallop {
 namespace {
@@ -190,7 +190,7 @@ std::vector<CentreSegment> feed_centres(const LinkedPath& path, double& rapid_le
 }
 
 // ----------------------------------------------------------------------------- simulation
-SimulationResult simulate_cut(const HeightField& surf, const std::vector<CentreSegment>& feed,
+SimulationResult simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSegment>& feed,
                               double rapid_length, const SimulateOptions& o,
                               const std::function<void(double)>& progress) {
   const double r = o.tool_radius, H = o.scallop;

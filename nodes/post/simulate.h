@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "nodes/cloud/surface_fit.h"
+#include "nodes/geom/height_field_model.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
@@ -50,7 +50,7 @@ struct SimulateOptions {
   // The patch's outline as closed xy polygons (mm): loops[0] the outer one, the others holes.
   // Given, a sample is on the patch iff it is inside the outer polygon and outside every hole,
   // and the interior margin is measured from the polygons' edges. Empty: the outline is guessed
-  // from the cloud (HeightField::inside), which on sparse clouds reaches past the real rim.
+  // from the cloud (HeightFieldModel::inside), which on sparse clouds reaches past the real rim.
   std::vector<std::vector<Eigen::Vector2d>> loops;
 };
 
@@ -79,7 +79,7 @@ struct SimulationResult {
 // places {x, y, z, kind: "gouge" | "uncut" | "scallop", value}, worst first).
 // Throws std::invalid_argument for r ≤ 0, h ≤ 0, an empty path, a non-finite centre, or loops
 // whose outer polygon has fewer than 3 points or that have a non-finite point.
-SimulationResult simulate_cut(const HeightField& surface, const std::vector<CentreSegment>& feed,
+SimulationResult simulate_cut(const HeightFieldModel& surface, const std::vector<CentreSegment>& feed,
                               double rapid_length, const SimulateOptions& options,
                               const std::function<void(double)>& progress = {});
 

@@ -67,7 +67,7 @@ NodeDecl make_simulate_node() {
       }
     }
     try {
-      HeightField surf(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
+      HeightFieldModel surf(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
       auto res = simulate_cut(surf, feed, rapid, o, [&](double f) { ctx.progress(f, "simulating"); });
       Image img;
       img.png = render_scallop_png(res, o.scallop, std::max(o.chord, 1e-3), static_cast<int>(ctx.integer("heatmap_width")));

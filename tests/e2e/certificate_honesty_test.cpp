@@ -24,7 +24,7 @@
 #include "engine/graph.h"
 #include "engine/runner.h"
 #include "nodes/all_nodes.h"
-#include "nodes/cloud/surface_fit.h"
+#include "nodes/geom/height_field_model.h"
 #include "nodes/io/ply_writer.h"
 #include "nodes/post/simulate.h"
 #include "nodes/types/cloud.h"
@@ -150,7 +150,7 @@ Outcome run_case(const Case& c) {
     out.certificate = std::static_pointer_cast<const Report>(r.run.outputs.at("report"))->data;
     const auto linked = std::static_pointer_cast<const LinkedPath>(r.run.outputs.at("linked"));
 
-    const HeightField exact(exact_grid(s), 20);
+    const HeightFieldModel exact(exact_grid(s), 20);
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> ux(0, s.width), uy(0, s.height);
     for (int i = 0; i < 2000; ++i) {

@@ -7,6 +7,7 @@
 
 #include "nodes/cloud/boundary.h"
 #include "nodes/cloud/knn.h"
+#include "nodes/geom/best_fit_plane.h"
 #include "tests/nodes/param/param_test_util.h"
 
 namespace scallop {

@@ -58,7 +58,7 @@ Toolpath plane_pass(double step, int sunk = -1, double sink = 0) {
 
 TEST(BallClearance, IsTheDistanceToATiltedPlaneMinusR) {
   auto cloud = plane_cloud();
-  HeightField surface(cloud);
+  HeightFieldModel surface(cloud);
   BallClearance clearance(surface, cloud, 2.0);
   const Eigen::Vector3d foot(1, 2, plane_z(1, 2));
   for (double gap : {0.1, 0.0, -0.03}) {
@@ -73,7 +73,7 @@ TEST(BallClearance, IsTheDistanceToATiltedPlaneMinusR) {
 TEST(BallClearance, SeesTheCloudsPointsBeyondTheEdge) {
   // A ball beyond the cloud's edge (no height field under it) still meets the edge points.
   auto cloud = plane_cloud();
-  HeightField surface(cloud);
+  HeightFieldModel surface(cloud);
   BallClearance clearance(surface, cloud, 2.0);
   const Eigen::Vector3d edge(10, 0, plane_z(10, 0));
   const Eigen::Vector3d centre = edge + Eigen::Vector3d(1.0, 0, 1.0);
@@ -94,7 +94,7 @@ TEST(BallClearance, CoversTheEdgeBandAndGapsAtTheRim) {
   std::vector<Eigen::Vector3d> cloud;
   for (const auto& p : full)
     if (std::hypot(p.x() - 10, p.y()) > 0.45) cloud.push_back(p);
-  HeightField surface(cloud);
+  HeightFieldModel surface(cloud);
   const double s = surface.spacing();
   BallClearance clearance(surface, cloud, 2.0);
   auto on_surface = [&](double x, double y) {
@@ -114,7 +114,7 @@ TEST(BallClearance, CoversTheEdgeBandAndGapsAtTheRim) {
 
 TEST(GougeGuard, LeavesAPathOnTheSurfaceAlone) {
   auto cloud = plane_cloud();
-  HeightField surface(cloud);
+  HeightFieldModel surface(cloud);
   BallClearance clearance(surface, cloud, 2.0);
   const Toolpath path = plane_pass(0.5);
   auto res = guard_gouges(path, clearance, {});
@@ -130,7 +130,7 @@ TEST(GougeGuard, LeavesAPathOnTheSurfaceAlone) {
 
 TEST(GougeGuard, LiftsAPositionThatCutsInUntilTheBallTouches) {
   auto cloud = plane_cloud();
-  HeightField surface(cloud);
+  HeightFieldModel surface(cloud);
   BallClearance clearance(surface, cloud, 2.0);
   // point 10 sunk 0.05 mm into the plane: more than the tolerance e/4 = 0.0025
   const Toolpath path = plane_pass(0.5, 10, 0.05);
@@ -158,7 +158,7 @@ TEST(GougeGuard, LiftedBallsClearAnUncertainSurfaceByItsUncertainty) {
   // 0.01 higher is touched, not cut
   auto cloud = plane_cloud();
   const std::vector<double> uncertainty(cloud.size(), 0.01);
-  HeightField surface(cloud, 20, &uncertainty);
+  HeightFieldModel surface(cloud, 20, &uncertainty);
   BallClearance clearance(surface, cloud, 2.0);
   // planned with 0.01 of stock (the planner's margin), one position sunk 0.05 below the surface
   auto planned = plane_pass(0.5, 10, 0.06);
@@ -181,7 +181,7 @@ TEST(GougeGuard, BeyondTheCloudsEdgeTheExtrapolationIsLessCertain) {
   // interior's 0.05 of stock there is lifted. On and inside the last points nothing grows.
   auto cloud = plane_cloud();
   const std::vector<double> uncertainty(cloud.size(), 0.05);
-  HeightField surface(cloud, 20, &uncertainty);
+  HeightFieldModel surface(cloud, 20, &uncertainty);
   const double s = surface.spacing(), grown = 0.05 * (1 + (0.2 - 0.5 * s) / (2 * s));
   for (double x : {5.0, 9.9, 10.0}) EXPECT_NEAR(surface.uncertainty(x, 0), 0.05, 1e-12) << x;
   EXPECT_NEAR(surface.uncertainty(10.2, 0), grown, 1e-9);
@@ -210,7 +210,7 @@ TEST(GougeGuard, SplitsAMoveWhoseMiddleCutsIn) {
   // 8^2 / (8 (30 + 2)) = 0.25 mm into it; the guard inserts lifted points until every move's
   // quarter points are within the chord tolerance.
   auto cloud = cap_cloud();
-  HeightField surface(cloud);
+  HeightFieldModel surface(cloud);
   BallClearance clearance(surface, cloud, 2.0);
   Toolpath path;
   path.tool_radius = 2;
@@ -243,7 +243,7 @@ TEST(GougeGuard, SplitsAMoveWhoseMiddleCutsIn) {
 
 TEST(GougeGuard, BadInputGetsClearErrors) {
   auto cloud = plane_cloud();
-  HeightField surface(cloud);
+  HeightFieldModel surface(cloud);
   BallClearance clearance(surface, cloud, 2.0);
   Toolpath empty;
   empty.tool_radius = 2;
@@ -270,7 +270,7 @@ TEST(GougeGuard, ALiftOfMoreThanThreeToolRadiiFailsWithWhereAndWhy) {
   // r = 2: a position sunk 5.8 mm needs a lift of 5.8 / n_z = 6.09 mm > 6 mm; one sunk 5.6 mm
   // (5.88 mm) is still lifted.
   auto cloud = plane_cloud();
-  HeightField surface(cloud);
+  HeightFieldModel surface(cloud);
   BallClearance clearance(surface, cloud, 2.0);
   auto ok = guard_gouges(plane_pass(0.5, 10, 5.6), clearance, {});
   EXPECT_NEAR(ok.report["highest_lift"].get<double>(), 5.6 / kPlaneNormal.z(), 1e-6);

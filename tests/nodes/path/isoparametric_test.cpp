@@ -170,7 +170,7 @@ TEST(Isoparametric, OutlinePassesCutTheRimTheWholePatchStaysUnderTheLimit) {
     EXPECT_NEAR((rim.contact[k] - in.cloud.points[i]).norm(), 0, 1e-9) << k;
     EXPECT_NEAR((rim.uv[k] - in.map.uv[i]).norm(), 0, 1e-12) << k;
   }
-  const HeightField plane(in.cloud.points);
+  const HeightFieldModel plane(in.cloud.points);
   SimulateOptions so;
   so.tool_radius = 3;
   so.scallop = 0.01;
@@ -245,7 +245,7 @@ TEST(Isoparametric, AHoleIsNotCutItsEdgeIsAndTheWholePatchStaysUnderTheLimit) {
     // centre in none)
     if (pattern == "zigzag") EXPECT_GT(tp.passes.size(), res.report["passes"].get<std::size_t>() + 2);
 
-    const HeightField plane(holed.cloud.points);
+    const HeightFieldModel plane(holed.cloud.points);
     SimulateOptions so;
     so.tool_radius = 3;
     so.scallop = 0.01;

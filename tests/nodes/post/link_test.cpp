@@ -72,7 +72,7 @@ TEST(Link, ALinkThatDipsBetweenSparsePointsIsCaughtByTheHeightField) {
   }
   const auto points_only = link_passes(t, cloud, {});
   EXPECT_EQ(count(points_only, MoveKind::Rapid), 2);  // down ... up: the link is a feed move
-  const HeightField model(cloud, 20);
+  const HeightFieldModel model(cloud, 20);
   const auto checked = link_passes(t, cloud, {}, &model);
   EXPECT_EQ(count(checked, MoveKind::Rapid), 4);  // down, up, over, up
 }

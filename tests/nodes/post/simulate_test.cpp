@@ -52,7 +52,7 @@ double line_gap(double s) {
 
 SimulationResult run(const Toolpath& t, double h) {
   static const auto cloud = plane_cloud();
-  HeightField surf(cloud);
+  HeightFieldModel surf(cloud);
   SimulateOptions o;
   o.tool_radius = t.tool_radius;
   o.scallop = h;
@@ -61,7 +61,7 @@ SimulationResult run(const Toolpath& t, double h) {
 }
 
 TEST(Simulate, HeightFieldReproducesAPlane) {
-  HeightField surf(plane_cloud());
+  HeightFieldModel surf(plane_cloud());
   double z;
   Eigen::Vector3d n;
   ASSERT_TRUE(surf.eval(7.3, 4.1, z, n));
@@ -89,7 +89,7 @@ TEST(Simulate, HeightFieldFollowsASteepSparseSphere) {
       P.emplace_back(R * std::sin(th) * std::cos(ph), R * std::sin(th) * std::sin(ph), R * std::cos(th));
     }
   }
-  HeightField surf(P);
+  HeightFieldModel surf(P);
   double worst = 0, worst_angle = 0;
   int n = 0;
   const double rho_max = R * std::sin(std::floor(tmax / dth) * dth) - 0.1;
@@ -133,10 +133,10 @@ TEST(Simulate, UncertainCloudGivesBoundsForTheRealSurface) {
   const double r = 3, s = 0.7, dz = 0.004, delta = 0.01;
   const auto cloud = plane_cloud();
   const std::vector<double> U(cloud.size(), delta);
-  HeightField surf(cloud, 20, &U);
+  HeightFieldModel surf(cloud, 20, &U);
   EXPECT_NEAR(surf.uncertainty(7, 5), delta, 1e-15);
   EXPECT_EQ(surf.uncertainty_max(), delta);
-  EXPECT_EQ(HeightField(cloud).uncertainty(7, 5), 0.0);
+  EXPECT_EQ(HeightFieldModel(cloud).uncertainty(7, 5), 0.0);
   SimulateOptions o;
   o.tool_radius = r;
   o.scallop = 0.05;
@@ -157,7 +157,7 @@ TEST(Simulate, UncertainCloudGivesBoundsForTheRealSurface) {
   EXPECT_EQ(j["surface_uncertainty_max"].get<double>(), delta);
   const std::vector<double> short_u(3, 0.0);
   try {
-    HeightField bad(cloud, 20, &short_u);
+    HeightFieldModel bad(cloud, 20, &short_u);
     FAIL() << "no exception";
   } catch (const std::invalid_argument& e) {
     EXPECT_EQ(std::string(e.what()),
@@ -237,7 +237,7 @@ SparsePatch sparse_patch() {
 
 SimulationResult run_sparse(double r, double s) {
   static const SparsePatch patch = sparse_patch();
-  HeightField surf(patch.cloud);
+  HeightFieldModel surf(patch.cloud);
   Toolpath t;
   t.tool_radius = r;
   t.scallop_height = 0.05;
@@ -283,7 +283,7 @@ TEST(Simulate, LoopsBoundTheSparsePatch) {
 
 TEST(Simulate, LoopsWithAHoleLeaveItOut) {
   auto patch = sparse_patch();
-  HeightField surf(patch.cloud);
+  HeightFieldModel surf(patch.cloud);
   Toolpath t;
   t.tool_radius = 4;
   for (double y = 0; y <= 30 + 1e-9; y += 1.25) {
@@ -310,7 +310,7 @@ TEST(Simulate, LoopsWithAHoleLeaveItOut) {
 
 TEST(Simulate, BadInputIsRefused) {
   auto cloud = plane_cloud();
-  HeightField surf(cloud);
+  HeightFieldModel surf(cloud);
   SimulateOptions o;
   o.tool_radius = 3;
   o.scallop = 0.02;
@@ -323,7 +323,7 @@ TEST(Simulate, BadInputIsRefused) {
   o.tool_radius = 0;
   EXPECT_THROW(simulate_cut(surf, feed_centres(raster(3, 0.7)), 0, o), std::invalid_argument);
   try {
-    HeightField tiny(std::vector<Eigen::Vector3d>(3, Eigen::Vector3d::Zero()));
+    HeightFieldModel tiny(std::vector<Eigen::Vector3d>(3, Eigen::Vector3d::Zero()));
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_STREQ(e.what(), "the cloud has 3 points; the surface model needs at least 10");

@@ -1,5 +1,7 @@
-// The surface a cloud samples, as a height field z(x, y) seen from +z: what the certificate
-// (post.simulate) measures against and what the gouge guard checks the ball against.
+// The surface a cloud samples, as a height field z(x, y) seen from +z: what the planner lifts
+// the ball on, what the gouge guard checks it against and what the certificate (post.simulate)
+// measures against. (Not the node cloud.height_field_check, nodes/cloud/height_field.h, which
+// asks whether a cloud is a height field at all.)
 #pragma once
 
 #include <Eigen/Core>
@@ -11,15 +13,15 @@ namespace scallop {
 // quadratic least-squares fit of the k nearest cloud points in xy; where the surface is steeper
 // than ~37 degrees, from a quadratic fitted in the local tangent frame to the k nearest points
 // in 3-D (a fit of z over xy is ill-posed there when the points crowd together in xy).
-class HeightField {
+class HeightFieldModel {
  public:
   // P  #P by 3 cloud points (mm), at least 10. k  neighbours per fit.
   // uncertainty  optional #P bounds (mm) on how far each point may be off the real surface
-  HeightField(const std::vector<Eigen::Vector3d>& P, int k = 20,
+  HeightFieldModel(const std::vector<Eigen::Vector3d>& P, int k = 20,
               const std::vector<double>* uncertainty = nullptr);
-  ~HeightField();
-  HeightField(const HeightField&) = delete;
-  HeightField& operator=(const HeightField&) = delete;
+  ~HeightFieldModel();
+  HeightFieldModel(const HeightFieldModel&) = delete;
+  HeightFieldModel& operator=(const HeightFieldModel&) = delete;
   // Evaluates at (x, y); false (and nothing evaluated) when (x, y) is outside the patch: no cloud
   // point within 1.5 × the mean cloud spacing, or the fitted neighbours lie to one side (their
   // centroid farther than half their radius from (x, y)), unless `force`.

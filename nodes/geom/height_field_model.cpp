@@ -1,4 +1,4 @@
-#include "nodes/cloud/surface_fit.h"
+#include "nodes/geom/height_field_model.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -9,13 +9,13 @@
 #include <stdexcept>
 #include <string>
 
-#include "nodes/cloud/kd_tree.h"
+#include "nodes/geom/kd_tree.h"
 
 namespace scallop {
 
 constexpr double kPi = 3.14159265358979323846;
 
-struct HeightField::Impl {
+struct HeightFieldModel::Impl {
   std::vector<Eigen::Vector2d> xy;
   std::vector<double> z;
   std::vector<Eigen::Vector3d> p;  // the points in 3-D, for the local-frame fit
@@ -80,7 +80,7 @@ bool local_plane(const std::vector<Eigen::Vector3d>& P, const std::uint32_t* idx
 // above (x, y) found by Newton's method. Unlike a fit of z over (x, y), it stays accurate where
 // the surface is steep and the neighbours crowd together in xy (rings of a sphere near its rim
 // project onto nearly the same xy lines, and a quadratic in (x, y) through them is ill-posed).
-bool HeightField::Impl::local_fit(double x, double y, const std::uint32_t* idx_xy, std::size_t got_xy,
+bool HeightFieldModel::Impl::local_fit(double x, double y, const std::uint32_t* idx_xy, std::size_t got_xy,
                                   int k, double& z_out, Eigen::Vector3d& n_out) const {
   Eigen::Vector3d m;
   Eigen::Matrix3d F;
@@ -169,7 +169,7 @@ bool HeightField::Impl::local_fit(double x, double y, const std::uint32_t* idx_x
   return true;
 }
 
-HeightField::HeightField(const std::vector<Eigen::Vector3d>& P, int k,
+HeightFieldModel::HeightFieldModel(const std::vector<Eigen::Vector3d>& P, int k,
                          const std::vector<double>* uncertainty)
     : impl_(new Impl), k_(k) {
   if (P.size() < 10) {
@@ -223,22 +223,22 @@ HeightField::HeightField(const std::vector<Eigen::Vector3d>& P, int k,
   spacing_ = r8[r8.size() / 2] * std::sqrt(kPi / (kk - 1));
 }
 
-HeightField::~HeightField() { delete impl_; }
+HeightFieldModel::~HeightFieldModel() { delete impl_; }
 
-double HeightField::Impl::mean_uncertainty(const std::uint32_t* idx, std::size_t got) const {
+double HeightFieldModel::Impl::mean_uncertainty(const std::uint32_t* idx, std::size_t got) const {
   if (uncertainty.empty() || got == 0) return 0;
   double sum = 0;
   for (std::size_t j = 0; j < got; ++j) sum += uncertainty[idx[j]];
   return sum / got;
 }
 
-Eigen::Vector2d HeightField::Impl::centroid(const std::uint32_t* idx, std::size_t got) const {
+Eigen::Vector2d HeightFieldModel::Impl::centroid(const std::uint32_t* idx, std::size_t got) const {
   Eigen::Vector2d c = Eigen::Vector2d::Zero();
   for (std::size_t j = 0; j < got; ++j) c += xy[idx[j]];
   return c / double(got);
 }
 
-double HeightField::Impl::widest_gap(double x, double y, const std::uint32_t* idx, std::size_t got) const {
+double HeightFieldModel::Impl::widest_gap(double x, double y, const std::uint32_t* idx, std::size_t got) const {
   std::array<double, 64> angle;
   for (std::size_t j = 0; j < got; ++j) angle[j] = std::atan2(xy[idx[j]].y() - y, xy[idx[j]].x() - x);
   std::sort(angle.begin(), angle.begin() + got);
@@ -247,7 +247,7 @@ double HeightField::Impl::widest_gap(double x, double y, const std::uint32_t* id
   return widest;
 }
 
-double HeightField::Impl::beyond_edge(double x, double y, const std::uint32_t* idx, std::size_t got) const {
+double HeightFieldModel::Impl::beyond_edge(double x, double y, const std::uint32_t* idx, std::size_t got) const {
   // The widest angle between neighbouring directions to the 64 nearest points, as boundary
   // detection uses it: at least pi beyond a straight edge; at most 0.41 pi measured inside the
   // freeform patch's denoised 50k-point cloud, in 1808 holes whose nearest point was 0.6 to
@@ -261,7 +261,7 @@ double HeightField::Impl::beyond_edge(double x, double y, const std::uint32_t* i
   return std::clamp((widest - kFrom) / (kTo - kFrom), 0.0, 1.0);
 }
 
-double HeightField::reach_beyond(double x, double y) const {
+double HeightFieldModel::reach_beyond(double x, double y) const {
   std::uint32_t idx[64];
   double d2[64];
   const double q[2] = {x, y};
@@ -275,20 +275,20 @@ double HeightField::reach_beyond(double x, double y) const {
   return out.norm() - farthest;
 }
 
-double HeightField::uncertainty(double x, double y) const {
+double HeightFieldModel::uncertainty(double x, double y) const {
   double z, u = 0;
   Eigen::Vector3d n;
   eval(x, y, z, n, /*force=*/true, &u);
   return u;
 }
 
-bool HeightField::inside(double x, double y) const {
+bool HeightFieldModel::inside(double x, double y) const {
   double z;
   Eigen::Vector3d n;
   return eval(x, y, z, n);
 }
 
-bool HeightField::eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force,
+bool HeightFieldModel::eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force,
                        double* uncertainty) const {
   const int k = k_;
   std::uint32_t idx[64];

@@ -1,0 +1,117 @@
+// HeightFieldModel against closed forms: exact on a plane and a quadric, the normals, what lies
+// beyond the cloud, and how the uncertainty grows across a gap beyond the edge.
+#include "nodes/geom/height_field_model.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <vector>
+
+namespace scallop {
+namespace {
+
+constexpr double kStep = 0.5;  // grid spacing (mm)
+
+// A grid of (2n+1)² points z = f(x, y) over [-n, n]² · kStep, minus those closer than `hole` to
+// the origin.
+std::vector<Eigen::Vector3d> grid(const std::function<double(double, double)>& f, int n = 20, double hole = 0) {
+  std::vector<Eigen::Vector3d> P;
+  for (int i = -n; i <= n; ++i)
+    for (int j = -n; j <= n; ++j) {
+      const double x = i * kStep, y = j * kStep;
+      if (std::hypot(x, y) < hole) continue;
+      P.emplace_back(x, y, f(x, y));
+    }
+  return P;
+}
+
+// The upward unit normal of z = f(x, y) with gradient (fx, fy).
+Eigen::Vector3d up_normal(double fx, double fy) { return Eigen::Vector3d(-fx, -fy, 1).normalized(); }
+
+// Points between the grid's nodes, well inside it.
+const double kProbes[][2] = {{0.13, -0.27}, {2.31, 1.77}, {-3.4, 4.05}, {6.6, -7.2}, {-8.1, -8.3}};
+
+// Between the grid's nodes the model gives f and the normal of f with gradient grad(x, y).
+void expect_exact(const std::function<double(double, double)>& f,
+                  const std::function<Eigen::Vector2d(double, double)>& grad) {
+  const HeightFieldModel m(grid(f));
+  for (const auto& q : kProbes) {
+    const double x = q[0], y = q[1];
+    double z;
+    Eigen::Vector3d n;
+    ASSERT_TRUE(m.eval(x, y, z, n)) << x << ", " << y;
+    EXPECT_NEAR(z, f(x, y), 1e-9) << x << ", " << y;
+    const Eigen::Vector2d g = grad(x, y);
+    EXPECT_NEAR((n - up_normal(g.x(), g.y())).norm(), 0, 1e-9) << x << ", " << y;
+  }
+}
+
+TEST(HeightFieldModel, ExactOnAPlane) {
+  expect_exact([](double x, double y) { return 0.3 * x - 0.2 * y + 1; },
+               [](double, double) { return Eigen::Vector2d(0.3, -0.2); });
+}
+
+TEST(HeightFieldModel, ExactOnASteepPlane) {
+  // 56 degrees: the fit in the local tangent frame (a plane is one in every frame)
+  expect_exact([](double x, double) { return 1.5 * x; }, [](double, double) { return Eigen::Vector2d(1.5, 0); });
+}
+
+TEST(HeightFieldModel, ExactOnAQuadric) {
+  // slopes under 37 degrees: the quadratic fit of z over (x, y), exact for a quadric
+  expect_exact([](double x, double y) { return 0.01 * x * x + 0.02 * x * y - 0.015 * y * y + 0.1 * x + 2; },
+               [](double x, double y) { return Eigen::Vector2d(0.02 * x + 0.02 * y + 0.1, 0.02 * x - 0.03 * y); });
+}
+
+TEST(HeightFieldModel, OutsideBeyondTheCloud) {
+  const HeightFieldModel m(grid([](double, double) { return 0.0; }));
+  EXPECT_TRUE(m.inside(0, 0));
+  EXPECT_TRUE(m.inside(9.9, 0.1));  // on an edge: half a disc of neighbours
+  EXPECT_FALSE(m.inside(10, 10));    // the very corner: a quarter disc, all to one side
+  EXPECT_FALSE(m.inside(10 + 3 * kStep, 0));  // beyond an edge
+  EXPECT_FALSE(m.inside(0, -10 - 3 * kStep));
+  EXPECT_FALSE(m.inside(30, 30));
+  double z = 1;
+  Eigen::Vector3d n;
+  EXPECT_FALSE(m.eval(30, 30, z, n));
+  EXPECT_TRUE(m.eval(30, 30, z, n, /*force=*/true));  // extrapolated on request
+  EXPECT_NEAR(z, 0, 1e-9);
+  EXPECT_DOUBLE_EQ(m.min_x(), -10);
+  EXPECT_DOUBLE_EQ(m.max_y(), 10);
+}
+
+TEST(HeightFieldModel, UncertaintyGrowsAcrossAGapBeyondTheEdge) {
+  const auto P = grid([](double, double) { return 0.0; });
+  const std::vector<double> u(P.size(), 0.01);
+  const HeightFieldModel m(P, 20, &u);
+  EXPECT_DOUBLE_EQ(m.uncertainty_max(), 0.01);
+  EXPECT_NEAR(m.uncertainty(0.2, 0.1), 0.01, 1e-15);  // among the points: theirs
+  const double s = m.spacing();
+  // Beyond the straight edge x = 10, on a grid row: the nearest point is d away and every
+  // neighbour lies to one side, so the factor is 1 + (d - s/2) / (2 s) (see the header).
+  for (double d : {1.0, 2.0, 4.0}) {
+    ASSERT_GT(d, s / 2);
+    EXPECT_NEAR(m.uncertainty(10 + d, 1.5), 0.01 * (1 + (d - s / 2) / (2 * s)), 1e-12) << d;
+  }
+  // within half a spacing of a point no growth, even beyond the edge
+  EXPECT_NEAR(m.uncertainty(10 + 0.4 * s, 1.5), 0.01, 1e-15);
+}
+
+TEST(HeightFieldModel, HolesInsideKeepThePointsUncertainty) {
+  // a hole 2 mm across: the points around it lie on every side, so it is interpolated across
+  const auto P = grid([](double, double) { return 0.0; }, 20, 1.0);
+  const std::vector<double> u(P.size(), 0.01);
+  const HeightFieldModel m(P, 20, &u);
+  EXPECT_NEAR(m.uncertainty(0, 0), 0.01, 1e-15);
+}
+
+TEST(HeightFieldModel, RefusesTooFewPointsAndMismatchedUncertainties) {
+  const std::vector<Eigen::Vector3d> few(9, Eigen::Vector3d::Zero());
+  EXPECT_THROW(HeightFieldModel m(few), std::invalid_argument);
+  const auto P = grid([](double, double) { return 0.0; }, 3);
+  const std::vector<double> u(P.size() - 1, 0.01);
+  EXPECT_THROW(HeightFieldModel m(P, 20, &u), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace scallop
