@@ -1,5 +1,5 @@
 #include "nodes/cloud/boundary.h"
-#include "nodes/parallel_progress.h"
+#include "engine/parallel_progress.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -1,5 +1,5 @@
 #include "nodes/cloud/knn.h"
-#include "nodes/parallel_progress.h"
+#include "engine/parallel_progress.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

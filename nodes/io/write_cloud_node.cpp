@@ -3,7 +3,7 @@
 #include "engine/file_ref.h"
 #include "engine/node.h"
 #include "engine/output_path.h"
-#include "nodes/io/ply_writer.h"
+#include "nodes/types/ply_writer.h"
 #include "nodes/types/cloud.h"
 
 namespace scallop {

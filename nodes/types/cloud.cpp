@@ -1,6 +1,6 @@
 #include "nodes/types/cloud.h"
 
-#include "nodes/io/ply_writer.h"
+#include "nodes/types/ply_writer.h"
 
 namespace scallop {
 

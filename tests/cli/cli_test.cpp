@@ -6,7 +6,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "nodes/io/ply_writer.h"
+#include "nodes/types/ply_writer.h"
 #include "nodes/types/cloud.h"
 #include "tests/test_support.h"
 

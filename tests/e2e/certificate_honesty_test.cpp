@@ -25,7 +25,7 @@
 #include "engine/runner.h"
 #include "nodes/all_nodes.h"
 #include "nodes/geom/height_field_model.h"
-#include "nodes/io/ply_writer.h"
+#include "nodes/types/ply_writer.h"
 #include "nodes/post/simulate.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"

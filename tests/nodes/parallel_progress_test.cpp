@@ -1,4 +1,4 @@
-#include "nodes/parallel_progress.h"
+#include "engine/parallel_progress.h"
 
 #include <gtest/gtest.h>
 #include <tbb/blocked_range.h>

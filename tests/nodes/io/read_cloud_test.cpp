@@ -24,7 +24,7 @@
 #include "nodes/io/mesh_vertices_reader.h"
 #include "nodes/io/pcd_reader.h"
 #include "nodes/io/ply_reader.h"
-#include "nodes/io/ply_writer.h"
+#include "nodes/types/ply_writer.h"
 #include "nodes/io/text_cloud_reader.h"
 
 namespace scallop {

@@ -1,5 +1,5 @@
 // Tests for write_ply and the io.write_cloud node.
-#include "nodes/io/ply_writer.h"
+#include "nodes/types/ply_writer.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-#include "nodes/io/ply_writer.h"
+#include "nodes/types/ply_writer.h"
 
 #include <bit>
 #include <cerrno>
