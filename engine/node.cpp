@@ -118,8 +118,23 @@ void NodeContext::warn(const std::string& message) const {
 }
 
 void Registry::add(NodeDecl decl) {
+  if (nodes_.count(decl.type)) throw std::logic_error("node type '" + decl.type + "' is registered twice");
+  for (const auto* ports : {&decl.inputs, &decl.outputs})
+    for (const PortDecl& p : *ports)
+      if (!values_.find(p.type))
+        throw std::logic_error("node type '" + decl.type + "': " + (ports == &decl.inputs ? "input" : "output") +
+                               " '" + p.name + "' has value type '" + p.type + "', which is not registered");
   std::string type = decl.type;
   nodes_[type] = std::move(decl);
+}
+
+void Registry::add_domain(const std::string& domain, std::vector<NodeDecl> decls) {
+  for (NodeDecl& d : decls) {
+    if (!d.type.starts_with(domain + "."))
+      throw std::logic_error("node type '" + d.type + "' is in the domain '" + domain + "': name it '" + domain +
+                             ".<name>'");
+    add(std::move(d));
+  }
 }
 
 const NodeDecl* Registry::find(const std::string& type) const {

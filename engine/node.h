@@ -142,7 +142,12 @@ class NodeContext {
 // All node types and value types the engine knows.
 class Registry {
  public:
+  // Adds a node type. Throws std::logic_error when the type is registered already, or when a
+  // port's value type is not (value types are registered before the nodes that use them).
   void add(NodeDecl decl);
+  // Adds the nodes of one domain, the folder nodes/<domain>/: each type must be named
+  // "<domain>.<name>", so that two domains' nodes (mesh.denoise, cloud.denoise) never clash.
+  void add_domain(const std::string& domain, std::vector<NodeDecl> decls);
   const NodeDecl* find(const std::string& type) const;
   const std::map<std::string, NodeDecl>& nodes() const { return nodes_; }
   ValueTypes& values() { return values_; }

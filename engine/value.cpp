@@ -21,6 +21,7 @@ std::string Value::content_key() const {
 }
 
 void ValueTypes::add(ValueType type) {
+  if (types_.count(type.name)) throw std::logic_error("value type '" + type.name + "' is registered twice");
   std::string name = type.name;
   types_[name] = std::move(type);
 }

@@ -48,6 +48,7 @@ struct ValueType {
 // All known value types by name.
 class ValueTypes {
  public:
+  // Throws std::logic_error when a type of that name is registered already.
   void add(ValueType type);
   const ValueType* find(const std::string& name) const;
   const std::map<std::string, ValueType>& all() const { return types_; }

@@ -5,7 +5,7 @@
 #include "nodes/cloud/clean.h"
 #include "nodes/types/cloud.h"
 
-namespace scallop {
+namespace scallop::cloud_nodes {
 
 NodeDecl make_clean_node() {
   NodeDecl d;
@@ -54,4 +54,4 @@ NodeDecl make_clean_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::cloud_nodes

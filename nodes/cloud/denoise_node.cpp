@@ -7,7 +7,7 @@
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
 
-namespace scallop {
+namespace scallop::cloud_nodes {
 
 NodeDecl make_denoise_node() {
   NodeDecl d;
@@ -120,4 +120,4 @@ NodeDecl make_denoise_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::cloud_nodes

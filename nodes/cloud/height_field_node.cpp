@@ -5,7 +5,7 @@
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
 
-namespace scallop {
+namespace scallop::cloud_nodes {
 
 NodeDecl make_height_field_node() {
   NodeDecl d;
@@ -56,4 +56,4 @@ NodeDecl make_height_field_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::cloud_nodes

@@ -4,7 +4,7 @@
 #include "nodes/cloud/knn.h"
 #include "nodes/types/cloud.h"
 
-namespace scallop {
+namespace scallop::cloud_nodes {
 
 NodeDecl make_knn_node() {
   NodeDecl d;
@@ -27,4 +27,4 @@ NodeDecl make_knn_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::cloud_nodes

@@ -4,7 +4,7 @@
 #include "nodes/cloud/normals.h"
 #include "nodes/types/cloud.h"
 
-namespace scallop {
+namespace scallop::cloud_nodes {
 
 NodeDecl make_normals_node() {
   NodeDecl d;
@@ -35,4 +35,4 @@ NodeDecl make_normals_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::cloud_nodes

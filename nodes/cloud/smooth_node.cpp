@@ -5,7 +5,7 @@
 #include "nodes/types/cloud.h"
 #include "nodes/types/param.h"
 
-namespace scallop {
+namespace scallop::cloud_nodes {
 
 NodeDecl make_smooth_node() {
   NodeDecl d;
@@ -37,4 +37,4 @@ NodeDecl make_smooth_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::cloud_nodes

@@ -7,7 +7,7 @@
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
 
-namespace scallop {
+namespace scallop::cloud_nodes {
 
 namespace {
 
@@ -93,4 +93,4 @@ NodeDecl make_trim_steep_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::cloud_nodes

@@ -4,7 +4,7 @@
 #include "nodes/io/read_cloud.h"
 #include "nodes/types/cloud.h"
 
-namespace scallop {
+namespace scallop::io_nodes {
 
 NodeDecl make_read_cloud_node() {
   NodeDecl d;
@@ -30,4 +30,4 @@ NodeDecl make_read_cloud_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::io_nodes

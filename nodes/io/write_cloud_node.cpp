@@ -6,7 +6,7 @@
 #include "nodes/types/ply_writer.h"
 #include "nodes/types/cloud.h"
 
-namespace scallop {
+namespace scallop::io_nodes {
 
 NodeDecl make_write_cloud_node() {
   NodeDecl d;
@@ -39,4 +39,4 @@ NodeDecl make_write_cloud_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::io_nodes

@@ -6,7 +6,7 @@
 #include "nodes/types/document.h"
 #include "nodes/types/toolpath.h"
 
-namespace scallop {
+namespace scallop::io_nodes {
 NodeDecl make_write_toolpath_node() {
   NodeDecl d;
   d.type = "io.write_toolpath";
@@ -40,4 +40,4 @@ NodeDecl make_write_toolpath_node() {
   };
   return d;
 }
-}  // namespace scallop
+}  // namespace scallop::io_nodes

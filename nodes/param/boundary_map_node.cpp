@@ -5,7 +5,7 @@
 #include "nodes/types/cloud.h"
 #include "nodes/types/param.h"
 
-namespace scallop {
+namespace scallop::param_nodes {
 
 NodeDecl make_boundary_map_node() {
   NodeDecl d;
@@ -34,4 +34,4 @@ NodeDecl make_boundary_map_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::param_nodes

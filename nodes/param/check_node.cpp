@@ -8,7 +8,7 @@
 #include "nodes/types/document.h"
 #include "nodes/types/param.h"
 
-namespace scallop {
+namespace scallop::param_nodes {
 
 NodeDecl make_map_check_node() {
   NodeDecl d;
@@ -68,4 +68,4 @@ NodeDecl make_map_check_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::param_nodes

@@ -6,7 +6,7 @@
 #include "nodes/types/cloud.h"
 #include "nodes/types/param.h"
 
-namespace scallop {
+namespace scallop::param_nodes {
 
 NodeDecl make_harmonic_node() {
   NodeDecl d;
@@ -52,4 +52,4 @@ NodeDecl make_harmonic_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::param_nodes

@@ -5,7 +5,7 @@
 #include "nodes/types/cloud.h"
 #include "nodes/types/param.h"
 
-namespace scallop {
+namespace scallop::param_nodes {
 
 NodeDecl make_laplacian_node() {
   NodeDecl d;
@@ -39,4 +39,4 @@ NodeDecl make_laplacian_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::param_nodes

@@ -7,7 +7,7 @@
 #include "nodes/types/document.h"
 #include "nodes/types/toolpath.h"
 
-namespace scallop {
+namespace scallop::path_nodes {
 
 NodeDecl make_gouge_guard_node() {
   NodeDecl d;
@@ -55,4 +55,4 @@ NodeDecl make_gouge_guard_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::path_nodes

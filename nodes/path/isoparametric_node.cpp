@@ -8,7 +8,7 @@
 #include "nodes/types/param.h"
 #include "nodes/types/toolpath.h"
 
-namespace scallop {
+namespace scallop::path_nodes {
 
 NodeDecl make_isoparametric_node() {
   NodeDecl d;
@@ -90,4 +90,4 @@ NodeDecl make_isoparametric_node() {
   return d;
 }
 
-}  // namespace scallop
+}  // namespace scallop::path_nodes

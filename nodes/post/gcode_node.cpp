@@ -4,7 +4,7 @@
 #include "nodes/types/document.h"
 #include "nodes/types/toolpath.h"
 
-namespace scallop {
+namespace scallop::post_nodes {
 NodeDecl make_gcode_node() {
   NodeDecl d;
   d.type = "post.gcode";
@@ -49,4 +49,4 @@ NodeDecl make_gcode_node() {
   };
   return d;
 }
-}  // namespace scallop
+}  // namespace scallop::post_nodes

@@ -6,7 +6,7 @@
 #include "nodes/types/cloud.h"
 #include "nodes/types/toolpath.h"
 
-namespace scallop {
+namespace scallop::post_nodes {
 NodeDecl make_link_node() {
   NodeDecl d;
   d.type = "post.link";
@@ -42,4 +42,4 @@ NodeDecl make_link_node() {
   };
   return d;
 }
-}  // namespace scallop
+}  // namespace scallop::post_nodes

@@ -8,7 +8,7 @@
 #include "nodes/types/svg.h"
 #include "nodes/types/toolpath.h"
 
-namespace scallop {
+namespace scallop::post_nodes {
 NodeDecl make_render_node() {
   NodeDecl d;
   d.type = "post.render";
@@ -55,4 +55,4 @@ NodeDecl make_render_node() {
   };
   return d;
 }
-}  // namespace scallop
+}  // namespace scallop::post_nodes

@@ -8,7 +8,7 @@
 #include "nodes/types/param.h"
 #include "nodes/types/toolpath.h"
 
-namespace scallop {
+namespace scallop::post_nodes {
 NodeDecl make_simulate_node() {
   NodeDecl d;
   d.type = "post.simulate";
@@ -81,4 +81,4 @@ NodeDecl make_simulate_node() {
   };
   return d;
 }
-}  // namespace scallop
+}  // namespace scallop::post_nodes

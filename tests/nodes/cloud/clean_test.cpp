@@ -133,7 +133,10 @@ TEST(Clean, EmptyCloudGivesEmptyCloud) {
 
 // ---- the node ----
 namespace scallop {
+namespace cloud_nodes {
 NodeDecl make_clean_node();
+}  // namespace cloud_nodes
+using cloud_nodes::make_clean_node;
 namespace {
 
 using test::run_node;

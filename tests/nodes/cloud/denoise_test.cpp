@@ -426,7 +426,10 @@ TEST(DenoiseAuto, MoreNoisePicksALargerK) {
 
 // ---- the node ----
 namespace scallop {
+namespace cloud_nodes {
 NodeDecl make_denoise_node();
+}  // namespace cloud_nodes
+using cloud_nodes::make_denoise_node;
 namespace {
 
 using test::run_node;

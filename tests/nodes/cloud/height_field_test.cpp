@@ -19,7 +19,10 @@
 
 namespace scallop {
 
+namespace cloud_nodes {
 NodeDecl make_height_field_node();
+}  // namespace cloud_nodes
+using cloud_nodes::make_height_field_node;
 
 namespace {
 

@@ -174,7 +174,10 @@ TEST(KnnIndex, EmptyCloudIsAnError) {
 
 // ---- the node ----
 namespace scallop {
+namespace cloud_nodes {
 NodeDecl make_knn_node();
+}  // namespace cloud_nodes
+using cloud_nodes::make_knn_node;
 namespace {
 
 using test::run_node;

@@ -201,7 +201,10 @@ TEST(Normals, ParseOrientation) {
 
 // ---- the node ----
 namespace scallop {
+namespace cloud_nodes {
 NodeDecl make_normals_node();
+}  // namespace cloud_nodes
+using cloud_nodes::make_normals_node;
 namespace {
 
 using test::run_node;

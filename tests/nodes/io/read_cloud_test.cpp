@@ -28,7 +28,10 @@
 #include "nodes/io/text_cloud_reader.h"
 
 namespace scallop {
+namespace io_nodes {
 NodeDecl make_read_cloud_node();
+}  // namespace io_nodes
+using io_nodes::make_read_cloud_node;
 }
 
 namespace scallop {

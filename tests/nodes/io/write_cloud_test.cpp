@@ -16,7 +16,10 @@
 #include "nodes/io/read_cloud.h"
 
 namespace scallop {
+namespace io_nodes {
 NodeDecl make_write_cloud_node();
+}  // namespace io_nodes
+using io_nodes::make_write_cloud_node;
 }
 
 namespace scallop {

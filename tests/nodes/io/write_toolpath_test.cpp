@@ -13,7 +13,10 @@
 #include "tests/test_support.h"
 
 namespace scallop {
+namespace io_nodes {
 NodeDecl make_write_toolpath_node();
+}  // namespace io_nodes
+using io_nodes::make_write_toolpath_node;
 
 namespace {
 

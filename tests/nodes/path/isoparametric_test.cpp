@@ -13,7 +13,10 @@
 #include "nodes/types/param.h"
 
 namespace scallop {
+namespace path_nodes {
 NodeDecl make_isoparametric_node();
+}  // namespace path_nodes
+using path_nodes::make_isoparametric_node;
 }
 
 using namespace scallop;

@@ -1,0 +1,28 @@
+#include "nodes/types/register.h"
+
+#include "engine/file_ref.h"
+#include "nodes/types/cloud.h"
+#include "nodes/types/document.h"
+#include "nodes/types/param.h"
+#include "nodes/types/svg.h"
+#include "nodes/types/toolpath.h"
+
+namespace scallop {
+
+void register_types(Registry& r) {
+  auto& v = r.values();
+  v.add({"File", "txt", "an input file (path and content hash)", FileRef::deserialize});
+  v.add({"Cloud", "ply", "points with optional unit normals (mm)", PointCloud::deserialize});
+  v.add({"Neighbors", "bin", "k nearest neighbours of every point", Neighborhoods::deserialize});
+  v.add({"Loops", "bin", "boundary points ordered into loops, outer first", BoundaryLoops::deserialize});
+  v.add({"Laplacian", "bin", "sparse meshless Laplacian", Laplacian::deserialize});
+  v.add({"UVMap", "bin", "(u,v) parameterisation of the points", UVMap::deserialize});
+  v.add({"Toolpath", "json", "passes of cutter-contact points for a ball-end tool", Toolpath::deserialize});
+  v.add({"LinkedPath", "bin", "linked machine moves (tool tip)", LinkedPath::deserialize});
+  v.add({"GCode", "ngc", "a machine program", GCode::deserialize});
+  v.add({"Report", "json", "a JSON report", Report::deserialize});
+  v.add({"Image", "png", "a PNG picture", Image::deserialize});
+  v.add({"Svg", "svg", "an SVG picture", Svg::deserialize});
+}
+
+}  // namespace scallop
