@@ -36,9 +36,11 @@ using json = nlohmann::json;
 std::string explain_miss(const std::optional<json>& last, const json& now) {
   if (!last) return "no earlier run recorded";
   if (last->value("key", "") == now["key"]) return "entry missing";
-  if (last->value("value_format", 1) != now["value_format"])
-    return "the cache's value format changed (" + std::to_string(last->value("value_format", 1)) +
-           " -> " + now["value_format"].dump() + ")";
+  const json formats = last->value("formats", json::object());
+  for (const auto& [type, format] : now["formats"].items())
+    if (!formats.contains(type) || formats[type] != format)
+      return "the cache format of value type " + type + " changed (" +
+             (formats.contains(type) ? formats[type].dump() : "unset") + " -> " + format.dump() + ")";
   if (last->value("version", 0) != now["version"])
     return "node version changed (" + std::to_string(last->value("version", 0)) + " -> " +
            now["version"].dump() + ")";
@@ -52,6 +54,16 @@ std::string explain_miss(const std::optional<json>& last, const json& now) {
   for (const auto& [k, v] : now["inputs"].items())
     if (!li.contains(k) || li[k] != v) why += (why.empty() ? "" : ", ") + std::string("input ") + k + " changed";
   return why.empty() ? "key changed" : why;
+}
+
+// The format version of each value type the node reads or writes, by name: a new layout of one
+// type invalidates the entries of the nodes that use it and of no others.
+json value_formats(const NodeDecl& decl, const ValueTypes& types) {
+  json formats = json::object();
+  for (const auto* ports : {&decl.inputs, &decl.outputs})
+    for (const PortDecl& p : *ports)
+      if (const ValueType* t = types.find(p.type)) formats[p.type] = t->format;
+  return formats;
 }
 
 // Where a cache entry's warnings are kept (beside the manifests, by the entry's key): a node's
@@ -94,7 +106,7 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
     const PlanNode& pn = plan.nodes[i];
     json m{{"type", pn.decl->type},
            {"version", pn.decl->version},
-           {"value_format", kValueFormat},
+           {"formats", value_formats(*pn.decl, registry.values())},
            {"params", pn.params},
            {"inputs", json::object()}};
     for (const auto& [port, src] : pn.inputs)

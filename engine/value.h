@@ -16,11 +16,6 @@
 
 namespace scallop {
 
-// The binary layout of the values as a whole, part of every cache key: raised whenever a value
-// type's serialize() changes, so that old disk-cache entries miss instead of being misread.
-// 2: Cloud carries per-point uncertainty.
-inline constexpr int kValueFormat = 2;
-
 class Value {
  public:
   virtual ~Value() = default;
@@ -43,6 +38,10 @@ struct ValueType {
   std::string extension;  // without the dot: "ply", "ngc", "json", "png"
   std::string description;
   std::function<ValuePtr(std::istream&)> deserialize;
+  // The version of serialize()'s layout, part of the cache key of every node that reads or writes
+  // the type: raise it whenever that layout changes, so that this type's disk-cache entries miss
+  // instead of being misread, and no other type's.
+  int format = 1;
 };
 
 // All known value types by name.

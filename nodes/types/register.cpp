@@ -12,7 +12,8 @@ namespace scallop {
 void register_types(Registry& r) {
   auto& v = r.values();
   v.add({"File", "txt", "an input file (path and content hash)", FileRef::deserialize});
-  v.add({"Cloud", "ply", "points with optional unit normals (mm)", PointCloud::deserialize});
+  // format 2: per-point uncertainty
+  v.add({"Cloud", "ply", "points with optional unit normals (mm)", PointCloud::deserialize, 2});
   v.add({"Neighbors", "bin", "k nearest neighbours of every point", Neighborhoods::deserialize});
   v.add({"Loops", "bin", "boundary points ordered into loops, outer first", BoundaryLoops::deserialize});
   v.add({"Laplacian", "bin", "sparse meshless Laplacian", Laplacian::deserialize});

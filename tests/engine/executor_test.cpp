@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <tuple>
 
 #include "engine/file_ref.h"
 #include "tests/test_support.h"
@@ -300,6 +301,51 @@ TEST(Cache, KeyDoesNotDependOnInputFileName) {
   auto key = [&](const char* name) { return FileRef::open((dir.path / name).string()).content_key(); };
   EXPECT_EQ(key("one.txt"), key("two.txt"));
   EXPECT_NE(key("one.txt"), key("three.txt"));
+}
+
+// test.measure (Number -> Length) and test.half (Length -> Number) beside the test nodes, with
+// Length's serialisation at `length_format`.
+Registry length_registry(int length_format) {
+  Registry reg = test::make_test_registry();
+  reg.values().add({"Length", "txt", "a number again", Number::deserialize, length_format});
+  for (auto [type, in, out] : {std::tuple{"test.measure", "Number", "Length"}, std::tuple{"test.half", "Length", "Number"}}) {
+    NodeDecl d;
+    d.type = type;
+    d.input("a", in, "").output("out", out, "");
+    d.run = [](NodeContext& ctx) { ctx.set("out", Number(ctx.input<Number>("a")->value / 2)); };
+    reg.add(d);
+  }
+  return reg;
+}
+
+// a ─ measure ─ half     b ─ sum
+const char* kLengths = R"({
+  "scallop_graph": 1, "name": "lengths",
+  "nodes": [
+    {"id": "a", "type": "test.const", "params": {"value": 4}},
+    {"id": "measure", "type": "test.measure", "inputs": {"a": "a.out"}},
+    {"id": "half", "type": "test.half", "inputs": {"a": "measure.out"}},
+    {"id": "b", "type": "test.const", "params": {"value": 3}},
+    {"id": "sum", "type": "test.add", "inputs": {"a": "b.out"}}
+  ],
+  "outputs": {"half": "half.out", "sum": "sum.out"}
+})";
+
+TEST(Executor, AValueTypesFormatIsInTheKeysOfTheNodesThatUseItOnly) {
+  const Registry before = length_registry(1), after = length_registry(2);
+  test::TempDir dir;
+  DiskCache cache(dir.str());
+  const RunResult first = run(before, kLengths, &cache), second = run(after, kLengths, &cache);
+  ASSERT_TRUE(first.ok() && second.ok());
+  for (const char* id : {"measure", "half"}) {  // they write and read Length
+    EXPECT_NE(first.find(id)->key, second.find(id)->key) << id;
+    EXPECT_EQ(second.find(id)->status, "ok") << id;
+    EXPECT_EQ(second.find(id)->why, "the cache format of value type Length changed (1 -> 2)") << id;
+  }
+  for (const char* id : {"a", "b", "sum"}) {  // Number only
+    EXPECT_EQ(first.find(id)->key, second.find(id)->key) << id;
+    EXPECT_EQ(second.find(id)->status, "cached") << id;
+  }
 }
 
 }  // namespace
