@@ -363,10 +363,7 @@ class Planner {
       if (k) P.unchecked.push_back(true);
     }
     lift_segments(P);
-    // the two ends of the loop are one vertex: both get the higher of their two lifts
-    const std::size_t last = P.c.size() - 1, from = P.lift[last] > P.lift[0] ? last : 0;
-    for (std::size_t j : {std::size_t{0}, last})
-      P.c[j] = P.c[from], P.p[j] = P.p[from], P.n[j] = P.n[from], P.lift[j] = P.lift[from];
+    join_ends(P);
     return P;
   }
 
@@ -481,14 +478,16 @@ class Planner {
                     "pass at s = " + fmt(s) + ": " + std::to_string(P.t.size()) + " points so far");
     }
     lift_segments(P);
-    if (P.closed && P.c.size() > 1) {
-      // the two ends of a circle are one vertex: both get the higher of their two lifts
-      const std::size_t last = P.c.size() - 1, from = P.lift[last] > P.lift[0] ? last : 0;
-      for (std::size_t j : {std::size_t{0}, last}) {
-        P.c[j] = P.c[from], P.p[j] = P.p[from], P.n[j] = P.n[from], P.lift[j] = P.lift[from];
-      }
-    }
+    if (P.closed) join_ends(P);
     return P;
+  }
+
+  // The two ends of a closed pass are one vertex: both get the higher of their two lifts.
+  static void join_ends(Pass& P) {
+    if (P.c.size() < 2) return;
+    const std::size_t last = P.c.size() - 1, from = P.lift[last] > P.lift[0] ? last : 0;
+    for (std::size_t j : {std::size_t{0}, last})
+      P.c[j] = P.c[from], P.p[j] = P.p[from], P.n[j] = P.n[from], P.lift[j] = P.lift[from];
   }
 
   // The swept ball between two lifted vertices can still reach more than e into the cloud (a

@@ -97,14 +97,33 @@ std::string error_of(const Input& in, const IsoparametricOptions& o) {
   return "no error";
 }
 
-}  // namespace
-
-TEST(Isoparametric, FlatRectanglePassesAreStraightEvenAndCoverIt) {
-  const Input in = flat();
+// r = 3, h = 0.01, e = 0.005: the limits most tests plan for.
+IsoparametricOptions fine_options() {
   IsoparametricOptions o;
   o.tool_radius = 3;
   o.scallop_height = 0.01;
   o.chord_error = 0.005;
+  return o;
+}
+
+// The product's simulation of a path planned with fine_options(), on a 0.05 mm grid over loops.
+nlohmann::json simulate_fine(const std::vector<Eigen::Vector3d>& points, const Toolpath& tp,
+                             std::vector<std::vector<Eigen::Vector2d>> loops) {
+  const HeightFieldModel surface(points);
+  SimulateOptions so;
+  so.tool_radius = 3;
+  so.scallop = 0.01;
+  so.chord = 0.005;
+  so.spacing = 0.05;
+  so.loops = std::move(loops);
+  return simulate_cut(surface, feed_centres(tp), 0, so).report;
+}
+
+}  // namespace
+
+TEST(Isoparametric, FlatRectanglePassesAreStraightEvenAndCoverIt) {
+  const Input in = flat();
+  IsoparametricOptions o = fine_options();
   o.max_segment = 5;
   o.outline = false;  // the passes alone (the rim pass is tested below)
   const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
@@ -156,10 +175,7 @@ TEST(Isoparametric, FlatRectanglePassesAreStraightEvenAndCoverIt) {
 // included (the product's simulation against the exact outline).
 TEST(Isoparametric, OutlinePassesCutTheRimTheWholePatchStaysUnderTheLimit) {
   const Input in = flat();
-  IsoparametricOptions o;
-  o.tool_radius = 3;
-  o.scallop_height = 0.01;
-  o.chord_error = 0.005;
+  IsoparametricOptions o = fine_options();
   const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
   const Toolpath& tp = res.toolpath;
   const std::size_t n = res.report["passes"].get<std::size_t>();
@@ -173,18 +189,11 @@ TEST(Isoparametric, OutlinePassesCutTheRimTheWholePatchStaysUnderTheLimit) {
     EXPECT_NEAR((rim.contact[k] - in.cloud.points[i]).norm(), 0, 1e-9) << k;
     EXPECT_NEAR((rim.uv[k] - in.map.uv[i]).norm(), 0, 1e-12) << k;
   }
-  const HeightFieldModel plane(in.cloud.points);
-  SimulateOptions so;
-  so.tool_radius = 3;
-  so.scallop = 0.01;
-  so.chord = 0.005;
-  so.spacing = 0.05;
-  so.loops = {{{0, 0}, {30, 0}, {30, 20}, {0, 20}}};
-  const auto sim = simulate_cut(plane, feed_centres(tp), 0, so);
-  EXPECT_LE(sim.report["scallop_max"].get<double>(), 1.01 * 0.01);
-  EXPECT_GE(sim.report["scallop_max"].get<double>(), 0.95 * 0.01);  // the cusps are there
-  EXPECT_EQ(sim.report["uncut_fraction"].get<double>(), 0.0);
-  EXPECT_LT(sim.report["gouge_max"].get<double>(), 1e-9);
+  const auto sim = simulate_fine(in.cloud.points, tp, {{{0, 0}, {30, 0}, {30, 20}, {0, 20}}});
+  EXPECT_LE(sim["scallop_max"].get<double>(), 1.01 * 0.01);
+  EXPECT_GE(sim["scallop_max"].get<double>(), 0.95 * 0.01);  // the cusps are there
+  EXPECT_EQ(sim["uncut_fraction"].get<double>(), 0.0);
+  EXPECT_LT(sim["gouge_max"].get<double>(), 1e-9);
 }
 
 // A flat rectangle with a round hole (radius 4 at (15, 10)), its edge sampled by a ring of points:
@@ -248,20 +257,15 @@ TEST(Isoparametric, AHoleIsNotCutItsEdgeIsAndTheWholePatchStaysUnderTheLimit) {
     // centre in none)
     if (pattern == "zigzag") EXPECT_GT(tp.passes.size(), res.report["passes"].get<std::size_t>() + 2);
 
-    const HeightFieldModel plane(holed.cloud.points);
-    SimulateOptions so;
-    so.tool_radius = 3;
-    so.scallop = 0.01;
-    so.chord = 0.005;
-    so.spacing = 0.05;
+    std::vector<std::vector<Eigen::Vector2d>> outline;
     for (const auto& loop : loops.loops) {
-      so.loops.emplace_back();
-      for (int i : loop) so.loops.back().push_back(holed.cloud.points[i].head<2>());
+      outline.emplace_back();
+      for (int i : loop) outline.back().push_back(holed.cloud.points[i].head<2>());
     }
-    const auto sim = simulate_cut(plane, feed_centres(tp), 0, so);
-    EXPECT_LE(sim.report["scallop_max"].get<double>(), 1.01 * 0.01) << sim.report["worst"].dump();
-    EXPECT_EQ(sim.report["uncut_fraction"].get<double>(), 0.0);
-    EXPECT_LT(sim.report["gouge_max"].get<double>(), 1e-9);
+    const auto sim = simulate_fine(holed.cloud.points, tp, outline);
+    EXPECT_LE(sim["scallop_max"].get<double>(), 1.01 * 0.01) << sim["worst"].dump();
+    EXPECT_EQ(sim["uncut_fraction"].get<double>(), 0.0);
+    EXPECT_LT(sim["gouge_max"].get<double>(), 1e-9);
   }
 }
 
@@ -271,10 +275,7 @@ TEST(Isoparametric, AHoleIsNotCutItsEdgeIsAndTheWholePatchStaysUnderTheLimit) {
 // plans them.
 TEST(Isoparametric, WorkOverTheBudgetIsRefusedBeforePlanningWithTheEstimate) {
   const Input in = flat();
-  IsoparametricOptions o;
-  o.tool_radius = 3;
-  o.scallop_height = 0.01;
-  o.chord_error = 0.005;
+  IsoparametricOptions o = fine_options();
   o.max_passes = 62;
   const std::string e = error_of(in, o);
   EXPECT_EQ(e.rfind("these limits need at least 63 passes (a side interval of 0.489898 mm across a patch 30 mm wide; at least ", 0), 0u) << e;
@@ -292,10 +293,7 @@ TEST(Isoparametric, WorkOverTheBudgetIsRefusedBeforePlanningWithTheEstimate) {
 // exactly the cusp spacing of a scallop of 0.005 - 0.00275 = 0.00225 apart.
 TEST(Isoparametric, SurfaceUncertaintyIsKeptAsAMargin) {
   const double delta = 0.004, stock = 0.00275, cusp = 0.00225;
-  IsoparametricOptions o;
-  o.tool_radius = 3;
-  o.scallop_height = 0.01;
-  o.chord_error = 0.005;
+  IsoparametricOptions o = fine_options();
   Input from_cloud = flat();
   from_cloud.cloud.uncertainty.assign(from_cloud.cloud.size(), delta);
   Input from_option = flat();
@@ -416,10 +414,7 @@ struct Trough {
       4, 6, 0.15, [](double, double y) { return (y - 3) * (y - 3) / 4; },
       [](double, double y) { return Eigen::Vector2d(0, (y - 3) / 2); });
   IsoparametricOptions o = [] {
-    IsoparametricOptions o;
-    o.tool_radius = 3;
-    o.scallop_height = 0.01;
-    o.chord_error = 0.005;
+    IsoparametricOptions o = fine_options();
     return o;
   }();
 };
@@ -590,10 +585,7 @@ TEST(Isoparametric, StopsWithAClearErrorWhenThePathNeedsTooManyPasses) {
   // while planning
   const Input in = rect_patch(30, 20, 0.5, [](double x, double) { return -x * x / 20; },
                               [](double x, double) { return Eigen::Vector2d(-x / 10, 0); });
-  IsoparametricOptions o;
-  o.tool_radius = 3;
-  o.scallop_height = 0.01;
-  o.chord_error = 0.005;
+  IsoparametricOptions o = fine_options();
   const IsoparametricResult full = plan_isoparametric(in.cloud, in.nb, in.map, o);
   const auto estimate = full.report["estimate"]["passes"].get<std::size_t>();
   ASSERT_LT(estimate, full.report["passes"].get<std::size_t>());
