@@ -1,9 +1,10 @@
-// PLY writer for point clouds.
+// PLY writers for point clouds and meshes.
 #pragma once
 
 #include <string>
 
 #include "nodes/types/cloud.h"
+#include "nodes/types/mesh.h"
 
 namespace scallop {
 
@@ -13,5 +14,12 @@ namespace scallop {
 // Throws std::runtime_error "cannot write '<path>': <reason>" when the file cannot be written,
 // or when the cloud has normals but not one per point.
 void write_ply(const std::string& path, const PointCloud& cloud, bool binary = true);
+
+// Writes `mesh` as binary little-endian PLY: element vertex (double x y z, plus nx ny nz when it
+// has normals), element face (list uchar uint vertex_indices, plus int label when it has labels),
+// and element edge (uint vertex1 vertex2, uchar feature = 1) when it has feature edges, the form
+// ../shared/tools/compare_mesh.py and most mesh tools read. Throws std::runtime_error
+// "cannot write '<path>': <reason>" when the file cannot be written or a face has over 255 corners.
+void write_mesh_ply(const std::string& path, const Mesh& mesh);
 
 }  // namespace scallop

@@ -3,6 +3,7 @@
 #include "engine/file_ref.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
+#include "nodes/types/mesh.h"
 #include "nodes/types/param.h"
 #include "nodes/types/svg.h"
 #include "nodes/types/toolpath.h"
@@ -14,6 +15,7 @@ void register_types(Registry& r) {
   v.add({"File", "txt", "an input file (path and content hash)", FileRef::deserialize});
   // format 2: per-point uncertainty
   v.add({"Cloud", "ply", "points with optional unit normals (mm)", PointCloud::deserialize, 2});
+  v.add({"Mesh", "ply", "polygon mesh: vertices, faces, optional normals, face labels, feature edges (mm)", Mesh::deserialize});
   v.add({"Neighbors", "bin", "k nearest neighbours of every point", Neighborhoods::deserialize});
   v.add({"Loops", "bin", "boundary points ordered into loops, outer first", BoundaryLoops::deserialize});
   v.add({"Laplacian", "bin", "sparse meshless Laplacian", Laplacian::deserialize});
