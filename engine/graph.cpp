@@ -245,11 +245,14 @@ Graph parse_graph(const std::string& text, const std::string& path) {
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {
+    // A syntax error ("parse error at line 2, column 12: ..."), or a number too large for a double
+    // ("number overflow parsing '1e999'", an out_of_range that used to escape as it was): the
+    // text after nlohmann's "[json.exception.…] " tag, bounded like the other quoted values.
     std::string what = e.what();
-    auto pos = what.find("parse error");
+    auto pos = what.find("] ");
     throw ValidationError({(path.empty() ? std::string("graph") : path) + ": not valid JSON: " +
-                           (pos == std::string::npos ? what : what.substr(pos))});
+                           shown(pos == std::string::npos ? what : what.substr(pos + 2), 200)});
   }
   DuplicateKeyFinder dups;
   json::sax_parse(text, &dups);

@@ -350,6 +350,17 @@ TEST(Graph, RepeatedKeysThatReadLikeNodePathsArePlainDuplicates) {
                 "nodes: duplicate key; expected each key once"}));
 }
 
+// Found by fuzz/fuzz_graph (issue 11): a number too large for a double escaped parse_graph as
+// nlohmann's out_of_range ("error: [json.exception.out_of_range.406] …", no file name).
+TEST(Graph, NumberTooLargeIsInvalidJson) {
+  try {
+    parse_graph(R"({"scallop_graph": 1, "params": {"r": 1e999}, "nodes": []})", "g.json");
+    FAIL();
+  } catch (const ValidationError& e) {
+    EXPECT_EQ(e.errors, std::vector<std::string>{"g.json: not valid JSON: number overflow parsing '1e999'"});
+  }
+}
+
 TEST(Graph, DotNamesEveryNodeAndEdge) {
   Registry reg = test::make_test_registry();
   std::string dot = to_dot(compile(parse_graph(kGood), reg));
