@@ -76,7 +76,13 @@ std::string join_names(const std::vector<std::string>& names) {
 // its current key or element index; a JSON path is put together only for a duplicate.
 class DuplicateKeyFinder : public nlohmann::json_sax<json> {
  public:
-  std::vector<std::string> duplicates;  // JSON paths of repeated keys
+  struct Duplicate {
+    std::string path;     // JSON path of the repeated key
+    std::string key;
+    int node = -1;        // for nodes[i].inputs.KEY and nodes[i].params.KEY: i, else -1
+    std::string section;  // "inputs" or "params" when node >= 0
+  };
+  std::vector<Duplicate> duplicates;
 
   bool null() override { return value(); }
   bool boolean(bool) override { return value(); }
@@ -91,7 +97,16 @@ class DuplicateKeyFinder : public nlohmann::json_sax<json> {
   bool end_array() override { return end(); }
   bool key(string_t& k) override {
     auto& f = frames_.back();
-    if (!f.keys.insert(k).second) duplicates.push_back(path_of(frames_.size() - 1, k));
+    if (!f.keys.insert(k).second) {
+      Duplicate d{path_of(frames_.size() - 1, k), k, -1, ""};
+      // Told from the frames, not from the path's text: a key may itself read "nodes[-1]".
+      if (frames_.size() == 4 && frames_[0].is_object && frames_[0].key == "nodes" && !frames_[1].is_object &&
+          frames_[2].is_object && (frames_[2].key == "inputs" || frames_[2].key == "params")) {
+        d.node = frames_[1].count;
+        d.section = frames_[2].key;
+      }
+      duplicates.push_back(std::move(d));
+    }
     f.key = k;
     return true;
   }
@@ -230,11 +245,14 @@ Graph parse_graph(const std::string& text, const std::string& path) {
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {
+    // A syntax error ("parse error at line 2, column 12: ..."), or a number too large for a double
+    // ("number overflow parsing '1e999'", an out_of_range that used to escape as it was): the
+    // text after nlohmann's "[json.exception.…] " tag, bounded like the other quoted values.
     std::string what = e.what();
-    auto pos = what.find("parse error");
+    auto pos = what.find("] ");
     throw ValidationError({(path.empty() ? std::string("graph") : path) + ": not valid JSON: " +
-                           (pos == std::string::npos ? what : what.substr(pos))});
+                           shown(pos == std::string::npos ? what : what.substr(pos + 2), 200)});
   }
   DuplicateKeyFinder dups;
   json::sax_parse(text, &dups);
@@ -347,24 +365,18 @@ Graph parse_graph(const std::string& text, const std::string& path) {
       }
   }
   for (const auto& d : dups.duplicates) {
-    // nodes[i].inputs.port repeated: the port is connected twice.
-    std::size_t close = d.find(']');
-    if (d.rfind("nodes[", 0) == 0 && close != std::string::npos) {
-      int idx = std::stoi(d.substr(6, close - 6));
-      std::string rest = d.substr(close + 1);
-      std::string id = idx < static_cast<int>(g.nodes.size()) ? g.nodes[idx].id : "";
-      if (rest.rfind(".inputs.", 0) == 0) {
-        errs.push_back(node_prefix(d, id) + "input port " + in_quotes(rest.substr(8)) +
+    // nodes[i].inputs.port repeated: the port is connected twice. (A repeated "nodes" leaves
+    // nlohmann the last array, which may have fewer nodes than the first.)
+    if (d.node >= 0) {
+      const std::string id = d.node < static_cast<int>(g.nodes.size()) ? g.nodes[d.node].id : "";
+      if (d.section == "inputs")
+        errs.push_back(node_prefix(d.path, id) + "input port " + in_quotes(d.key) +
                        " is connected twice; expected one source per input");
-        continue;
-      }
-      if (rest.rfind(".params.", 0) == 0) {
-        errs.push_back(node_prefix(d, id) + "parameter " + in_quotes(rest.substr(8)) +
-                       " is given twice; expected it once");
-        continue;
-      }
+      else
+        errs.push_back(node_prefix(d.path, id) + "parameter " + in_quotes(d.key) + " is given twice; expected it once");
+      continue;
     }
-    errs.push_back(d + ": duplicate key; expected each key once");
+    errs.push_back(d.path + ": duplicate key; expected each key once");
   }
   return g;
 }

@@ -4,7 +4,8 @@ set -euo pipefail
 packages=(build-essential cmake ninja-build ccache pkg-config
   libeigen3-dev libcgal-dev libopenmesh-dev libpcl-dev libsuitesparse-dev libtbb-dev nlohmann-json3-dev
   libnanoflann-dev libspectra-dev libcli11-dev libgtest-dev libbenchmark-dev liblzf-dev libxxhash-dev libpng-dev
-  linuxcnc-uspace)
+  linuxcnc-uspace
+  clang libclang-rt-14-dev)  # scripts/fuzz.sh: clang++ and libFuzzer's runtime (libclang_rt.fuzzer-x86_64.a)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

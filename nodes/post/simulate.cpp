@@ -403,7 +403,10 @@ SimulationResult simulate_cut(const HeightFieldModel& surf, const std::vector<Ce
 
   // Local refinement around the highest values (verify.py's levels: seeds, half-width/spacing).
   const std::pair<int, double> levels[] = {{1000, 1.0}, {100, 0.25}, {30, 1.0 / 16}};
-  for (auto [K, halfw] : levels) {
+  // Plain variables, not a structured binding: clang 14 (the fuzz build) cannot capture one in a lambda.
+  for (const auto& level : levels) {
+    const int K = level.first;
+    const double halfw = level.second;
     std::vector<std::size_t> seeds;
     auto top = [&](auto value, auto keep, int count) {
       std::vector<std::size_t> c;

@@ -330,6 +330,37 @@ TEST(Graph, ListsOfExpectedNamesAreCutAfterTwenty) {
                                      "p113, p114, p115, p116, p117, p118, p119, … (5 more)"});
 }
 
+// Found while writing fuzz/fuzz_graph (issue 11): a repeated key was told apart by its path's text, so a
+// top-level key reading "nodes[-1]" indexed nodes[-1] (a crash) and "nodes[x]" threw std::stoi's
+// exception; and one reading "nodes[0].inputs.a" was reported as a port connected twice.
+TEST(Graph, RepeatedKeysThatReadLikeNodePathsArePlainDuplicates) {
+  const std::string expected =
+      "; expected one of: description, inputs, name, nodes, outputs, params, scallop_graph";
+  for (const std::string key : {"nodes[-1]", "nodes[x]", "nodes[99999999999]", "nodes[0].inputs.a"})
+    EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [{"id": "a", "type": "test.const"}], ")" + key +
+                        R"(": 1, ")" + key + R"(": 2})"),
+              (std::vector<std::string>{key + ": unknown key '" + key + "'" + expected,
+                                        key + ": duplicate key; expected each key once"}))
+        << key;
+  // a repeated "nodes" keeps the last array, shorter than the one the repeated port is in
+  EXPECT_EQ(errors_of(R"({"scallop_graph": 1, "nodes": [{"id": "a", "type": "test.const"},
+      {"id": "s", "type": "test.add", "inputs": {"a": "a.out", "a": "a.out"}}], "nodes": []})"),
+            (std::vector<std::string>{
+                "nodes[1].inputs.a: node '': input port 'a' is connected twice; expected one source per input",
+                "nodes: duplicate key; expected each key once"}));
+}
+
+// Found by fuzz/fuzz_graph (issue 11): a number too large for a double escaped parse_graph as
+// nlohmann's out_of_range ("error: [json.exception.out_of_range.406] …", no file name).
+TEST(Graph, NumberTooLargeIsInvalidJson) {
+  try {
+    parse_graph(R"({"scallop_graph": 1, "params": {"r": 1e999}, "nodes": []})", "g.json");
+    FAIL();
+  } catch (const ValidationError& e) {
+    EXPECT_EQ(e.errors, std::vector<std::string>{"g.json: not valid JSON: number overflow parsing '1e999'"});
+  }
+}
+
 TEST(Graph, DotNamesEveryNodeAndEdge) {
   Registry reg = test::make_test_registry();
   std::string dot = to_dot(compile(parse_graph(kGood), reg));
