@@ -1,5 +1,6 @@
 // The `scallop` command: run, batch, validate, nodes, dot.
 #include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
 #include <tbb/task_group.h>
 
 #include <algorithm>
@@ -27,6 +28,7 @@ struct CommonOptions {
   bool explain = false;
   bool quiet = false;
   std::string events_path;
+  int threads = 0;
 };
 
 void add_common(CLI::App* cmd, CommonOptions& o) {
@@ -37,6 +39,10 @@ void add_common(CLI::App* cmd, CommonOptions& o) {
   cmd->add_flag("--explain", o.explain, "say for each node why the cache hit or missed");
   cmd->add_option("--events", o.events_path, "write progress events as JSON lines to FILE");
   cmd->add_flag("-q,--quiet", o.quiet, "no per-node progress on stderr");
+  cmd->add_option("--threads", o.threads,
+                  "at most N threads (default: every core); 1 runs one node at a time, so the events' "
+                  "peak_mib is each node's own")
+      ->check(CLI::Range(1, 1024));
 }
 
 // Loads a graph or prints its errors; returns false on failure.
@@ -358,6 +364,11 @@ int main(int argc, char** argv) {
   dot->add_option("graph", dot_graph, "graph JSON file")->required();
 
   CLI11_PARSE(app, argc, argv);
+  const int threads = *run ? run_opts.threads : *batch ? batch_opts.threads : 0;
+  std::unique_ptr<tbb::global_control> thread_limit;
+  if (threads > 0)
+    thread_limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                         static_cast<std::size_t>(threads));
   try {
     if (*run) return cmd_run(run_graph, run_inputs, run_out, run_opts);
     if (*batch) return cmd_batch(batch_graph, batch_parts, batch_jobs, batch_input, batch_out, batch_opts);

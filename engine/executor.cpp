@@ -6,6 +6,7 @@
 #include <mutex>
 
 #include "engine/hash.h"
+#include "engine/memory.h"
 
 namespace scallop {
 
@@ -140,9 +141,13 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
     runs[i] = !have[i] && (needed[i] || heal);
   }
 
+  // The memory high-water mark restarts whenever a node starts with no other running, so each
+  // node's peak is its own when nodes run one at a time.
+  std::atomic<int> running{0};
   auto run_node = [&](int i) {
     const PlanNode& pn = plan.nodes[i];
     NodeRun& rec = result.nodes[i];
+    if (running++ == 0) reset_peak_resident();
     rec.id = pn.id;
     rec.type = pn.decl->type;
     rec.key = keys[i];
@@ -256,8 +261,11 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
       good[i] = true;
     }
     rec.finish = seconds_since_start();
+    rec.peak_mib = static_cast<double>(peak_resident_bytes()) / (1024.0 * 1024.0);
+    --running;
     emit({{"event", "node_finish"}, {"node", pn.id}, {"type", rec.type}, {"status", rec.status},
-          {"seconds", rec.seconds()}, {"cache", rec.cache}, {"why", rec.why}, {"error", rec.error}, {"key", rec.key}});
+          {"seconds", rec.seconds()}, {"peak_mib", rec.peak_mib}, {"cache", rec.cache}, {"why", rec.why},
+          {"error", rec.error}, {"key", rec.key}});
 
     // Memory tier: free each input's producer once its last consumer is done.
     std::lock_guard lock(output_mutex);

@@ -33,6 +33,9 @@ struct NodeRun {
   std::string key;
   double start = 0, finish = 0;  // seconds since process start
   double seconds() const { return finish - start; }
+  // The process's resident-memory peak while the node ran (MiB; 0 when unknown). Nodes running at
+  // the same time share it: with one node at a time (--threads 1) it is the node's own.
+  double peak_mib = 0;
 };
 
 struct RunResult {
