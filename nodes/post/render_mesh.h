@@ -1,0 +1,24 @@
+// A picture of a mesh for people: shaded faces (a z-buffer), feature edges in a strong colour,
+// optionally a colour per face label (segments).
+#pragma once
+
+#include <string>
+
+#include "nodes/post/render.h"
+#include "nodes/types/mesh.h"
+
+namespace scallop {
+
+struct MeshPictureOptions {
+  std::string view = "iso";  // "iso" (seen from (-1, -1, 1), as render_path's), "top", "front" (from -Y)
+  int width = 1000;          // pixels; the height follows the mesh's projected aspect
+  bool by_label = false;     // colour each face by its label (grey when -1 or no labels)
+  bool wireframe = false;    // thin dark polygon edges (readable up to a few thousand faces)
+};
+
+// The mesh shaded with a headlight (Lambert on both sides, so an inverted face still shows) over
+// white, feature edges drawn 2 px wide in red on top where visible. Throws std::invalid_argument
+// for an unknown view or a mesh with no faces.
+Picture render_mesh(const Mesh& mesh, const MeshPictureOptions& options);
+
+}  // namespace scallop
