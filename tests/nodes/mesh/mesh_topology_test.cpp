@@ -2,24 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/test_support.h"
+
 namespace scallop {
 namespace {
 
-// The unit cube as six quads, outward.
-Mesh cube() {
-  Mesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.push_back(Eigen::Vector3d(i & 1, (i >> 1) & 1, (i >> 2) & 1));
-  m.add_face({0, 2, 3, 1});
-  m.add_face({4, 5, 7, 6});
-  m.add_face({0, 1, 5, 4});
-  m.add_face({2, 6, 7, 3});
-  m.add_face({0, 4, 6, 2});
-  m.add_face({1, 3, 7, 5});
-  return m;
-}
+using test::unit_cube;
 
 TEST(MeshTopology, ACubeIsOneClosedComponentOfGenusZero) {
-  Mesh m = cube();
+  Mesh m = unit_cube();
   auto e = mesh_edges(m);
   EXPECT_EQ(e.size(), 12u);
   for (std::size_t i = 0; i < e.size(); ++i) EXPECT_EQ(e.faces_on(i), 2u);
@@ -34,7 +25,7 @@ TEST(MeshTopology, ACubeIsOneClosedComponentOfGenusZero) {
 }
 
 TEST(MeshTopology, AnOpenBoxHasOneBoundaryLoopAlongTheRemovedFace) {
-  Mesh m = cube();
+  Mesh m = unit_cube();
   Mesh open;
   open.vertices = m.vertices;
   for (std::size_t f = 0; f < 6; ++f)
@@ -51,14 +42,14 @@ TEST(MeshTopology, AnOpenBoxHasOneBoundaryLoopAlongTheRemovedFace) {
 }
 
 TEST(MeshTopology, ThreeFacesOnAnEdgeAreNonManifoldTwoCubesTwoComponents) {
-  Mesh m = cube();
+  Mesh m = unit_cube();
   m.vertices.push_back({0.5, 0.5, -1});
   m.add_face({0, 1, 8});  // a fin on the cube's edge 0-1
   auto t = mesh_topology(m, mesh_edges(m));
   EXPECT_EQ(t.non_manifold_edges, 1u);
   EXPECT_EQ(t.genus, -1);
 
-  Mesh two = cube();
+  Mesh two = unit_cube();
   for (int i = 0; i < 8; ++i) two.vertices.push_back(two.vertices[i] + Eigen::Vector3d(3, 0, 0));
   for (std::size_t f = 0; f < 6; ++f) {
     std::vector<std::uint32_t> c(two.face(f), two.face(f) + 4);

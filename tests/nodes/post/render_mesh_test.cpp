@@ -2,21 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/test_support.h"
+
 namespace scallop {
 namespace {
 
-// The unit cube as six quads, outward, with its 12 edges as features.
-Mesh cube() {
-  Mesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.push_back(Eigen::Vector3d(i & 1, (i >> 1) & 1, (i >> 2) & 1));
-  m.add_face({0, 2, 3, 1});
-  m.add_face({4, 5, 7, 6});
-  m.add_face({0, 1, 5, 4});
-  m.add_face({2, 6, 7, 3});
-  m.add_face({0, 4, 6, 2});
-  m.add_face({1, 3, 7, 5});
-  return m;
-}
+using test::unit_cube;
 
 std::array<int, 3> pixel(const Picture& p, int x, int y) {
   const std::size_t i = (std::size_t(y) * p.width + x) * 3;
@@ -24,7 +15,7 @@ std::array<int, 3> pixel(const Picture& p, int x, int y) {
 }
 
 TEST(RenderMesh, TopViewOfACubeFillsASquareWithItsFeatureEdgesRed) {
-  Mesh m = cube();
+  Mesh m = unit_cube();
   MeshPictureOptions o;
   o.view = "top";
   o.width = 120;
@@ -41,7 +32,7 @@ TEST(RenderMesh, TopViewOfACubeFillsASquareWithItsFeatureEdgesRed) {
 }
 
 TEST(RenderMesh, LabelsColourTheirFacesAndBadInputIsRefused) {
-  Mesh m = cube();
+  Mesh m = unit_cube();
   m.face_label = {0, 1, 2, 3, 4, 5};
   MeshPictureOptions o;
   o.view = "top", o.width = 120, o.by_label = true;
