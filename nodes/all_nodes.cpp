@@ -2,6 +2,7 @@
 
 #include "nodes/cloud/register.h"
 #include "nodes/io/register.h"
+#include "nodes/mesh/register.h"
 #include "nodes/param/register.h"
 #include "nodes/path/register.h"
 #include "nodes/post/register.h"
@@ -13,6 +14,7 @@ namespace scallop {
 void register_builtins(Registry& r) {
   register_types(r);
   register_io(r);
+  register_mesh(r);
   register_cloud(r);
   register_param(r);
   register_path(r);
