@@ -143,16 +143,4 @@ int run_command(const std::string& command, std::string* output) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-Mesh unit_cube() {
-  Mesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.push_back(Eigen::Vector3d(i & 1, (i >> 1) & 1, (i >> 2) & 1));
-  m.add_face({0, 2, 3, 1});
-  m.add_face({4, 5, 7, 6});
-  m.add_face({0, 1, 5, 4});
-  m.add_face({2, 6, 7, 3});
-  m.add_face({0, 4, 6, 2});
-  m.add_face({1, 3, 7, 5});
-  return m;
-}
-
 }  // namespace scallop::test

@@ -9,7 +9,6 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/node.h"
-#include "nodes/types/mesh.h"
 
 namespace scallop::test {
 
@@ -46,9 +45,6 @@ std::map<std::string, ValuePtr> run_node(const NodeDecl& decl, const nlohmann::j
 // Writes text to a file.
 void write_file(const std::filesystem::path& path, const std::string& text);
 std::string read_file(const std::filesystem::path& path);
-
-// The unit cube [0, 1]^3 as six outward quads; vertex i is (i & 1, (i >> 1) & 1, (i >> 2) & 1).
-Mesh unit_cube();
 
 // Runs a shell command; returns its exit status and fills output with stdout+stderr.
 int run_command(const std::string& command, std::string* output = nullptr);

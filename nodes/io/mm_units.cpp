@@ -27,7 +27,7 @@ std::string out_of_range_point(const std::vector<Eigen::Vector3d>& P) {
   return "";
 }
 
-CloudScale measure_scale(const std::vector<Eigen::Vector3d>& P) {
+CloudScale measure_scale(const std::vector<Eigen::Vector3d>& P, bool spacing) {
   std::vector<Eigen::Vector3d> F;
   F.reserve(P.size());
   for (const auto& p : P)
@@ -38,6 +38,7 @@ CloudScale measure_scale(const std::vector<Eigen::Vector3d>& P) {
   Eigen::Vector3d lo = F[0], hi = F[0];
   for (const auto& p : F) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   s.extent = (hi - lo).maxCoeff();
+  if (!spacing) return s;
 
   const PointsAdaptor<Eigen::Vector3d> adaptor{F};
   KdTree<Eigen::Vector3d, 3> tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
@@ -65,9 +66,10 @@ CloudScale measure_scale(const std::vector<Eigen::Vector3d>& P) {
   return s;
 }
 
-std::string units_warning(const CloudScale& s, double scale, const std::string& scale_setting) {
+std::string units_warning(const CloudScale& s, double scale, const std::string& scale_setting,
+                          const std::string& noun) {
   if (s.points < 2 || s.extent <= 0) return "";
-  const std::string what = "the cloud is " + num(s.extent) + " mm across" +
+  const std::string what = "the " + noun + " is " + num(s.extent) + " mm across" +
                            (s.spacing > 0 ? " with points " + num(s.spacing) + " mm apart" : "");
   // A finishing job's part is millimetres to metres across, its points microns to millimetres apart.
   if (s.extent < 1 || (s.spacing > 0 && s.spacing < 1e-3))
@@ -76,6 +78,13 @@ std::string units_warning(const CloudScale& s, double scale, const std::string& 
     return what + ": is it in micrometres? coordinates are read as mm; set " + scale_setting + " to " +
            num(scale / 1000, "%.6g");
   return "";
+}
+
+void check_units(const NodeContext& ctx, const std::string& path, const std::vector<Eigen::Vector3d>& P, bool spacing,
+                 const std::string& noun) {
+  if (auto bad = out_of_range_point(P); !bad.empty()) throw InputError(path + ": " + bad);
+  const std::string w = units_warning(measure_scale(P, spacing), ctx.number("scale"), ctx.node_id() + ".scale", noun);
+  if (!w.empty()) ctx.warn(w);
 }
 
 }  // namespace scallop

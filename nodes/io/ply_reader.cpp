@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <bit>
+#include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -34,6 +36,11 @@ bool scalar_from_name(std::string_view n, Scalar& s) {
       return true;
     }
   return false;
+}
+
+std::string_view scalar_name(Scalar s) {
+  static const std::string_view names[] = {"char", "uchar", "short", "ushort", "int", "uint", "float", "double"};
+  return names[static_cast<int>(s)];
 }
 
 std::size_t scalar_size(Scalar s) {
@@ -82,22 +89,51 @@ struct Element {
 
 enum class Format { Ascii, BinaryLE, BinaryBE };
 
-// Which vertex property feeds which output slot: 0..2 position, 3..5 normal, -1 dropped.
-std::vector<int> vertex_slots(const Element& v, bool& has_normals) {
-  static const char* names[] = {"x", "y", "z", "nx", "ny", "nz"};
-  std::vector<int> slots(v.props.size(), -1);
-  int found[6] = {-1, -1, -1, -1, -1, -1};
-  for (std::size_t i = 0; i < v.props.size(); ++i)
-    for (int k = 0; k < 6; ++k)
-      if (!v.props[i].is_list && v.props[i].name == names[k] && found[k] < 0) {
-        found[k] = static_cast<int>(i);
-        slots[i] = k;
-      }
-  has_normals = found[3] >= 0 && found[4] >= 0 && found[5] >= 0;
-  if (!has_normals)
-    for (int& s : slots)
-      if (s >= 3) s = -1;
-  return slots;
+// What a property of an element feeds; the values of one item are gathered in a double[kSlots].
+enum Slot : int { kNone = -1, kX, kY, kZ, kNx, kNy, kNz, kLabel, kV1, kV2, kFeature, kSlots, kCorners = kSlots };
+
+enum class Role { Skip, Vertex, Face, Edge };
+
+// How one element is read: its role and the slot of each property.
+struct Plan {
+  Role role = Role::Skip;
+  std::vector<int> slots;
+  bool normals = false, labels = false;
+};
+
+// The first non-list (or, for corners, list) property of each name gets its slot.
+Plan plan_element(const Element& e, io::MeshRead what) {
+  Plan plan;
+  plan.slots.assign(e.props.size(), kNone);
+  auto find = [&](const char* name, bool list) -> int {
+    for (std::size_t i = 0; i < e.props.size(); ++i)
+      if (e.props[i].is_list == list && e.props[i].name == name) return static_cast<int>(i);
+    return -1;
+  };
+  auto take = [&](const char* name, int slot, bool list = false) {
+    const int i = find(name, list);
+    if (i >= 0) plan.slots[i] = slot;
+    return i >= 0;
+  };
+  if (e.name == "vertex") {
+    plan.role = Role::Vertex;
+    take("x", kX), take("y", kY), take("z", kZ);
+    if (find("nx", false) >= 0 && find("ny", false) >= 0 && find("nz", false) >= 0) {
+      take("nx", kNx), take("ny", kNy), take("nz", kNz);
+      plan.normals = true;
+    }
+  } else if (what == io::MeshRead::Mesh && e.name == "face") {
+    plan.role = Role::Face;
+    if (!take("vertex_indices", kCorners, true)) take("vertex_index", kCorners, true);
+    plan.labels = take("label", kLabel);
+  } else if (what == io::MeshRead::Mesh && e.name == "edge" && find("vertex1", false) >= 0 &&
+             find("vertex2", false) >= 0 && find("feature", false) >= 0) {
+    // scallop's own form: the feature edges of the mesh (an edge element without the flag is
+    // some other list of edges, read past)
+    plan.role = Role::Edge;
+    take("vertex1", kV1), take("vertex2", kV2), take("feature", kFeature);
+  }
+  return plan;
 }
 
 // The end of the trailing-data message: which element was last and how many the header declares.
@@ -106,11 +142,77 @@ std::string trailing_what(const Element& last) {
          " is smaller than the data";
 }
 
+// A number as a message quotes it: 12, -1, 2.5.
+std::string number_text(double x) {
+  char buf[32];
+  auto r = std::to_chars(buf, buf + sizeof buf, x);
+  return std::string(buf, r.ptr);
+}
+
+// Where the items go: the mesh being read, item by item.
+class Sink {
+ public:
+  Sink(Mesh& mesh, std::uint64_t vertices) : mesh_(mesh), nv_(vertices) {}
+
+  // Room for `n` items of `plan`'s element (never more than the file can hold).
+  void reserve(const Plan& plan, std::size_t n) {
+    if (plan.role == Role::Vertex) {
+      mesh_.vertices.reserve(n);
+      if (plan.normals) mesh_.normals.reserve(n);
+    } else if (plan.role == Role::Face) {
+      mesh_.face_start.reserve(n + 1);
+      mesh_.face_vertices.reserve(3 * n);
+      if (plan.labels) mesh_.face_label.reserve(n);
+    }
+  }
+  // A corner of face `face`, read as x (its text `token`); "" or what is wrong with it.
+  std::string corner(std::uint64_t face, double x, std::string_view token) {
+    if (!(x >= 0 && x < static_cast<double>(nv_) && x == std::floor(x)))
+      return io::index_past_vertices("face " + std::to_string(face), token, nv_);
+    mesh_.face_vertices.push_back(static_cast<std::uint32_t>(x));
+    return {};
+  }
+  // Item `i` of `plan`'s element, whose values are v; "" or what is wrong with it.
+  std::string finish(const Plan& plan, std::uint64_t i, const double* v, bool finite_only) {
+    switch (plan.role) {
+      case Role::Skip: break;
+      case Role::Vertex:
+        if (finite_only && !io::finite_point(v)) return io::non_finite_point("vertex " + std::to_string(i), v);
+        mesh_.vertices.emplace_back(v[kX], v[kY], v[kZ]);
+        if (plan.normals) mesh_.normals.emplace_back(v[kNx], v[kNy], v[kNz]);
+        break;
+      case Role::Face: {
+        const std::size_t corners = mesh_.face_vertices.size() - mesh_.face_start.back();
+        if (corners < 3) return io::too_few_corners(i, corners);
+        mesh_.face_start.push_back(static_cast<std::uint32_t>(mesh_.face_vertices.size()));
+        if (plan.labels) mesh_.face_label.push_back(static_cast<std::int32_t>(v[kLabel]));
+        break;
+      }
+      case Role::Edge:
+        for (int k : {kV1, kV2})
+          if (!(v[k] >= 0 && v[k] < static_cast<double>(nv_)))
+            return io::index_past_vertices("edge " + std::to_string(i), number_text(v[k]), nv_);
+        if (v[kFeature] != 0) {
+          const auto a = static_cast<std::uint32_t>(v[kV1]), b = static_cast<std::uint32_t>(v[kV2]);
+          mesh_.feature_edges.push_back({std::min(a, b), std::max(a, b)});
+        }
+        break;
+    }
+    return {};
+  }
+
+ private:
+  Mesh& mesh_;
+  std::uint64_t nv_;
+};
+
 void read_binary(const std::string& path, const std::string& data, std::size_t pos,
-                 const std::vector<Element>& elements, bool big, PointCloud& cloud) {
+                 const std::vector<Element>& elements, const std::vector<Plan>& plans, bool big,
+                 bool finite_only, Sink& sink) {
   const std::size_t size = data.size();
-  for (const Element& e : elements) {
-    const bool is_vertex = e.name == "vertex";
+  for (std::size_t ei = 0; ei < elements.size(); ++ei) {
+    const Element& e = elements[ei];
+    const Plan& plan = plans[ei];
     bool fixed = true;
     std::size_t item_min = 0;  // bytes of an item whose lists are all empty
     for (const Property& p : e.props) {
@@ -118,7 +220,7 @@ void read_binary(const std::string& path, const std::string& data, std::size_t p
       item_min += p.is_list ? scalar_size(p.count_type) : scalar_size(p.type);
     }
     const std::string of = " of " + std::to_string(e.count);
-    if (!is_vertex && fixed) {
+    if (plan.role == Role::Skip && fixed) {
       // Skip the whole element at once; check against the bytes left before doing so.
       if (item_min > 0 && e.count > (size - pos) / item_min) {
         const std::size_t k = (size - pos) / item_min;
@@ -127,19 +229,12 @@ void read_binary(const std::string& path, const std::string& data, std::size_t p
       pos += static_cast<std::size_t>(e.count) * item_min;
       continue;
     }
-    bool has_normals = false;
-    std::vector<int> slots;
-    if (is_vertex) {
-      slots = vertex_slots(e, has_normals);
-      // Never trust the count for the allocation: at most what the remaining bytes can hold.
-      const std::size_t fit = item_min > 0 ? (size - pos) / item_min : 0;
-      const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(e.count, fit));
-      cloud.points.reserve(n);
-      if (has_normals) cloud.normals.reserve(n);
-    }
+    // Never trust the count for the allocation: at most what the remaining bytes can hold.
+    const std::size_t fit = item_min > 0 ? (size - pos) / item_min : 0;
+    sink.reserve(plan, static_cast<std::size_t>(std::min<std::uint64_t>(e.count, fit)));
     for (std::uint64_t i = 0; i < e.count; ++i) {
       const std::size_t start = pos;
-      double v[6] = {0, 0, 0, 0, 0, 0};
+      double v[kSlots] = {};
       for (std::size_t j = 0; j < e.props.size(); ++j) {
         const Property& p = e.props[j];
         if (p.is_list) {
@@ -155,19 +250,21 @@ void read_binary(const std::string& path, const std::string& data, std::size_t p
           const std::size_t es = scalar_size(p.type);
           if (n > static_cast<double>((size - pos) / es))
             fail_byte(path, start, "file ends inside " + e.name + " " + std::to_string(i) + of);
+          if (plan.slots[j] == kCorners)
+            for (std::size_t k = 0; k < static_cast<std::size_t>(n); ++k) {
+              const double x = read_scalar(data.data() + pos + k * es, p.type, big);
+              if (auto bad = sink.corner(i, x, number_text(x)); !bad.empty()) fail_byte(path, start, bad);
+            }
           pos += static_cast<std::size_t>(n) * es;
         } else {
           const std::size_t s = scalar_size(p.type);
           if (size - pos < s)
             fail_byte(path, start, "file ends inside " + e.name + " " + std::to_string(i) + of);
-          if (is_vertex && slots[j] >= 0) v[slots[j]] = read_scalar(data.data() + pos, p.type, big);
+          if (plan.slots[j] >= 0) v[plan.slots[j]] = read_scalar(data.data() + pos, p.type, big);
           pos += s;
         }
       }
-      if (is_vertex) {
-        cloud.points.emplace_back(v[0], v[1], v[2]);
-        if (has_normals) cloud.normals.emplace_back(v[3], v[4], v[5]);
-      }
+      if (auto bad = sink.finish(plan, i, v, finite_only); !bad.empty()) fail_byte(path, start, bad);
     }
   }
   // Data past the last element means the header's counts are too small: reading only what they
@@ -178,23 +275,17 @@ void read_binary(const std::string& path, const std::string& data, std::size_t p
 }
 
 void read_ascii(const std::string& path, io::LineReader& lines, const std::vector<Element>& elements,
-                PointCloud& cloud, std::size_t bytes_left) {
+                const std::vector<Plan>& plans, std::size_t bytes_left, bool finite_only, Sink& sink) {
   std::vector<std::string_view> tok;
   std::string_view line;
-  for (const Element& e : elements) {
-    const bool is_vertex = e.name == "vertex";
+  for (std::size_t ei = 0; ei < elements.size(); ++ei) {
+    const Element& e = elements[ei];
+    const Plan& plan = plans[ei];
     bool has_lists = false;
     for (const Property& p : e.props) has_lists = has_lists || p.is_list;
-    bool has_normals = false;
-    std::vector<int> slots;
-    if (is_vertex) {
-      slots = vertex_slots(e, has_normals);
-      // Each value takes at least two bytes ("0 "): never reserve more than the file can hold.
-      const std::size_t fit = bytes_left / (2 * std::max<std::size_t>(1, e.props.size()));
-      const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(e.count, fit));
-      cloud.points.reserve(n);
-      if (has_normals) cloud.normals.reserve(n);
-    }
+    // Each value takes at least two bytes ("0 "): never reserve more than the file can hold.
+    const std::size_t fit = bytes_left / (2 * std::max<std::size_t>(1, e.props.size()));
+    sink.reserve(plan, static_cast<std::size_t>(std::min<std::uint64_t>(e.count, fit)));
     const std::string of = " of " + std::to_string(e.count);
     for (std::uint64_t i = 0; i < e.count; ++i) {
       const std::string item = e.name + " " + std::to_string(i);
@@ -205,7 +296,7 @@ void read_ascii(const std::string& path, io::LineReader& lines, const std::vecto
       }
       if (!got) fail_line(path, lines.line() + 1, "file ends before " + item + of);
       const std::size_t ln = lines.line();
-      double v[6] = {0, 0, 0, 0, 0, 0};
+      double v[kSlots] = {};
       std::size_t t = 0;
       for (std::size_t j = 0; j < e.props.size(); ++j) {
         const Property& p = e.props[j];
@@ -233,23 +324,22 @@ void read_ascii(const std::string& path, io::LineReader& lines, const std::vecto
             if (!io::parse_double(tok[t], x))
               fail_line(path, ln, io::bad_number(tok[t], "bad value " + quote(tok[t]) + " for property '" + p.name +
                                                            "' of " + item));
+            if (plan.slots[j] == kCorners)
+              if (auto bad = sink.corner(i, x, tok[t]); !bad.empty()) fail_line(path, ln, bad);
           }
         } else {
           double x;
           if (!io::parse_double(tok[t], x))
             fail_line(path, ln, io::bad_number(tok[t], "bad value " + quote(tok[t]) + " for property '" + p.name +
                                                          "' of " + item));
-          if (is_vertex && slots[j] >= 0) v[slots[j]] = x;
+          if (plan.slots[j] >= 0) v[plan.slots[j]] = x;
           ++t;
         }
       }
       if (t != tok.size())
         fail_line(path, ln, "expected " + std::to_string(t) + " values for " + item + ", found " +
                                 std::to_string(tok.size()));
-      if (is_vertex) {
-        cloud.points.emplace_back(v[0], v[1], v[2]);
-        if (has_normals) cloud.normals.emplace_back(v[3], v[4], v[5]);
-      }
+      if (auto bad = sink.finish(plan, i, v, finite_only); !bad.empty()) fail_line(path, ln, bad);
     }
   }
   // Blank lines may follow; anything else means the header's counts are too small.
@@ -266,7 +356,7 @@ void read_ascii(const std::string& path, io::LineReader& lines, const std::vecto
 
 }  // namespace
 
-PointCloud read_ply(const std::string& path) {
+Mesh read_ply_mesh(const std::string& path, io::MeshRead what) {
   const std::string data = io::read_file_bytes(path);
   io::LineReader lines(data, io::bom_size(data));
   std::string_view line;
@@ -340,12 +430,33 @@ PointCloud read_ply(const std::string& path) {
     if (!found) fail_line(path, end_line, std::string("vertex element has no '") + c + "' property");
   }
 
-  PointCloud cloud;
+  std::vector<Plan> plans;
+  const Element* face = nullptr;
+  for (const Element& e : elements) {
+    plans.push_back(plan_element(e, what));
+    if (plans.back().role == Role::Face) face = &e;
+  }
+  if (face) {
+    const Plan& plan = plans[face - elements.data()];
+    const auto corners = std::find(plan.slots.begin(), plan.slots.end(), kCorners);
+    if (corners == plan.slots.end())
+      fail_line(path, end_line, "face element has no 'vertex_indices' list property");
+    const Property& p = face->props[corners - plan.slots.begin()];
+    if (!is_integer(p.type))
+      fail_line(path, end_line, "face property '" + p.name + "' holds " + quote(scalar_name(p.type)) +
+                                    " values; vertex indices must be integers");
+  }
+
+  Mesh mesh;
+  Sink sink(mesh, vertex->count);
+  const bool finite_only = what == io::MeshRead::Mesh;
   if (format == Format::Ascii)
-    read_ascii(path, lines, elements, cloud, data.size() - lines.offset());
+    read_ascii(path, lines, elements, plans, data.size() - lines.offset(), finite_only, sink);
   else
-    read_binary(path, data, lines.offset(), elements, format == Format::BinaryBE, cloud);
-  return cloud;
+    read_binary(path, data, lines.offset(), elements, plans, format == Format::BinaryBE, finite_only, sink);
+  return mesh;
 }
+
+PointCloud read_ply(const std::string& path) { return io::vertices_as_cloud(read_ply_mesh(path, io::MeshRead::Vertices)); }
 
 }  // namespace scallop

@@ -1,9 +1,6 @@
 #include "nodes/io/read_cloud.h"
 
-#include <cmath>
-#include <sstream>
-
-#include "nodes/io/mesh_vertices_reader.h"
+#include "nodes/io/mesh_reader.h"
 #include "nodes/io/pcd_reader.h"
 #include "nodes/io/ply_reader.h"
 #include "nodes/io/read_support.h"
@@ -12,11 +9,7 @@
 namespace scallop {
 
 PointCloud read_cloud(const std::string& path, double scale) {
-  if (!(std::isfinite(scale) && scale > 0)) {
-    std::ostringstream s;
-    s << "scale must be positive and finite, got " << scale;
-    io::fail(path, s.str());
-  }
+  io::check_scale(path, scale);
   const std::string ext = io::lower_extension(path);
   PointCloud cloud;
   if (ext == ".ply") cloud = read_ply(path);

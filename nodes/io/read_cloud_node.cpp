@@ -1,7 +1,7 @@
-#include "engine/file_ref.h"
 #include "engine/node.h"
 #include "nodes/io/mm_units.h"
 #include "nodes/io/read_cloud.h"
+#include "nodes/io/read_input.h"
 #include "nodes/types/cloud.h"
 
 namespace scallop::io_nodes {
@@ -15,16 +15,9 @@ NodeDecl make_read_cloud_node() {
       .output("cloud", "Cloud", "the points, NaN points kept, normals only when the file has them")
       .param_float("scale", 1.0, 1e-9, 1e9, "", "multiplies every coordinate, e.g. 1000 for a file in metres");
   d.run = [](NodeContext& ctx) {
-    auto file = ctx.input<FileRef>("file");
-    const double scale = ctx.number("scale");
-    PointCloud cloud;
-    try {
-      cloud = read_cloud(file->path, scale);
-    } catch (const CloudReadError& e) {
-      throw InputError(e.what());  // a malformed file is bad input: exit 2
-    }
-    if (auto bad = out_of_range_point(cloud.points); !bad.empty()) throw InputError(file->path + ": " + bad);
-    if (auto w = units_warning(measure_scale(cloud.points), scale, ctx.node_id() + ".scale"); !w.empty()) ctx.warn(w);
+    std::string path;
+    PointCloud cloud = io::read_input(ctx, read_cloud, path);
+    check_units(ctx, path, cloud.points);
     ctx.set("cloud", std::move(cloud));
   };
   return d;

@@ -1,9 +1,11 @@
 #include "nodes/io/read_support.h"
 
 #include <cctype>
+#include <cmath>
 #include <charconv>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <system_error>
 
 namespace scallop::io {
@@ -113,6 +115,37 @@ std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return ext;
+}
+
+void check_scale(const std::string& path, double scale) {
+  if (std::isfinite(scale) && scale > 0) return;
+  std::ostringstream s;
+  s << "scale must be positive and finite, got " << scale;
+  fail(path, s.str());
+}
+
+PointCloud vertices_as_cloud(Mesh&& mesh) {
+  PointCloud cloud;
+  cloud.points = std::move(mesh.vertices);
+  cloud.normals = std::move(mesh.normals);
+  return cloud;
+}
+
+bool finite_point(const double* xyz) {
+  return std::isfinite(xyz[0]) && std::isfinite(xyz[1]) && std::isfinite(xyz[2]);
+}
+
+std::string non_finite_point(const std::string& item, const double* xyz) {
+  const bool nan = std::isnan(xyz[0]) || std::isnan(xyz[1]) || std::isnan(xyz[2]);
+  return item + (nan ? " has a NaN coordinate" : " has an infinite coordinate");
+}
+
+std::string index_past_vertices(const std::string& item, std::string_view token, std::uint64_t vertices) {
+  return item + " has index " + quote(token) + " but there are " + std::to_string(vertices) + " vertices";
+}
+
+std::string too_few_corners(std::uint64_t face, std::uint64_t corners) {
+  return "face " + std::to_string(face) + " has " + std::to_string(corners) + " corners; a face needs at least 3";
 }
 
 }  // namespace scallop::io

@@ -1,5 +1,5 @@
-// Small helpers shared by the cloud readers: loading a file, walking its lines, parsing numbers
-// and raising CloudReadError with the file name and position.
+// Small helpers shared by the cloud and mesh readers: loading a file, walking its lines, parsing
+// numbers and raising CloudReadError with the file name and position.
 #pragma once
 
 #include <cstddef>
@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "nodes/io/read_cloud.h"
+#include "nodes/types/mesh.h"
 
 namespace scallop::io {
 
@@ -61,5 +62,32 @@ std::string quote(std::string_view token);
 
 // The extension of `path` in lower case with its dot (".ply"), or "" when it has none.
 std::string lower_extension(const std::string& path);
+
+// "<path>: scale must be positive and finite, got <scale>" unless it is.
+void check_scale(const std::string& path, double scale);
+
+// ---- mesh files (mesh_reader.h, ply_reader.h)
+
+// What a mesh file's reader keeps.
+enum class MeshRead {
+  // io.read_cloud: the vertices (and vertex normals) only. Faces are read past (OFF's indices
+  // are checked), NaN coordinates kept.
+  Vertices,
+  // io.read_mesh: vertices and faces. Every face needs at least 3 corners, each a vertex of the
+  // file; NaN and infinite coordinates are refused.
+  Mesh,
+};
+
+// The vertices (and normals) of a mesh as a point cloud, moved out of it.
+PointCloud vertices_as_cloud(Mesh&& mesh);
+
+// Whether x, y and z are all finite.
+bool finite_point(const double* xyz);
+// "<item> has a NaN coordinate" or "<item> has an infinite coordinate", for a non-finite xyz.
+std::string non_finite_point(const std::string& item, const double* xyz);
+// "<item> has index '<token>' but there are <vertices> vertices".
+std::string index_past_vertices(const std::string& item, std::string_view token, std::uint64_t vertices);
+// "face <f> has <corners> corners; a face needs at least 3".
+std::string too_few_corners(std::uint64_t face, std::uint64_t corners);
 
 }  // namespace scallop::io

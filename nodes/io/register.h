@@ -1,4 +1,4 @@
-// The io.* nodes: reading and writing clouds and tool paths.
+// The io.* nodes: reading and writing clouds, meshes and tool paths.
 #pragma once
 
 #include "engine/node.h"

@@ -1,8 +1,6 @@
-#include <stdexcept>
-
 #include "engine/file_ref.h"
 #include "engine/node.h"
-#include "engine/output_path.h"
+#include "nodes/io/write_support.h"
 #include "nodes/types/ply_writer.h"
 #include "nodes/types/cloud.h"
 
@@ -24,17 +22,8 @@ NodeDecl make_write_cloud_node() {
     auto cloud = ctx.input<PointCloud>("cloud");
     const std::string param = ctx.text("path");
     if (param.empty()) throw NodeError("parameter 'path' is empty: give the file to write");
-    try {
-      const std::string path = output_file(ctx.output_dir(), param);
-      write_ply(path, *cloud, ctx.flag("binary"));
-      ctx.set("file", FileRef::open(path));
-    } catch (const NodeError&) {
-      throw;
-    } catch (const std::invalid_argument& e) {
-      throw NodeError("parameter 'path': " + std::string(e.what()));
-    } catch (const std::runtime_error& e) {
-      throw NodeError(e.what());
-    }
+    const bool binary = ctx.flag("binary");
+    ctx.set("file", io::write_output_file(ctx, param, [&](const std::string& path) { write_ply(path, *cloud, binary); }));
   };
   return d;
 }

@@ -2,14 +2,16 @@
 
 namespace scallop {
 
-// Each in its own nodes/mesh/<name>_node.cpp.
+// Each in its own nodes/mesh/<name>_node.cpp, in a namespace of the domain's own so that another
+// domain's node of the same name (mesh.denoise beside cloud.denoise) links beside it.
 namespace mesh_nodes {
 NodeDecl make_reconstruct_node();
+NodeDecl make_repair_node();
 }  // namespace mesh_nodes
 
 void register_mesh(Registry& registry) {
   using namespace mesh_nodes;
-  registry.add_domain("mesh", {make_reconstruct_node()});
+  registry.add_domain("mesh", {make_reconstruct_node(), make_repair_node()});
 }
 
 }  // namespace scallop

@@ -21,11 +21,12 @@
 
 #include "engine/file_ref.h"
 #include "engine/node.h"
-#include "nodes/io/mesh_vertices_reader.h"
+#include "nodes/io/mesh_reader.h"
 #include "nodes/io/pcd_reader.h"
 #include "nodes/io/ply_reader.h"
 #include "nodes/types/ply_writer.h"
 #include "nodes/io/text_cloud_reader.h"
+#include "tests/nodes/io/bytes.h"
 
 namespace scallop {
 namespace io_nodes {
@@ -69,20 +70,8 @@ std::string error_of(const std::string& path) {
   return "<no error>";
 }
 
-// Little- and big-endian byte images of scalars, for hand-made binary files.
-template <class T>
-std::string le(T v) {
-  std::string s(sizeof(T), '\0');
-  std::memcpy(s.data(), &v, sizeof(T));
-  if constexpr (std::endian::native == std::endian::big) std::reverse(s.begin(), s.end());
-  return s;
-}
-template <class T>
-std::string be(T v) {
-  std::string s = le(v);
-  std::reverse(s.begin(), s.end());
-  return s;
-}
+using test::be;
+using test::le;
 
 bool same(double a, double b) { return (std::isnan(a) && std::isnan(b)) || std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
 

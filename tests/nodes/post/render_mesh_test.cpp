@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/test_support.h"
+#include "tests/nodes/mesh/mesh_test_util.h"
 
 namespace scallop {
 namespace {

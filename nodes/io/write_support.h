@@ -1,0 +1,20 @@
+// What the io.write_* nodes share: writing a file inside the run's output folder.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include "engine/file_ref.h"
+#include "engine/node.h"
+
+namespace scallop::io {
+
+// Writes the node's file: `param` (its path parameter's value, relative to the output folder)
+// resolved by output_file (engine/output_path.h), `write(path)` called on it, and the written
+// file returned. A path that would leave the output folder throws NodeError "parameter 'path':
+// <why>"; a folder that cannot be made, or a writer's std::runtime_error, NodeError with its
+// message.
+FileRef write_output_file(const NodeContext& ctx, const std::string& param,
+                          const std::function<void(const std::string& path)>& write);
+
+}  // namespace scallop::io

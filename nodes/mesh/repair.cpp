@@ -1,0 +1,166 @@
+#include "nodes/mesh/repair.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/manifoldness.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/polygon_mesh_to_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/stitch_borders.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "nodes/mesh/mesh_topology.h"
+
+namespace scallop {
+namespace {
+
+namespace PMP = CGAL::Polygon_mesh_processing;
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+using SurfaceMesh = CGAL::Surface_mesh<Point>;
+using Polygons = std::vector<std::vector<std::size_t>>;
+
+// Counts what orient_polygon_soup does (it takes its visitor by value: the counts live outside).
+struct OrientCounter : PMP::Default_orientation_visitor {
+  RepairReport* report;
+  std::set<std::pair<std::size_t, std::size_t>>* cut_edges;  // called once per face on such an edge
+  void non_manifold_edge(std::size_t a, std::size_t b, std::size_t) {
+    if (cut_edges->insert({std::min(a, b), std::max(a, b)}).second) ++report->non_manifold_edges_cut;
+  }
+  void duplicated_vertex(std::size_t, std::size_t) { ++report->non_manifold_vertices_split; }
+  void polygon_orientation_reversed(std::size_t) { ++report->faces_reversed; }
+};
+
+void to_soup(const Mesh& mesh, std::vector<Point>& points, Polygons& polygons) {
+  points.clear();
+  polygons.clear();
+  points.reserve(mesh.num_vertices());
+  for (const auto& v : mesh.vertices) points.emplace_back(v.x(), v.y(), v.z());
+  polygons.reserve(mesh.num_faces());
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f) polygons.emplace_back(mesh.face(f), mesh.face(f) + mesh.face_size(f));
+}
+
+Mesh from_soup(const std::vector<Point>& points, const Polygons& polygons) {
+  Mesh mesh;
+  mesh.vertices.reserve(points.size());
+  for (const Point& p : points) mesh.vertices.emplace_back(p.x(), p.y(), p.z());
+  for (const auto& polygon : polygons) mesh.add_face_range(polygon);
+  return mesh;
+}
+
+// The cleaning of CGAL's repair_polygon_soup, its six steps called one by one in its order (as
+// CGAL 5.5's internal::Polygon_soup_fixer does) so that each one's count can be reported.
+void clean_soup(std::vector<Point>& points, Polygons& polygons, RepairReport& r) {
+  const Kernel traits;
+  r.points_merged = PMP::merge_duplicate_points_in_polygon_soup(points, polygons);
+  r.faces_simplified = PMP::internal::simplify_polygons_in_polygon_soup(points, polygons, traits);
+  r.pinched_faces_split = PMP::internal::split_pinched_polygons_in_polygon_soup(points, polygons, traits);
+  r.degenerate_faces_removed = PMP::internal::remove_invalid_polygons_in_polygon_soup(points, polygons);
+  r.duplicate_faces_removed = PMP::merge_duplicate_polygons_in_polygon_soup(points, polygons);
+  r.isolated_vertices_removed = PMP::remove_isolated_points_in_polygon_soup(points, polygons);
+}
+
+// Whether the triangle (a, b, c) runs round the other way in face t of `tm`.
+bool reversed_in(const SurfaceMesh& tm, SurfaceMesh::Face_index t, const std::array<std::size_t, 3>& abc) {
+  std::array<std::size_t, 3> now{};
+  int k = 0;
+  for (auto v : CGAL::vertices_around_face(tm.halfedge(t), tm)) now[k++] = v;
+  const auto at = std::find(now.begin(), now.end(), abc[0]) - now.begin();
+  return now[(at + 1) % 3] != abc[1];
+}
+
+// Turns the closed components of `mesh` (every edge on exactly two faces) so that they bound a
+// volume, by CGAL's orient_to_bound_a_volume on a fan triangulation of them (it wants
+// triangles); a face is reversed when its first triangle was. Returns the faces reversed.
+std::size_t orient_closed_components(Mesh& mesh) {
+  const MeshEdges edges = mesh_edges(mesh);
+  const std::vector<int> comp = face_components(mesh, edges);
+  const int n_comp = comp.empty() ? 0 : *std::max_element(comp.begin(), comp.end()) + 1;
+  std::vector<bool> closed(n_comp, true);
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    if (edges.faces_on(e) != 2) closed[comp[edges.faces(e)[0]]] = false;
+
+  // Only the closed components' vertices: CGAL's volume_connected_components crashes on an
+  // isolated vertex (CGAL 5.5.1).
+  std::vector<Point> points;
+  std::vector<std::size_t> local(mesh.num_vertices(), SIZE_MAX);
+  auto vertex = [&](std::uint32_t v) {
+    if (local[v] == SIZE_MAX) {
+      local[v] = points.size();
+      points.emplace_back(mesh.vertices[v].x(), mesh.vertices[v].y(), mesh.vertices[v].z());
+    }
+    return local[v];
+  };
+  std::vector<std::array<std::size_t, 3>> triangles;
+  std::vector<std::size_t> first_triangle(mesh.num_faces(), SIZE_MAX);
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
+    if (!closed[comp[f]]) continue;
+    first_triangle[f] = triangles.size();
+    const std::uint32_t* c = mesh.face(f);
+    for (std::size_t k = 1; k + 1 < mesh.face_size(f); ++k) triangles.push_back({vertex(c[0]), vertex(c[k]), vertex(c[k + 1])});
+  }
+  if (triangles.empty() || !PMP::is_polygon_soup_a_polygon_mesh(triangles)) return 0;
+  SurfaceMesh tm;
+  PMP::polygon_soup_to_polygon_mesh(points, triangles, tm);
+  if (!CGAL::is_closed(tm)) return 0;
+  PMP::orient_to_bound_a_volume(tm);
+  // polygon_soup_to_polygon_mesh adds every point and then every triangle, in order: vertex i of
+  // tm is point i, face i is triangle i.
+  std::size_t turned = 0;
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
+    if (first_triangle[f] == SIZE_MAX) continue;
+    const auto t = SurfaceMesh::Face_index(static_cast<SurfaceMesh::size_type>(first_triangle[f]));
+    if (!reversed_in(tm, t, triangles[first_triangle[f]])) continue;
+    std::reverse(mesh.face_vertices.begin() + mesh.face_start[f] + 1, mesh.face_vertices.begin() + mesh.face_start[f + 1]);
+    ++turned;
+  }
+  return turned;
+}
+
+}  // namespace
+
+Mesh repair_mesh(const Mesh& soup, const RepairOptions& options, RepairReport& report) {
+  report = RepairReport{};
+  if (soup.num_faces() == 0) throw std::invalid_argument("the mesh has no faces");
+  for (auto v : soup.face_vertices)
+    if (v >= soup.num_vertices())
+      throw std::invalid_argument("a face has corner " + std::to_string(v) + " but there are " +
+                                  std::to_string(soup.num_vertices()) + " vertices");
+  std::vector<Point> points;
+  Polygons polygons;
+  to_soup(soup, points, polygons);
+  clean_soup(points, polygons, report);
+  if (polygons.empty()) throw std::invalid_argument("no face is left: every one was degenerate");
+
+  std::set<std::pair<std::size_t, std::size_t>> cut_edges;
+  OrientCounter counter;
+  counter.report = &report;
+  counter.cut_edges = &cut_edges;
+  PMP::orient_polygon_soup(points, polygons, CGAL::parameters::visitor(counter));
+  if (!PMP::is_polygon_soup_a_polygon_mesh(polygons))
+    throw std::runtime_error("CGAL could not make a polygon mesh of the faces even after orienting them");
+
+  SurfaceMesh sm;
+  PMP::polygon_soup_to_polygon_mesh(points, polygons, sm);
+  report.borders_stitched = PMP::stitch_borders(sm);
+  report.non_manifold_vertices_split += PMP::duplicate_non_manifold_vertices(sm);
+  sm.collect_garbage();
+  points.clear();
+  polygons.clear();
+  PMP::polygon_mesh_to_polygon_soup(sm, points, polygons);
+  Mesh mesh = from_soup(points, polygons);
+  if (options.orient_outward) report.faces_turned_outward = orient_closed_components(mesh);
+  return mesh;
+}
+
+}  // namespace scallop

@@ -1,0 +1,60 @@
+#include <stdexcept>
+
+#include "engine/node.h"
+#include "nodes/mesh/repair.h"
+#include "nodes/mesh/topology_report.h"
+#include "nodes/types/document.h"
+#include "nodes/types/mesh.h"
+
+namespace scallop::mesh_nodes {
+
+NodeDecl make_repair_node() {
+  NodeDecl d;
+  d.type = "mesh.repair";
+  d.version = 1;
+  d.description =
+      "repairs a polygon soup with CGAL: merges duplicate points, drops degenerate and duplicate faces, orients "
+      "consistently, stitches borders, splits non-manifold edges and vertices, turns closed parts outward";
+  d.input("mesh", "Mesh", "any vertices and polygon faces (triangles, quads, mixed), in any orientation")
+      .output("mesh", "Mesh",
+              "manifold, each component consistently oriented, closed ones outward; quads kept; vertices and faces "
+              "renumbered, so vertex normals, face labels and feature edges are dropped")
+      .output("report", "Report",
+              "{changes: {points_merged, faces_simplified, pinched_faces_split, degenerate_faces_removed, "
+              "duplicate_faces_removed, isolated_vertices_removed, faces_reversed, non_manifold_edges_cut, "
+              "non_manifold_vertices_split, borders_stitched, faces_turned_outward}, before, after: the topology "
+              "as io.read_mesh reports it}")
+      .param_bool("orient_outward", true,
+                  "orient each closed component so that the mesh bounds a volume (normals out of the material)");
+  d.run = [](NodeContext& ctx) {
+    auto in = ctx.input<Mesh>("mesh");
+    RepairOptions options;
+    options.orient_outward = ctx.flag("orient_outward");
+    RepairReport r;
+    Mesh out;
+    try {
+      out = repair_mesh(*in, options, r);
+    } catch (const std::exception& e) {
+      throw NodeError(e.what());
+    }
+    Report report;
+    report.data["changes"] = {{"points_merged", r.points_merged},
+                              {"faces_simplified", r.faces_simplified},
+                              {"pinched_faces_split", r.pinched_faces_split},
+                              {"degenerate_faces_removed", r.degenerate_faces_removed},
+                              {"duplicate_faces_removed", r.duplicate_faces_removed},
+                              {"isolated_vertices_removed", r.isolated_vertices_removed},
+                              {"faces_reversed", r.faces_reversed},
+                              {"non_manifold_edges_cut", r.non_manifold_edges_cut},
+                              {"non_manifold_vertices_split", r.non_manifold_vertices_split},
+                              {"borders_stitched", r.borders_stitched},
+                              {"faces_turned_outward", r.faces_turned_outward}};
+    report.data["before"] = topology_report(*in);
+    report.data["after"] = topology_report(out);
+    ctx.set("report", std::move(report));
+    ctx.set("mesh", std::move(out));
+  };
+  return d;
+}
+
+}  // namespace scallop::mesh_nodes
