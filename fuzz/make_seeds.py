@@ -132,6 +132,18 @@ seed("graph", "duplicates.json",
      '"inputs": {"c": {}}, "outputs": {"o": "r.cloud"}}')
 seed("graph", "not_object.json", '[{"scallop_graph": 1}, "\\u00e9\\"", -0.0, 1e999]')
 
+# The mesh reader target: the first byte picks the format (fuzz_read_mesh.cpp: 0 ply, 1 off,
+# 2 obj, 3 stl), the rest is the file; the cloud targets' mesh files are its seeds too, plus
+# faces with labels and feature edges.
+for i, fmt in enumerate(("ply", "off", "obj", "stl")):
+    for name, data in list(seeds.get(fmt, {}).items()):
+        seed("mesh", "%s_%s" % (fmt, name), bytes([i]) + data)
+seed("mesh", "ply_labels_features.ply", bytes([0]) + (
+    "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
+    "element face 2\nproperty list uchar uint vertex_indices\nproperty int label\n"
+    "element edge 1\nproperty uint vertex1\nproperty uint vertex2\nproperty uchar feature\nend_header\n"
+    "0 0 0\n1 0 0\n1 1 0\n0 1 1\n3 0 1 2 5\n4 0 2 3 1 -1\n0 2 1\n").encode())
+
 for target, files in seeds.items():
     d = os.path.join(root, target)
     os.makedirs(d, exist_ok=True)

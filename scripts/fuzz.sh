@@ -18,7 +18,7 @@ bash scripts/install-deps.sh
 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
   -DCMAKE_CXX_COMPILER=clang++ -DSCALLOP_FUZZ=ON -DSCALLOP_TESTS=OFF -DSCALLOP_BENCH=OFF >/dev/null
 cmake --build build-fuzz -j "$(nproc)" --target scallop_fuzzers
-targets=${FUZZ_TARGETS:-"fuzz_read_ply fuzz_read_pcd fuzz_read_text fuzz_read_off fuzz_read_obj fuzz_read_stl fuzz_graph"}
+targets=${FUZZ_TARGETS:-"fuzz_read_ply fuzz_read_pcd fuzz_read_text fuzz_read_off fuzz_read_obj fuzz_read_stl fuzz_read_mesh fuzz_graph"}
 export ASAN_OPTIONS=detect_leaks=1:halt_on_error=1
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 failed=()
