@@ -2,6 +2,7 @@
 
 #include "nodes/cloud/register.h"
 #include "nodes/io/register.h"
+#include "nodes/mesh/register.h"
 #include "nodes/param/register.h"
 #include "nodes/path/register.h"
 #include "nodes/post/register.h"
@@ -14,6 +15,7 @@ void register_builtins(Registry& r) {
   register_types(r);
   register_io(r);
   register_cloud(r);
+  register_mesh(r);
   register_param(r);
   register_path(r);
   register_post(r);

@@ -1,0 +1,12 @@
+// The mesh.* nodes: finding a mesh's features.
+#pragma once
+
+#include "engine/node.h"
+
+namespace scallop {
+
+// Adds the mesh.* nodes to `registry`; the value types they use must be registered already
+// (register_types).
+void register_mesh(Registry& registry);
+
+}  // namespace scallop
