@@ -1,4 +1,4 @@
-// The mesh.* nodes: finding a mesh's features.
+// The mesh.* nodes: denoising a mesh and finding its features.
 #pragma once
 
 #include "engine/node.h"

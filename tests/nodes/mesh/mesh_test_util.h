@@ -3,12 +3,14 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
 #include <random>
 #include <vector>
 
+#include "nodes/mesh/face_geometry.h"
 #include "nodes/types/mesh.h"
 
 namespace scallop::test {
@@ -106,6 +108,24 @@ inline Mesh add_normal_noise(Mesh m, double sigma, unsigned seed) {
   std::normal_distribution<double> noise(0.0, sigma);
   for (std::size_t v = 0; v < m.vertices.size(); ++v) m.vertices[v] += noise(rng) * n[v].normalized();
   return m;
+}
+
+// Area-weighted mean angle (degrees) between the faces of a (denoised) cube_mesh of edge 1 and
+// their side's true normal (face_label: the side), over faces whose centroid lies farther than
+// `margin` from the cube's edges.
+inline double cube_normal_error_deg(const Mesh& m, double margin) {
+  const FaceGeometry g = face_geometry(m);
+  double sum = 0, area = 0;
+  for (std::size_t f = 0; f < m.num_faces(); ++f) {
+    const int s = m.face_label[f], a = s % 3;
+    double to_edge = 1e9;
+    for (int c = 0; c < 3; ++c)
+      if (c != a) to_edge = std::min({to_edge, g.centroid[f][c], 1 - g.centroid[f][c]});
+    if (to_edge <= margin) continue;
+    sum += g.area[f] * angle_deg(g.normal[f], cube_side_normal(s));
+    area += g.area[f];
+  }
+  return sum / area;
 }
 
 }  // namespace scallop::test
