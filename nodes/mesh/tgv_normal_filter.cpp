@@ -260,7 +260,8 @@ TgvResult tgv_filter_normals(const Mesh& mesh, const MeshEdges& edges, const Fac
     out.cg_steps += pcg_w.solve(W, rhs_w, apply_w, precondition_w, o.w_cg_iterations, o.cg_tolerance);
     // W_f <- W_f (I - N_f N_f^T): exactly tangent (the penalty above only nearly). Without it a
     // W close to c I, a sphere's gradient, slips through the cube's edges at no second-order
-    // cost, and the clean test cube's sides came back domed by up to 1.9 degrees (1.3 with it).
+    // cost, and the clean test cube's sides came back domed by up to 1.9 degrees (1.3 with it,
+    // both run to convergence).
     for_each(F, [&](std::size_t f) { W[f] -= (W[f] * N[f]) * N[f].transpose(); });
     // P, Q by shrinkage, the multipliers, and S = P + u, T = Q + v for the next iteration.
     for_each(E, [&](std::size_t e) {

@@ -42,15 +42,17 @@
 // factorisation (the paper's choice) was measured too slow at the sizes scallop meets: CHOLMOD's
 // supernodal Cholesky of the N matrix alone of a 330 000-face mesh took 5.0 s, and each solve
 // with its three right-hand sides 0.22 s (Eigen's SimplicialLDLT: 9.3 s and 0.23 s), against
-// about 0.1 s for a whole ALM iteration here. Edges on the boundary (one face) carry no term.
+// about 0.25 s of CPU for a whole ALM iteration (both subproblems) of a 400 000-face mesh here
+// (bench/mesh_denoise_bench.cpp). Edges on the boundary (one face) carry no term.
 //
 // What was measured (tests/nodes/mesh/denoise_test.cpp):
 //   - A sphere's normals cost nothing: a clean icosphere comes back within 0.001 of its radius.
 //   - Flat sides are not quite free: the jumps at a cube's edges cost alpha1 each, and tilting
 //     each side's normals slightly towards its neighbours (a faint dome) lowers them, so a clean
-//     cube's sides come back turned by up to about 1.3 degrees before the vertex update (its
-//     vertices moved by up to 13 % of the edge spacing). This is the contrast loss of TV-type
-//     models (Rudin-Osher-Fatemi) in TGV's form; bilateral filtering does not have it.
+//     cube's filtered normals are turned by 1.0 degrees on average (1.5 at most); after the
+//     vertex update its sides lie 0.36 degrees off away from the edges and its vertices moved by
+//     up to 13 % of the edge spacing. This is the contrast loss of TV-type models
+//     (Rudin-Osher-Fatemi) in TGV's form; bilateral filtering does not have it.
 //   - alpha_ratio hardly matters at the default iteration counts: the second-order term's
 //     multipliers stay below alpha0 in 50 iterations, so the penalty r rather than alpha0 is what
 //     keeps W smooth (the results for ratios 2 to 50 agreed to 0.001 degrees on the test cube).
