@@ -108,6 +108,33 @@ std::vector<std::vector<std::uint32_t>> boundary_loops(const Mesh& mesh, const M
   return loops;
 }
 
+VertexFaces vertex_faces(const Mesh& mesh) {
+  VertexFaces out;
+  out.start.assign(mesh.num_vertices() + 1, 0);
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f)
+    for (std::size_t c = 0; c < mesh.face_size(f); ++c) ++out.start[mesh.face(f)[c] + 1];
+  for (std::size_t v = 0; v < mesh.num_vertices(); ++v) out.start[v + 1] += out.start[v];
+  out.face.resize(out.start.back());
+  std::vector<std::uint32_t> fill(out.start.begin(), out.start.end() - 1);
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f)
+    for (std::size_t c = 0; c < mesh.face_size(f); ++c) {
+      const std::uint32_t v = mesh.face(f)[c];
+      // Faces come in increasing order, so a face repeating v is the last one written.
+      if (fill[v] > out.start[v] && out.face[fill[v] - 1] == f) continue;
+      out.face[fill[v]++] = static_cast<std::uint32_t>(f);
+    }
+  // Compact away the slots left by faces that repeat a vertex.
+  std::size_t w = 0;
+  for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
+    const std::size_t begin = out.start[v], end = fill[v];
+    out.start[v] = static_cast<std::uint32_t>(w);
+    for (std::size_t k = begin; k < end; ++k) out.face[w++] = out.face[k];
+  }
+  out.start[mesh.num_vertices()] = static_cast<std::uint32_t>(w);
+  out.face.resize(w);
+  return out;
+}
+
 Eigen::Vector3d face_area_vector(const Mesh& mesh, std::size_t f) {
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
   const std::size_t m = mesh.face_size(f);

@@ -41,6 +41,17 @@ std::vector<int> face_components(const Mesh& mesh, const MeshEdges& edges);
 // are cut at the first free one.
 std::vector<std::vector<std::uint32_t>> boundary_loops(const Mesh& mesh, const MeshEdges& edges);
 
+// The faces around each vertex: faces of vertex v are
+// face[start[v] .. start[v+1]), in increasing order, each once (also when it has v twice).
+struct VertexFaces {
+  std::vector<std::uint32_t> start{0};
+  std::vector<std::uint32_t> face;
+  std::size_t count(std::size_t v) const { return start[v + 1] - start[v]; }
+  const std::uint32_t* faces(std::size_t v) const { return face.data() + start[v]; }
+};
+
+VertexFaces vertex_faces(const Mesh& mesh);
+
 // Newell's area vector of face f: its direction is the face normal, its length twice its area.
 Eigen::Vector3d face_area_vector(const Mesh& mesh, std::size_t f);
 

@@ -64,5 +64,18 @@ TEST(MeshTopology, ThreeFacesOnAnEdgeAreNonManifoldTwoCubesTwoComponents) {
   EXPECT_EQ(t2.isolated_vertices, 1u);
 }
 
+TEST(MeshTopology, VertexFacesListEachFaceAroundAVertexOnce) {
+  Mesh m = unit_cube();
+  m.vertices.push_back({9, 9, 9});  // on no face
+  m.add_face({0, 1, 1});            // a repeated corner: listed once at vertex 1
+  const VertexFaces vf = vertex_faces(m);
+  ASSERT_EQ(vf.start.size(), m.num_vertices() + 1);
+  EXPECT_EQ(std::vector<std::uint32_t>(vf.faces(0), vf.faces(0) + vf.count(0)), (std::vector<std::uint32_t>{0, 2, 4, 6}));
+  EXPECT_EQ(std::vector<std::uint32_t>(vf.faces(1), vf.faces(1) + vf.count(1)), (std::vector<std::uint32_t>{0, 2, 5, 6}));
+  EXPECT_EQ(std::vector<std::uint32_t>(vf.faces(7), vf.faces(7) + vf.count(7)), (std::vector<std::uint32_t>{1, 3, 5}));
+  EXPECT_EQ(vf.count(8), 0u);
+  EXPECT_EQ(vf.face.size(), 6u * 4 + 2);
+}
+
 }  // namespace
 }  // namespace scallop

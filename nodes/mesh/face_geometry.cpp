@@ -1,0 +1,43 @@
+#include "nodes/mesh/face_geometry.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <numbers>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace scallop {
+
+FaceGeometry face_geometry(const Mesh& mesh) { return face_geometry(mesh, mesh.vertices); }
+
+FaceGeometry face_geometry(const Mesh& mesh, const std::vector<Eigen::Vector3d>& V) {
+  const std::size_t F = mesh.num_faces();
+  FaceGeometry g;
+  g.normal.resize(F);
+  g.area.resize(F);
+  g.centroid.resize(F);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, F, 4096), [&](const auto& r) {
+    for (std::size_t f = r.begin(); f < r.end(); ++f) {
+      const std::uint32_t* c = mesh.face(f);
+      const std::size_t m = mesh.face_size(f);
+      // Newell's vector about the first corner (no cancellation far from the origin).
+      const Eigen::Vector3d& o = V[c[0]];
+      Eigen::Vector3d n = Eigen::Vector3d::Zero(), s = Eigen::Vector3d::Zero();
+      for (std::size_t k = 0; k < m; ++k) {
+        n += (V[c[k]] - o).cross(V[c[(k + 1) % m]] - o);
+        s += V[c[k]];
+      }
+      const double len = n.norm();
+      g.area[f] = 0.5 * len;
+      g.normal[f] = len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
+      g.centroid[f] = s / static_cast<double>(m);
+    }
+  });
+  return g;
+}
+
+double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / std::numbers::pi;
+}
+
+}  // namespace scallop

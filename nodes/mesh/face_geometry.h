@@ -1,0 +1,31 @@
+// Per-face geometry of a polygon mesh: unit normals, areas, centroids; and the angle between two
+// directions. What the mesh filters (mesh.denoise) and mesh.sharp_edges measure faces with.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "nodes/types/mesh.h"
+
+namespace scallop {
+
+// normal    #F unit normals: Newell's vector (as face_area_vector, taken about the face's first
+//           corner) normalised; zero for a face without area
+// area      #F areas (mm^2), half the length of Newell's vector
+// centroid  #F means of each face's corners (mm)
+struct FaceGeometry {
+  std::vector<Eigen::Vector3d> normal;
+  std::vector<double> area;
+  std::vector<Eigen::Vector3d> centroid;
+};
+
+// Computed in parallel. The mesh's corners must index its vertices.
+FaceGeometry face_geometry(const Mesh& mesh);
+// The same for the mesh's faces at other vertex positions V (#V by 3).
+FaceGeometry face_geometry(const Mesh& mesh, const std::vector<Eigen::Vector3d>& V);
+
+// Angle between a and b in degrees, in [0, 180]; atan2(|a x b|, a . b), accurate also near 0 and 180.
+// 0 when either is zero.
+double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
+
+}  // namespace scallop
