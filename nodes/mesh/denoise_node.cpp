@@ -27,10 +27,10 @@ NodeDecl make_denoise_node() {
               "area-weighted mean and largest), cg_steps (tgv), move_mean, move_max (mm), "
               "normal_change_mean_deg (area-weighted), normal_change_max_deg, seconds, "
               "filter_seconds, vertex_seconds}")
-      .param_choice("method", "tgv", {"tgv", "bilateral"},
+      .param_choice("method", "tgv", {"tgv", "bilateral", "none"},
                     "tgv: MeshTGV (Liu et al. 2021), keeps flat faces flat, smooth bends smooth and "
                     "sharp edges sharp; bilateral: bilateral normal filtering (Zheng et al. 2011), "
-                    "the baseline")
+                    "the baseline; none: the mesh passes unchanged (to compare, or for clean scans)")
       .param_float("alpha1", def.tgv.alpha1, 1e-6, 1e6, "",
                    "tgv: weight of the first-order term (jumps of the normals the gradient field "
                    "does not explain) against fidelity to the input normals; larger removes more "
@@ -59,6 +59,13 @@ NodeDecl make_denoise_node() {
                  "vertex updates towards the filtered normals (Sun et al. 2007), both methods");
   d.run = [](NodeContext& ctx) {
     auto mesh = ctx.input<Mesh>("mesh");
+    if (ctx.text("method") == "none") {
+      Report report;
+      report.data = {{"method", "none"}, {"faces", mesh->num_faces()}, {"vertices", mesh->num_vertices()}};
+      ctx.set("report", std::move(report));
+      ctx.set_output("mesh", mesh);
+      return;
+    }
     MeshDenoiseOptions o;
     o.method = ctx.text("method") == "bilateral" ? MeshDenoiseMethod::Bilateral : MeshDenoiseMethod::Tgv;
     o.tgv.alpha1 = ctx.number("alpha1");

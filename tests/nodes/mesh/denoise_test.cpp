@@ -293,6 +293,14 @@ TEST(MeshDenoiseNode, ReportsWhatItDid) {
     EXPECT_TRUE(j.contains(key)) << key;
 }
 
+TEST(MeshDenoiseNode, MethodNonePassesTheSameMeshOn) {
+  auto in = std::make_shared<Mesh>(noisy_cube());
+  auto out = run_node(mesh_nodes::make_denoise_node(), {{"method", "none"}}, {{"mesh", in}});
+  EXPECT_EQ(out.at("mesh"), in);
+  const auto& j = std::dynamic_pointer_cast<const Report>(out.at("report"))->data;
+  EXPECT_EQ(j, (nlohmann::json{{"method", "none"}, {"faces", 4800}, {"vertices", 2402}}));
+}
+
 TEST(MeshDenoiseNode, RefusesQuadsNonManifoldEdgesAndEmptyMeshesWithTheReason) {
   // Six quads (the unit cube): refused, not triangulated behind the user's back.
   Mesh quads;
