@@ -25,7 +25,7 @@
 namespace scallop {
 
 struct DenoiseOptions {
-  int k = 64;              // neighbours in each fit (the point itself excluded), >= 5; or 0:
+  int k = 0;               // neighbours in each fit (the point itself excluded), >= 5; or 0:
                            // automatic, from the estimated noise and `tolerance` (see
                            // choose_denoise_k); the cloud is returned unchanged when the noise
                            // is already below `tolerance`

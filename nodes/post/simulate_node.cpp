@@ -25,11 +25,15 @@ NodeDecl make_simulate_node() {
       .output("report", "Report", "scallop/gouge/uncut statistics (whole patch, rim included, and interior), pass (the whole patch within the limits) and fail reasons, the 10 worst places")
       .output("heatmap", "Image", "top view of the scallop left, colour bar 0..1.01 h")
       .param_float("scallop", 0, 0, 100, "mm", "scallop limit h; 0: the path's own")
-      .param_float("chord", -1, -1, 100, "mm", "chord tolerance e (gouges up to max(e, 0.001) pass); -1: the path's own")
-      .param_float("spacing", 0, 0, 100, "mm", "grid spacing; 0: sqrt(8 r h)/12")
-      .param_float("margin", 0, 0, 1000, "mm", "interior = farther than this from the outline; 0: sqrt(8 r h)")
-      .param_int("max_samples", 1500000, 1000, 100000000, "", "the spacing is raised to stay below this many samples")
-      .param_int("heatmap_width", 1000, 64, 8000, "px", "width of the heat map");
+      .param_float("chord", -1, -1, 100, "mm", "chord tolerance e (gouges up to max(e, 0.001) pass); -1: the path's own");
+  // scallop and chord stand for the path's own limits at 0 and -1: resolved in run, not bound
+  d.options<SimulateOptions>()
+      .number("spacing", &SimulateOptions::spacing, 0, 100, "mm", "grid spacing; 0: sqrt(8 r h)/12")
+      .number("margin", &SimulateOptions::margin, 0, 1000, "mm",
+              "interior = farther than this from the outline; 0: sqrt(8 r h)")
+      .integer("max_samples", &SimulateOptions::max_samples, 1000, 100000000, "",
+               "the spacing is raised to stay below this many samples");
+  d.param_int("heatmap_width", 1000, 64, 8000, "px", "width of the heat map");
   d.run = [](NodeContext& ctx) {
     if (ctx.has_input("path") == ctx.has_input("linked"))
       throw NodeError("give exactly one of the inputs 'path' and 'linked'");
@@ -45,13 +49,10 @@ NodeDecl make_simulate_node() {
       feed = feed_centres(*p, rapid);
       r = p->tool_radius, h = p->scallop_height, e = p->chord_error;
     }
-    SimulateOptions o;
+    SimulateOptions o = ctx.options<SimulateOptions>();
     o.tool_radius = r;
     o.scallop = ctx.number("scallop") > 0 ? ctx.number("scallop") : h;
     o.chord = ctx.number("chord") >= 0 ? ctx.number("chord") : e;
-    o.spacing = ctx.number("spacing");
-    o.margin = ctx.number("margin");
-    o.max_samples = static_cast<std::size_t>(ctx.integer("max_samples"));
     if (ctx.has_input("loops")) {
       auto loops = ctx.input<BoundaryLoops>("loops");
       if (loops->loops.empty()) throw NodeError("the input 'loops' has no loop");

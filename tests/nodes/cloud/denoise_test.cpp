@@ -451,6 +451,11 @@ TEST(DenoiseNode, Declaration) {
     EXPECT_TRUE(d.find_param(p)) << p;
   EXPECT_EQ(d.find_param("k")->default_value, 0);
   EXPECT_EQ(d.find_param("tolerance")->default_value, 0.002);
+  // the parameters are bound to DenoiseOptions: one default each, the struct's (its k was 64
+  // while the node's was 0; automatic, the node's, is what users got and get)
+  const DenoiseOptions def;
+  EXPECT_EQ(d.find_param("k")->default_value, def.k);
+  EXPECT_EQ(d.find_param("normals")->default_value, def.set_normals);
 }
 
 TEST(DenoiseNode, AutomaticModeReports) {
