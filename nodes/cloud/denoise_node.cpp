@@ -1,4 +1,3 @@
-#include <algorithm>
 #include <cstdio>
 #include <stdexcept>
 
@@ -70,17 +69,7 @@ NodeDecl make_denoise_node() {
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }
-    // What each point may still be off the real surface: kUncertaintyFactor standard errors of
-    // its fit, or of its own noise when the cloud was left as it is.
-    std::vector<double> uncertainty(cloud->size(), std::max(kUncertaintyFloor, uncertainty_factor(o.scales) * r.noise_sigma));
-    if (!r.skipped)
-      uncertainty = r.uncertainty;
-    std::size_t worst = 0;
-    for (std::size_t i = 0; i < uncertainty.size(); ++i)
-      if (uncertainty[i] > uncertainty[worst]) worst = i;
-    std::vector<double> sorted = uncertainty;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    const Eigen::Vector3d& at = r.skipped ? cloud->points[worst] : r.points[worst];
+    const Eigen::Vector3d& at = r.uncertainty_max_at;
     Report report;
     report.data = {{"noise_sigma", r.noise_sigma},
                    {"k", r.k},
@@ -89,11 +78,11 @@ NodeDecl make_denoise_node() {
                    {"rim_refitted", r.refitted},
                    {"rim_refits_biased", r.refits_biased},
                    {"narrowed", r.narrowed},
-                   {"bias_max", r.bias.empty() ? 0.0 : *std::max_element(r.bias.begin(), r.bias.end())},
-                   {"uncertainty", {{"median", sorted[sorted.size() / 2]},
-                                    {"max", uncertainty[worst]},
+                   {"bias_max", r.bias_max},
+                   {"uncertainty", {{"median", r.uncertainty_median},
+                                    {"max", r.uncertainty_max},
                                     {"max_at", {at.x(), at.y(), at.z()}},
-                                    {"factor", uncertainty_factor(o.scales)}}}};
+                                    {"factor", r.uncertainty_factor}}}};
     ctx.set("report", std::move(report));
     if (r.skipped) {
       char msg[160];
@@ -102,14 +91,14 @@ NodeDecl make_denoise_node() {
                     r.noise_sigma, o.tolerance);
       ctx.progress(1.0, msg);
       PointCloud out = *cloud;
-      out.uncertainty = std::move(uncertainty);
+      out.uncertainty = std::move(r.uncertainty);
       ctx.set("cloud", std::move(out));
       return;
     }
     PointCloud out;
     out.points = std::move(r.points);
     out.normals = o.set_normals ? std::move(r.normals) : cloud->normals;
-    out.uncertainty = std::move(uncertainty);
+    out.uncertainty = std::move(r.uncertainty);
     ctx.set("cloud", std::move(out));
   };
   return d;
