@@ -43,13 +43,13 @@ std::map<std::string, ValuePtr> run_node(const NodeDecl& decl, const nlohmann::j
                                          std::map<std::string, ValuePtr> inputs,
                                          std::string* last_progress = nullptr);
 
-// The message of the std::logic_error `f` throws ("" when it throws none): a declaration the
-// registry refuses, a programming error.
-template <class F>
-std::string logic_error_of(F f) {
+// The message of the exception of type E `f` throws ("" when it throws none); by default a
+// std::logic_error: a declaration the registry refuses, a programming error.
+template <class E = std::logic_error, class F>
+std::string error_of(F f) {
   try {
     f();
-  } catch (const std::logic_error& e) {
+  } catch (const E& e) {
     return e.what();
   }
   return "";

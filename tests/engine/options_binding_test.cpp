@@ -77,7 +77,7 @@ TEST(OptionsBinding, FillsEveryBoundMemberFromTheParameters) {
   EXPECT_EQ(o.mode, "exact");
   EXPECT_EQ(o.not_a_parameter, 7);  // not bound: the struct's default
   // another struct than the bound one is a programming error
-  EXPECT_EQ(test::logic_error_of([&] { ctx.options<test::Number>(); }),
+  EXPECT_EQ(test::error_of([&] { ctx.options<test::Number>(); }),
             "node type 'test.scale' binds no parameters to the options struct asked for");
 }
 
@@ -123,10 +123,10 @@ TEST(OptionsBinding, RefusesADeclarationItsStructCannotHold) {
   // a range the member's type cannot hold
   NodeDecl d;
   d.type = "test.narrow";
-  EXPECT_EQ(test::logic_error_of([&] { d.options<NarrowOptions>().integer("small", &NarrowOptions::small, 0, 1000, "", ""); }),
+  EXPECT_EQ(test::error_of([&] { d.options<NarrowOptions>().integer("small", &NarrowOptions::small, 0, 1000, "", ""); }),
             "node type 'test.narrow': parameter 'small': its range does not fit the type of the member it is bound to");
   // a second options struct
-  EXPECT_EQ(test::logic_error_of([&] { d.options<ScaleOptions>(); }),
+  EXPECT_EQ(test::error_of([&] { d.options<ScaleOptions>(); }),
             "node type 'test.narrow' binds its parameters to a second options struct");
 }
 
@@ -137,13 +137,13 @@ TEST(OptionsBinding, TheRegistryRefusesADefaultOutsideItsOwnDeclaration) {
   d.type = "test.drift";
   d.output("out", "Number", "");
   d.options<NarrowOptions>().integer("k", &NarrowOptions::k, 0, 10, "", "");
-  EXPECT_EQ(test::logic_error_of([&] { reg.add(d); }),
+  EXPECT_EQ(test::error_of([&] { reg.add(d); }),
             "node type 'test.drift': parameter 'k': its default 64 is out of its range 0 .. 10");
   NodeDecl c;
   c.type = "test.drift";
   c.output("out", "Number", "");
   c.options<NarrowOptions>().choice("how", &NarrowOptions::how, {"a", "c"}, "");
-  EXPECT_EQ(test::logic_error_of([&] { reg.add(c); }),
+  EXPECT_EQ(test::error_of([&] { reg.add(c); }),
             "node type 'test.drift': parameter 'how': its default \"b\" is not one of its choices");
   EXPECT_EQ(reg.find("test.drift"), nullptr);
 }
