@@ -56,6 +56,12 @@ NodeDecl& NodeDecl::param_choice(std::string name, std::string def, std::vector<
 }
 
 namespace {
+std::string number_text(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
 template <class T>
 const T* find_named(const std::vector<T>& v, const std::string& name) {
   for (const auto& x : v)
@@ -117,8 +123,26 @@ void NodeContext::warn(const std::string& message) const {
   if (warn_) warn_(message);
 }
 
+namespace {
+// Why a parameter's default is not one of the values its declaration accepts ("" when it is).
+std::string default_problem(const ParamDecl& p) {
+  const nlohmann::json& d = p.default_value;
+  if (d.is_null()) return "";  // required: no default
+  if (p.kind == ParamKind::Choice && std::find(p.choices.begin(), p.choices.end(), d.get<std::string>()) == p.choices.end())
+    return "its default " + d.dump() + " is not one of its choices";
+  if ((p.kind == ParamKind::Int || p.kind == ParamKind::Float) &&
+      ((p.min && d.get<double>() < *p.min) || (p.max && d.get<double>() > *p.max)))
+    return "its default " + d.dump() + " is out of its range " + (p.min ? number_text(*p.min) : "") + " .. " +
+           (p.max ? number_text(*p.max) : "");
+  return "";
+}
+}  // namespace
+
 void Registry::add(NodeDecl decl) {
   if (nodes_.count(decl.type)) throw std::logic_error("node type '" + decl.type + "' is registered twice");
+  for (const ParamDecl& p : decl.params)
+    if (auto problem = default_problem(p); !problem.empty())
+      throw std::logic_error("node type '" + decl.type + "': parameter '" + p.name + "': " + problem);
   for (const auto* ports : {&decl.inputs, &decl.outputs})
     for (const PortDecl& p : *ports)
       if (!values_.find(p.type))
@@ -166,14 +190,6 @@ nlohmann::json to_json(const NodeDecl& d) {
   }
   return j;
 }
-
-namespace {
-std::string number_text(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-}  // namespace
 
 std::string to_markdown(const NodeDecl& d) {
   std::ostringstream s;

@@ -4,14 +4,20 @@
 // the same inputs and parameters changes: the cache keys on it), a one-line description, its input
 // and output ports with value types, and its parameters with type, default, range, unit and
 // description. `scallop nodes`, validation and the README reference are all generated from it.
+// A parameter that sets a member of the options struct of the node's algorithm is bound to that
+// member (NodeDecl::options, OptionsBinding below): its default is the member's, so the two
+// cannot drift apart.
 #pragma once
 
+#include <concepts>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <typeindex>
 #include <vector>
 
 #include "engine/value.h"
@@ -41,6 +47,8 @@ struct PortDecl {
 };
 
 class NodeContext;
+template <class Options>
+class OptionsBinding;
 
 struct NodeDecl {
   std::string type;
@@ -65,6 +73,15 @@ struct NodeDecl {
                          std::string description);
   // A String naming a file the node writes inside the output folder (engine/output_path.h).
   NodeDecl& param_output_path(std::string name, std::string description);
+
+  // Parameters bound to the members of Options, the options struct of the node's algorithm
+  // (see OptionsBinding); in run, ctx.options<Options>() fills them. One struct per node.
+  template <class Options>
+  OptionsBinding<Options> options();
+  // What options() records: the bound struct, and per bound parameter how it sets its member
+  // (called with the struct as void*, which is an Options).
+  std::type_index options_type = typeid(void);
+  std::vector<std::function<void(const NodeContext&, void*)>> option_setters;
 
   const PortDecl* find_input(const std::string& name) const;
   const PortDecl* find_output(const std::string& name) const;
@@ -106,6 +123,17 @@ class NodeContext {
   bool flag(const std::string& name) const;
   std::string text(const std::string& name) const;
   const nlohmann::json& params() const { return params_; }
+  // The options struct the node's parameters are bound to (NodeDecl::options): Options{} with
+  // every bound member set from the node's parameters; the other members keep their defaults.
+  // Throws std::logic_error when the declaration binds no parameter to Options.
+  template <class Options>
+  Options options() const {
+    if (decl_.options_type != typeid(Options))
+      throw std::logic_error("node type '" + decl_.type + "' binds no parameters to the options struct asked for");
+    Options o{};
+    for (const auto& set : decl_.option_setters) set(*this, &o);
+    return o;
+  }
 
   void set_output(const std::string& port, ValuePtr value);
   template <class T>
@@ -142,8 +170,10 @@ class NodeContext {
 // All node types and value types the engine knows.
 class Registry {
  public:
-  // Adds a node type. Throws std::logic_error when the type is registered already, or when a
-  // port's value type is not (value types are registered before the nodes that use them).
+  // Adds a node type. Throws std::logic_error when the type is registered already, when a
+  // port's value type is not (value types are registered before the nodes that use them), or
+  // when a parameter's default is not a value the parameter accepts (out of its range, not one
+  // of its choices: a bound options struct's default that drifted from the declaration).
   void add(NodeDecl decl);
   // Adds the nodes of one domain, the folder nodes/<domain>/: each type must be named
   // "<domain>.<name>", so that two domains' nodes (mesh.denoise, cloud.denoise) never clash.
@@ -157,6 +187,76 @@ class Registry {
   std::map<std::string, NodeDecl> nodes_;
   ValueTypes values_;
 };
+
+// Declares parameters bound to members of Options, the options struct of a node's algorithm:
+//   d.options<DenoiseOptions>()
+//       .integer("k", &DenoiseOptions::k, 0, 512, "", "neighbours in each fit ...")
+//       .flag("normals", &DenoiseOptions::set_normals, "set normals from the fitted quadrics ...");
+// and in run: DenoiseOptions o = ctx.options<DenoiseOptions>();
+// A bound parameter's default is its member's value in Options{}: the struct is the one home of
+// the default. Range, unit, description and choices are declared here, as with param_int & co.,
+// and the result is an ordinary ParamDecl (validation, `scallop nodes`, the README reference and
+// the cache keys see no difference). Bound and plain parameters may be declared in any order.
+template <class Options>
+class OptionsBinding {
+ public:
+  explicit OptionsBinding(NodeDecl& decl) : decl_(decl) {}
+
+  template <std::integral M>
+    requires(!std::same_as<M, bool>)
+  OptionsBinding& integer(std::string name, M Options::*member, double min, double max, std::string unit,
+                          std::string description) {
+    if (min < static_cast<double>(std::numeric_limits<M>::lowest()) ||
+        max > static_cast<double>(std::numeric_limits<M>::max()))
+      throw std::logic_error("node type '" + decl_.type + "': parameter '" + name +
+                             "': its range does not fit the type of the member it is bound to");
+    decl_.param_int(name, static_cast<long long>(Options{}.*member), min, max, std::move(unit),
+                    std::move(description));
+    return bind(std::move(name), [member](const NodeContext& ctx, const std::string& n, Options& o) {
+      o.*member = static_cast<M>(ctx.integer(n));
+    });
+  }
+  OptionsBinding& number(std::string name, double Options::*member, double min, double max, std::string unit,
+                         std::string description) {
+    decl_.param_float(name, Options{}.*member, min, max, std::move(unit), std::move(description));
+    return bind(std::move(name),
+                [member](const NodeContext& ctx, const std::string& n, Options& o) { o.*member = ctx.number(n); });
+  }
+  OptionsBinding& flag(std::string name, bool Options::*member, std::string description) {
+    decl_.param_bool(name, Options{}.*member, std::move(description));
+    return bind(std::move(name),
+                [member](const NodeContext& ctx, const std::string& n, Options& o) { o.*member = ctx.flag(n); });
+  }
+  OptionsBinding& text(std::string name, std::string Options::*member, std::string description) {
+    decl_.param_string(name, Options{}.*member, std::move(description));
+    return bind(std::move(name),
+                [member](const NodeContext& ctx, const std::string& n, Options& o) { o.*member = ctx.text(n); });
+  }
+  OptionsBinding& choice(std::string name, std::string Options::*member, std::vector<std::string> choices,
+                         std::string description) {
+    decl_.param_choice(name, Options{}.*member, std::move(choices), std::move(description));
+    return bind(std::move(name),
+                [member](const NodeContext& ctx, const std::string& n, Options& o) { o.*member = ctx.text(n); });
+  }
+
+ private:
+  template <class Set>
+  OptionsBinding& bind(std::string name, Set set) {
+    decl_.option_setters.push_back([name = std::move(name), set](const NodeContext& ctx, void* o) {
+      set(ctx, name, *static_cast<Options*>(o));
+    });
+    return *this;
+  }
+  NodeDecl& decl_;
+};
+
+template <class Options>
+OptionsBinding<Options> NodeDecl::options() {
+  if (options_type != typeid(void) && options_type != typeid(Options))
+    throw std::logic_error("node type '" + type + "' binds its parameters to a second options struct");
+  options_type = typeid(Options);
+  return OptionsBinding<Options>(*this);
+}
 
 // JSON form of a declaration (for `scallop nodes --json` and generated docs).
 nlohmann::json to_json(const NodeDecl& decl);

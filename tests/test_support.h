@@ -4,6 +4,7 @@
 #include <atomic>
 #include <filesystem>
 #include <map>
+#include <stdexcept>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -41,6 +42,18 @@ Registry make_test_registry();
 std::map<std::string, ValuePtr> run_node(const NodeDecl& decl, const nlohmann::json& params,
                                          std::map<std::string, ValuePtr> inputs,
                                          std::string* last_progress = nullptr);
+
+// The message of the exception of type E `f` throws ("" when it throws none); by default a
+// std::logic_error: a declaration the registry refuses, a programming error.
+template <class E = std::logic_error, class F>
+std::string error_of(F f) {
+  try {
+    f();
+  } catch (const E& e) {
+    return e.what();
+  }
+  return "";
+}
 
 // Writes text to a file.
 void write_file(const std::filesystem::path& path, const std::string& text);

@@ -13,21 +13,19 @@ NodeDecl make_clean_node() {
   d.version = 1;
   d.description = "drops NaN/Inf points, exact duplicates and (optionally) statistical outliers";
   d.input("cloud", "Cloud", "the raw points")
-      .output("cloud", "Cloud", "the points kept, in their original order")
-      .param_bool("remove_outliers", false,
-                  "drop points whose mean distance to their outlier_k nearest neighbours exceeds "
-                  "the global mean by outlier_std_ratio standard deviations")
-      .param_int("outlier_k", 16, 2, 256, "", "neighbours used to rate a point as an outlier")
-      .param_float("outlier_std_ratio", 2.0, 0.1, 100, "",
-                   "outlier threshold in standard deviations above the mean distance")
-      .param_int("min_points", 10, 0, 1e9, "", "fewer points than this left is an error");
+      .output("cloud", "Cloud", "the points kept, in their original order");
+  d.options<CleanOptions>()
+      .flag("remove_outliers", &CleanOptions::remove_outliers,
+            "drop points whose mean distance to their outlier_k nearest neighbours exceeds "
+            "the global mean by outlier_std_ratio standard deviations")
+      .integer("outlier_k", &CleanOptions::outlier_k, 2, 256, "", "neighbours used to rate a point as an outlier")
+      .number("outlier_std_ratio", &CleanOptions::outlier_std_ratio, 0.1, 100, "",
+              "outlier threshold in standard deviations above the mean distance");
+  d.param_int("min_points", 10, 0, 1e9, "", "fewer points than this left is an error");
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");
     if (cloud->size() == 0) throw NodeError("the cloud is empty");
-    CleanOptions opts;
-    opts.remove_outliers = ctx.flag("remove_outliers");
-    opts.outlier_k = static_cast<int>(ctx.integer("outlier_k"));
-    opts.outlier_std_ratio = ctx.number("outlier_std_ratio");
+    const CleanOptions opts = ctx.options<CleanOptions>();
     const long long min_points = ctx.integer("min_points");
 
     CleanStats s;

@@ -255,6 +255,23 @@ int choose_denoise_k(double sigma, double tolerance) {
   return static_cast<int>(std::lround(std::clamp(k, 32.0, 512.0)));
 }
 
+namespace {
+// The uncertainty's summary fields of a result whose points and uncertainty are final.
+void summarize_uncertainty(DenoiseResult& res, int scales) {
+  const std::vector<double>& u = res.uncertainty;
+  std::size_t worst = 0;
+  for (std::size_t i = 0; i < u.size(); ++i)
+    if (u[i] > u[worst]) worst = i;
+  std::vector<double> sorted = u;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  res.uncertainty_median = sorted[sorted.size() / 2];
+  res.uncertainty_max = u[worst];
+  res.uncertainty_max_at = res.points[worst];
+  res.uncertainty_factor = uncertainty_factor(scales);
+  res.bias_max = res.bias.empty() ? 0.0 : *std::max_element(res.bias.begin(), res.bias.end());
+}
+}  // namespace
+
 constexpr int kMaxWiden = 2;
 constexpr int kMinScaleNeighbours = 16;  // the narrowest fit of the multi-scale rule
 constexpr double kRefitAgreement = 2;  // how many noise widths a wider rim refit may move a point
@@ -272,6 +289,9 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
       res.points = P;
       res.normals = N;
       res.skipped = true;
+      // left as they are: each point is known as well as the noise lets it be
+      res.uncertainty.assign(n, std::max(kUncertaintyFloor, uncertainty_factor(o.scales) * res.noise_sigma));
+      summarize_uncertainty(res, o.scales);
       if (progress) progress(1.0);
       return res;
     }
@@ -517,6 +537,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
     res.uncertainty[i] = std::max(kUncertaintyFloor, uncertainty_factor(o.scales) * res.standard_error[i] + bias[i]);
     if (chosen[i] > 0) ++res.narrowed;
   }
+  summarize_uncertainty(res, o.scales);
   double moved = 0;
   for (std::size_t i = 0; i < n; ++i) moved += (res.points[i] - P[i]).squaredNorm();
   res.moved_rms = std::sqrt(moved / n);

@@ -25,7 +25,7 @@
 namespace scallop {
 
 struct DenoiseOptions {
-  int k = 64;              // neighbours in each fit (the point itself excluded), >= 5; or 0:
+  int k = 0;               // neighbours in each fit (the point itself excluded), >= 5; or 0:
                            // automatic, from the estimated noise and `tolerance` (see
                            // choose_denoise_k); the cloud is returned unchanged when the noise
                            // is already below `tolerance`
@@ -66,10 +66,19 @@ struct DenoiseResult {
   // left in place
   std::vector<double> standard_error;
   std::vector<double> bias;  // mm, #P (empty when skipped): bound on the kept fit's shape bias
-  // mm, #P (empty when skipped): how far each point may be off the real surface,
-  // kUncertaintyFactor * standard_error + bias
+  // mm, #P: how far each point may be off the real surface, the model the certificate rests on:
+  // uncertainty_factor(scales) * standard_error + bias; when skipped, the points being the input
+  // ones, uncertainty_factor(scales) * noise_sigma for every point; at least kUncertaintyFloor
   std::vector<double> uncertainty;
   std::size_t narrowed = 0;  // points kept with a narrower fit than k (sharp shape)
+  // The uncertainty in brief, for reports (mm): its median (the upper one of an even count),
+  // its largest value and the output point that has it (the first such), the number of standard
+  // errors it counts (uncertainty_factor(scales)), and the largest bias bound (0 when skipped).
+  double uncertainty_median = 0;
+  double uncertainty_max = 0;
+  Eigen::Vector3d uncertainty_max_at = Eigen::Vector3d::Zero();
+  double uncertainty_factor = 0;
+  double bias_max = 0;
 };
 
 // How many standard errors a denoised point may lie off the real surface: the bound stored as

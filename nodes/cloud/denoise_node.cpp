@@ -1,4 +1,3 @@
-#include <algorithm>
 #include <cstdio>
 #include <stdexcept>
 
@@ -30,42 +29,37 @@ NodeDecl make_denoise_node() {
       .output("report", "Report",
               "{noise_sigma (mm, estimated), k (used; 0 when skipped), moved_rms (mm), skipped, "
               "rim_refitted (points refitted from a wider neighbourhood), rim_refits_biased (of those, kept with the narrower fit because the wider one was biased), narrowed (points kept with a narrower fit than k: sharp shape), bias_max (mm), uncertainty {median, "
-              "max, max_at, factor}: how far the points may still be off the real surface}")
-      .param_int("k", 0, 0, 512, "",
-                 "neighbours in each fit; more averages more noise away (noise in the normal "
-                 "direction falls roughly as 1/sqrt(k)) but smooths more of the shape. 0: "
-                 "automatic: the noise sigma is estimated from local quadric fits; below "
-                 "`tolerance` the cloud passes unchanged, otherwise k = clamp(3 (sigma / "
-                 "tolerance)^2, 32, 512)")
-      .param_float("tolerance", 0.002, 1e-6, 1e3, "mm",
-                   "automatic mode (k = 0): the normal error the denoised cloud should reach; "
-                   "clouds with less estimated noise are left as they are")
-      .param_float("radius", 0.0, 0.0, 1e6, "mm",
-                   "neighbourhood radius R (of the k nearest, those within R count, Gaussian "
-                   "weights exp(-2 d^2/R^2)); 0: automatic, the smallest k-th neighbour distance "
-                   "around each point")
-      .param_int("iterations", 1, 0, 20, "", "projections in sequence")
-      .param_int("scales", 1, 1, 6, "",
-                 "fits at k, k/2, ... (down to 16 neighbours); each point keeps the widest that "
-                 "agrees with the narrower ones, so a crest or crease is not flattened, and its "
-                 "uncertainty is 6 standard errors plus the bias bound from the other scales "
-                 "(honest on crests, about twice the single-scale uncertainty on noisy clouds). "
-                 "1: one fit of k; uncertainty 4 standard errors, noise only")
-      .param_bool("normals", true,
-                  "set normals from the fitted quadrics (oriented like the input normals, or "
-                  "+Z); otherwise the input normals are kept");
+              "max, max_at, factor}: how far the points may still be off the real surface}");
+  d.options<DenoiseOptions>()
+      .integer("k", &DenoiseOptions::k, 0, 512, "",
+               "neighbours in each fit; more averages more noise away (noise in the normal "
+               "direction falls roughly as 1/sqrt(k)) but smooths more of the shape. 0: "
+               "automatic: the noise sigma is estimated from local quadric fits; below "
+               "`tolerance` the cloud passes unchanged, otherwise k = clamp(3 (sigma / "
+               "tolerance)^2, 32, 512)")
+      .number("tolerance", &DenoiseOptions::tolerance, 1e-6, 1e3, "mm",
+              "automatic mode (k = 0): the normal error the denoised cloud should reach; "
+              "clouds with less estimated noise are left as they are")
+      .number("radius", &DenoiseOptions::radius, 0.0, 1e6, "mm",
+              "neighbourhood radius R (of the k nearest, those within R count, Gaussian "
+              "weights exp(-2 d^2/R^2)); 0: automatic, the smallest k-th neighbour distance "
+              "around each point")
+      .integer("iterations", &DenoiseOptions::iterations, 0, 20, "", "projections in sequence")
+      .integer("scales", &DenoiseOptions::scales, 1, 6, "",
+               "fits at k, k/2, ... (down to 16 neighbours); each point keeps the widest that "
+               "agrees with the narrower ones, so a crest or crease is not flattened, and its "
+               "uncertainty is 6 standard errors plus the bias bound from the other scales "
+               "(honest on crests, about twice the single-scale uncertainty on noisy clouds). "
+               "1: one fit of k; uncertainty 4 standard errors, noise only")
+      .flag("normals", &DenoiseOptions::set_normals,
+            "set normals from the fitted quadrics (oriented like the input normals, or "
+            "+Z); otherwise the input normals are kept");
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");
     if (cloud->size() == 0) throw NodeError("the cloud is empty");
     std::shared_ptr<const Neighborhoods> nbrs;
     if (ctx.has_input("neighbors")) nbrs = ctx.input<Neighborhoods>("neighbors");
-    DenoiseOptions o;
-    o.k = static_cast<int>(ctx.integer("k"));
-    o.tolerance = ctx.number("tolerance");
-    o.radius = ctx.number("radius");
-    o.iterations = static_cast<int>(ctx.integer("iterations"));
-    o.scales = static_cast<int>(ctx.integer("scales"));
-    o.set_normals = ctx.flag("normals");
+    const DenoiseOptions o = ctx.options<DenoiseOptions>();
     static const std::vector<Eigen::Vector3d> none;
     const auto& N = cloud->has_normals() ? cloud->normals : none;
     DenoiseResult r;
@@ -75,17 +69,7 @@ NodeDecl make_denoise_node() {
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }
-    // What each point may still be off the real surface: kUncertaintyFactor standard errors of
-    // its fit, or of its own noise when the cloud was left as it is.
-    std::vector<double> uncertainty(cloud->size(), std::max(kUncertaintyFloor, uncertainty_factor(o.scales) * r.noise_sigma));
-    if (!r.skipped)
-      uncertainty = r.uncertainty;
-    std::size_t worst = 0;
-    for (std::size_t i = 0; i < uncertainty.size(); ++i)
-      if (uncertainty[i] > uncertainty[worst]) worst = i;
-    std::vector<double> sorted = uncertainty;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    const Eigen::Vector3d& at = r.skipped ? cloud->points[worst] : r.points[worst];
+    const Eigen::Vector3d& at = r.uncertainty_max_at;
     Report report;
     report.data = {{"noise_sigma", r.noise_sigma},
                    {"k", r.k},
@@ -94,11 +78,11 @@ NodeDecl make_denoise_node() {
                    {"rim_refitted", r.refitted},
                    {"rim_refits_biased", r.refits_biased},
                    {"narrowed", r.narrowed},
-                   {"bias_max", r.bias.empty() ? 0.0 : *std::max_element(r.bias.begin(), r.bias.end())},
-                   {"uncertainty", {{"median", sorted[sorted.size() / 2]},
-                                    {"max", uncertainty[worst]},
+                   {"bias_max", r.bias_max},
+                   {"uncertainty", {{"median", r.uncertainty_median},
+                                    {"max", r.uncertainty_max},
                                     {"max_at", {at.x(), at.y(), at.z()}},
-                                    {"factor", uncertainty_factor(o.scales)}}}};
+                                    {"factor", r.uncertainty_factor}}}};
     ctx.set("report", std::move(report));
     if (r.skipped) {
       char msg[160];
@@ -107,14 +91,14 @@ NodeDecl make_denoise_node() {
                     r.noise_sigma, o.tolerance);
       ctx.progress(1.0, msg);
       PointCloud out = *cloud;
-      out.uncertainty = std::move(uncertainty);
+      out.uncertainty = std::move(r.uncertainty);
       ctx.set("cloud", std::move(out));
       return;
     }
     PointCloud out;
     out.points = std::move(r.points);
     out.normals = o.set_normals ? std::move(r.normals) : cloud->normals;
-    out.uncertainty = std::move(uncertainty);
+    out.uncertainty = std::move(r.uncertainty);
     ctx.set("cloud", std::move(out));
   };
   return d;

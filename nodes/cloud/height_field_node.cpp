@@ -17,29 +17,24 @@ NodeDecl make_height_field_node() {
   d.input("cloud", "Cloud", "the points with normals (oriented or not)")
       .input("neighbors", "Neighbors", "k nearest neighbours of each point (cloud.knn)")
       .output("cloud", "Cloud", "the same cloud, unchanged, once it passed")
-      .output("report", "Report", "parts, points under other points, slopes, xy extent and spacing")
-      .param_int("min_points", 100, 0, 1e9, "", "fewer points are refused")
-      .param_int("max_components", 1, 1, 1e6, "",
-                 "separate parts (components of the neighbour graph) allowed")
-      .param_float("min_component_fraction", 0.01, 0, 1, "",
-                   "parts with a smaller share of the points are specks: reported, ignored")
-      .param_float("layer_gap", 4.0, 0.5, 1000, "spacings",
-                   "two sheets closer than this (in median point spacings) are not told apart")
-      .param_float("max_layered_fraction", 0.002, 0, 1, "",
-                   "share of points under other points that is tolerated (noise)")
-      .param_float("max_slope", 85.0, 0, 90, "deg", "walls steeper than this are steep")
-      .param_float("max_steep_fraction", 0.05, 0, 1, "", "share of steep points that is tolerated");
+      .output("report", "Report", "parts, points under other points, slopes, xy extent and spacing");
+  using L = HeightFieldLimits;
+  d.options<L>()
+      .integer("min_points", &L::min_points, 0, 1e9, "", "fewer points are refused")
+      .integer("max_components", &L::max_components, 1, 1e6, "",
+               "separate parts (components of the neighbour graph) allowed")
+      .number("min_component_fraction", &L::min_component_fraction, 0, 1, "",
+              "parts with a smaller share of the points are specks: reported, ignored")
+      .number("layer_gap", &L::layer_gap, 0.5, 1000, "spacings",
+              "two sheets closer than this (in median point spacings) are not told apart")
+      .number("max_layered_fraction", &L::max_layered_fraction, 0, 1, "",
+              "share of points under other points that is tolerated (noise)")
+      .number("max_slope", &L::max_slope_deg, 0, 90, "deg", "walls steeper than this are steep")
+      .number("max_steep_fraction", &L::max_steep_fraction, 0, 1, "", "share of steep points that is tolerated");
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");
     auto nbrs = ctx.input<Neighborhoods>("neighbors");
-    HeightFieldLimits limits;
-    limits.min_points = static_cast<int>(ctx.integer("min_points"));
-    limits.max_components = static_cast<int>(ctx.integer("max_components"));
-    limits.min_component_fraction = ctx.number("min_component_fraction");
-    limits.layer_gap = ctx.number("layer_gap");
-    limits.max_layered_fraction = ctx.number("max_layered_fraction");
-    limits.max_slope_deg = ctx.number("max_slope");
-    limits.max_steep_fraction = ctx.number("max_steep_fraction");
+    const HeightFieldLimits limits = ctx.options<HeightFieldLimits>();
     HeightFieldStats stats;
     try {
       stats = analyze_height_field(cloud->points, cloud->normals, *nbrs, limits);

@@ -18,7 +18,7 @@
 namespace scallop {
 
 struct TrimSteepOptions {
-  double max_slope_deg = 75;  // points steeper than this are trimmed, (0, 90]
+  double max_slope_deg = 90;  // points steeper than this are trimmed, (0, 90]; 90: no point is steep
   int k = 16;                 // neighbours of the PCA normals and of the connectivity, >= 3
 };
 

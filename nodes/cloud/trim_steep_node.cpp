@@ -34,16 +34,15 @@ NodeDecl make_trim_steep_node() {
               "{points, kept, steep (steeper than max_slope), cut_off (gentle points in smaller "
               "pieces), area_mm2, trimmed_area_mm2, trimmed_fraction (of the area), "
               "max_slope_kept_deg, regions: [{points, area_mm2, centroid, min, max, "
-              "max_slope_deg}] (the trimmed pieces, largest first, at most 10)}")
-      .param_float("max_slope", 90, 1, 90, "deg",
-                   "points whose tangent plane is steeper than this to the xy plane are not "
-                   "machined (90: nothing is trimmed)")
-      .param_int("k", 16, 3, 256, "", "neighbours of the slope estimate and of the connectivity");
+              "max_slope_deg}] (the trimmed pieces, largest first, at most 10)}");
+  d.options<TrimSteepOptions>()
+      .number("max_slope", &TrimSteepOptions::max_slope_deg, 1, 90, "deg",
+              "points whose tangent plane is steeper than this to the xy plane are not "
+              "machined (90: nothing is trimmed)")
+      .integer("k", &TrimSteepOptions::k, 3, 256, "", "neighbours of the slope estimate and of the connectivity");
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");
-    TrimSteepOptions o;
-    o.max_slope_deg = ctx.number("max_slope");
-    o.k = static_cast<int>(ctx.integer("k"));
+    const TrimSteepOptions o = ctx.options<TrimSteepOptions>();
     TrimSteepResult r;
     try {
       r = trim_steep(cloud->points, o);

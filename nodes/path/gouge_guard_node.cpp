@@ -23,21 +23,19 @@ NodeDecl make_gouge_guard_node() {
       .output("toolpath", "Toolpath", "the passes, lifted where needed (lifted contact points are the ball's new touching points)")
       .output("report", "Report",
               "positions and moves checked, lifted and inserted positions, the deepest cut-in "
-              "found and the highest lift, with where")
-      .param_float("tolerance", 0, 0, 10, "mm",
-                   "how far the surface (raised by its uncertainty) may come inside the ball at a planned "
-                   "position before it is lifted; 0: a quarter of the path's chord error")
-      .param_float("chord_tolerance", 0, 0, 10, "mm",
-                   "how far the surface (raised by its uncertainty) may come inside the ball in the middle "
-                   "of a move before a lifted point is inserted; 0: 0.95 of the path's chord error")
-      .param_int("max_splits", 3, 0, 10, "", "how often a move may be halved");
+              "found and the highest lift, with where");
+  d.options<GougeGuardOptions>()
+      .number("tolerance", &GougeGuardOptions::tolerance, 0, 10, "mm",
+              "how far the surface (raised by its uncertainty) may come inside the ball at a planned "
+              "position before it is lifted; 0: a quarter of the path's chord error")
+      .number("chord_tolerance", &GougeGuardOptions::chord_tolerance, 0, 10, "mm",
+              "how far the surface (raised by its uncertainty) may come inside the ball in the middle "
+              "of a move before a lifted point is inserted; 0: 0.95 of the path's chord error")
+      .integer("max_splits", &GougeGuardOptions::max_splits, 0, 10, "", "how often a move may be halved");
   d.run = [](NodeContext& ctx) {
     auto path = ctx.input<Toolpath>("path");
     auto cloud = ctx.input<PointCloud>("cloud");
-    GougeGuardOptions o;
-    o.tolerance = ctx.number("tolerance");
-    o.chord_tolerance = ctx.number("chord_tolerance");
-    o.max_splits = static_cast<int>(ctx.integer("max_splits"));
+    GougeGuardOptions o = ctx.options<GougeGuardOptions>();
     o.progress = [&ctx](double f) { ctx.progress(f, "checking the ball against the surface"); };
     try {
       HeightFieldModel surface(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);

@@ -29,48 +29,39 @@ NodeDecl make_isoparametric_node() {
       .output("toolpath", "Toolpath", "the passes: contact points, normals, uv, in cutting order")
       .output("report", "Report",
               "passes, side and forward intervals, formula (4) use, predicted scallop and chord "
-              "deviation, concave regions tighter than the tool")
-      .param_choice("pattern", "zigzag", {"zigzag", "contour"},
-                    "zigzag: iso-u passes forward along v, alternating (rectangle map); contour: "
-                    "concentric circles from the boundary inwards (disk map)")
-      .param_float("tool_radius", 3.0, 1e-3, 1e3, "mm", "ball-end cutter radius r")
-      .param_float("scallop_height", 0.01, 1e-6, 1e2, "mm", "largest scallop height h allowed")
-      .param_float("chord_error", 0.005, 1e-6, 1e2, "mm", "largest chord deviation e allowed")
-      .param_float("safety_factor", 1.0, 0.05, 1.0, "",
-                   "plan for safety_factor * h (margin for the cloud's own error)")
-      .param_float("surface_error", 0.0, 0.0, 1e2, "mm",
-                   "the cloud's surface is known to +- this (e.g. the scanner's accuracy); where "
-                   "the cloud's own per-point uncertainty (from cloud.denoise) is larger, that "
-                   "is used. The scallop is planned for h minus it, and the ball kept above the "
-                   "estimate by what the chord budget cannot absorb, so the limits hold on the "
-                   "real surface")
-      .param_float("conformal_tolerance", 5.0, 0.0, 89.0, "deg",
-                   "where r_u and r_v are further than this from orthogonal, the side step uses "
-                   "the corrected formula (4) instead of (3)")
-      .param_float("max_segment", 5.0, 1e-3, 1e3, "mm", "longest forward step")
-      .param_int("interpolation_k", 20, 6, 64, "", "neighbours per local (u,v) fit")
-      .param_int("max_passes", 5000, 1, 1000000, "",
-                 "the work budget: more passes than this, estimated before planning (or met "
-                 "while planning), refuse with the estimate")
-      .param_bool("outline", true,
-                  "a last closed pass through the outline's own points, so the rim between pass "
-                  "ends and the outline's corners are cut");
+              "deviation, concave regions tighter than the tool");
+  d.options<IsoparametricOptions>()
+      .choice("pattern", &IsoparametricOptions::pattern, {"zigzag", "contour"},
+              "zigzag: iso-u passes forward along v, alternating (rectangle map); contour: "
+              "concentric circles from the boundary inwards (disk map)")
+      .number("tool_radius", &IsoparametricOptions::tool_radius, 1e-3, 1e3, "mm", "ball-end cutter radius r")
+      .number("scallop_height", &IsoparametricOptions::scallop_height, 1e-6, 1e2, "mm",
+              "largest scallop height h allowed")
+      .number("chord_error", &IsoparametricOptions::chord_error, 1e-6, 1e2, "mm", "largest chord deviation e allowed")
+      .number("safety_factor", &IsoparametricOptions::safety_factor, 0.05, 1.0, "",
+              "plan for safety_factor * h (margin for the cloud's own error)")
+      .number("surface_error", &IsoparametricOptions::surface_error, 0.0, 1e2, "mm",
+              "the cloud's surface is known to +- this (e.g. the scanner's accuracy); where "
+              "the cloud's own per-point uncertainty (from cloud.denoise) is larger, that "
+              "is used. The scallop is planned for h minus it, and the ball kept above the "
+              "estimate by what the chord budget cannot absorb, so the limits hold on the "
+              "real surface")
+      .number("conformal_tolerance", &IsoparametricOptions::conformal_tolerance, 0.0, 89.0, "deg",
+              "where r_u and r_v are further than this from orthogonal, the side step uses "
+              "the corrected formula (4) instead of (3)")
+      .number("max_segment", &IsoparametricOptions::max_segment, 1e-3, 1e3, "mm", "longest forward step")
+      .integer("interpolation_k", &IsoparametricOptions::interpolation_k, 6, 64, "", "neighbours per local (u,v) fit")
+      .integer("max_passes", &IsoparametricOptions::max_passes, 1, 1000000, "",
+               "the work budget: more passes than this, estimated before planning (or met "
+               "while planning), refuse with the estimate")
+      .flag("outline", &IsoparametricOptions::outline, 
+            "a last closed pass through the outline's own points, so the rim between pass "
+            "ends and the outline's corners are cut");
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");
     auto neighbors = ctx.input<Neighborhoods>("neighbors");
     auto map = ctx.input<UVMap>("map");
-    IsoparametricOptions o;
-    o.pattern = ctx.text("pattern");
-    o.tool_radius = ctx.number("tool_radius");
-    o.scallop_height = ctx.number("scallop_height");
-    o.chord_error = ctx.number("chord_error");
-    o.safety_factor = ctx.number("safety_factor");
-    o.surface_error = ctx.number("surface_error");
-    o.conformal_tolerance = ctx.number("conformal_tolerance");
-    o.max_segment = ctx.number("max_segment");
-    o.interpolation_k = static_cast<int>(ctx.integer("interpolation_k"));
-    o.outline = ctx.flag("outline");
-    o.max_passes = static_cast<std::size_t>(ctx.integer("max_passes"));
+    IsoparametricOptions o = ctx.options<IsoparametricOptions>();
     o.progress = [&ctx](double f, const std::string& m) { ctx.progress(f, m); };
     IsoparametricResult res;
     try {

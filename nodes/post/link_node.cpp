@@ -15,21 +15,21 @@ NodeDecl make_link_node() {
   d.description = "joins passes in order: short feed links where the ball stays above the surface, else retract to a clearance plane";
   d.input("path", "Toolpath", "the passes, in cutting order")
       .input("cloud", "Cloud", "the surface, for link safety and the clearance plane (else the passes' contact points)", false)
-      .output("linked", "LinkedPath", "tool-tip moves: rapids, plunges and feeds")
-      .param_float("max_link", 0, 0, 1e4, "mm", "longest direct feed link; 0: twice the largest stepover")
-      .param_float("safety", 5, 0, 1e4, "mm", "clearance plane height above the highest surface point")
-      .param_float("lead_height", 1, 0, 1e3, "mm", "height above a pass end where plunges stop and lifts start")
-      .param_float("tolerance", 0, 0, 10, "mm", "how much closer than r a link may bring the ball to the surface; 0: max(chord error, 0.001)");
+      .output("linked", "LinkedPath", "tool-tip moves: rapids, plunges and feeds");
+  d.options<LinkOptions>()
+      .number("max_link", &LinkOptions::max_link, 0, 1e4, "mm",
+              "longest direct feed link; 0: twice the largest stepover")
+      .number("safety", &LinkOptions::safety, 0, 1e4, "mm", "clearance plane height above the highest surface point")
+      .number("lead_height", &LinkOptions::lead_height, 0, 1e3, "mm",
+              "height above a pass end where plunges stop and lifts start")
+      .number("tolerance", &LinkOptions::tolerance, 0, 10, "mm",
+              "how much closer than r a link may bring the ball to the surface; 0: max(chord error, 0.001)");
   d.run = [](NodeContext& ctx) {
     auto path = ctx.input<Toolpath>("path");
     std::vector<Eigen::Vector3d> none;
     std::shared_ptr<const PointCloud> cloud;
     if (ctx.has_input("cloud")) cloud = ctx.input<PointCloud>("cloud");
-    LinkOptions o;
-    o.max_link = ctx.number("max_link");
-    o.safety = ctx.number("safety");
-    o.lead_height = ctx.number("lead_height");
-    o.tolerance = ctx.number("tolerance");
+    const LinkOptions o = ctx.options<LinkOptions>();
     try {
       std::unique_ptr<HeightFieldModel> model;  // what the certificate measures against
       if (cloud && cloud->size() >= 10)

@@ -185,7 +185,7 @@ struct HeatGrid {
   double cell;
   int nx, ny;
   std::vector<long> worst;  // index into samples, −1 empty
-  HeatGrid(const SimulationResult& sim, double limit, double gouge_tol, int plot_width)
+  HeatGrid(const Simulation& sim, double limit, double gouge_tol, int plot_width)
       : frame(bounds(sim), plot_width) {
     cell = std::max(1.0 / frame.scale, 1.3 * sim.spacing);  // every cell holds a sample
     nx = std::max(1, static_cast<int>(std::ceil((frame.hi.x() - frame.lo.x()) / cell)) + 1);
@@ -206,7 +206,7 @@ struct HeatGrid {
       if (a > b || (a == b && (a == 3 ? s.gouge > o.gouge : sv > ov))) w = long(i);
     }
   }
-  static std::vector<Eigen::Vector2d> bounds(const SimulationResult& sim) {
+  static std::vector<Eigen::Vector2d> bounds(const Simulation& sim) {
     if (sim.samples.empty()) throw std::invalid_argument("the simulation has no samples");
     std::vector<Eigen::Vector2d> b;
     for (const auto& s : sim.samples) b.emplace_back(s.x, s.y);
@@ -296,8 +296,9 @@ std::string render_path_svg(const Toolpath& path, const PointCloud* cloud, const
   return o.str();
 }
 
-Picture render_scallop(const SimulationResult& sim, double limit, double gouge_tol, int width) {
+Picture render_scallop(const Simulation& sim, int width) {
   if (width < kBar + 32) throw std::invalid_argument("width must be at least " + std::to_string(kBar + 32) + " px");
+  const double limit = sim.scallop_limit, gouge_tol = sim.gouge_tolerance;
   if (!(limit > 0)) throw std::invalid_argument("scallop limit must be > 0");
   HeatGrid g(sim, limit, gouge_tol, width - kBar);
   const Frame& f = g.frame;
@@ -330,12 +331,11 @@ Picture render_scallop(const SimulationResult& sim, double limit, double gouge_t
   return c.p;
 }
 
-std::string render_scallop_png(const SimulationResult& sim, double limit, double gouge_tol, int width) {
-  return encode_png(render_scallop(sim, limit, gouge_tol, width));
-}
+std::string render_scallop_png(const Simulation& sim, int width) { return encode_png(render_scallop(sim, width)); }
 
-std::string render_scallop_svg(const SimulationResult& sim, double limit, double gouge_tol, int width) {
+std::string render_scallop_svg(const Simulation& sim, int width) {
   if (width < kBar + 32) throw std::invalid_argument("width must be at least " + std::to_string(kBar + 32) + " px");
+  const double limit = sim.scallop_limit, gouge_tol = sim.gouge_tolerance;
   if (!(limit > 0)) throw std::invalid_argument("scallop limit must be > 0");
   // Coarse cells (at most ~200 across) keep the SVG small; each shows its worst sample.
   HeatGrid g(sim, limit, gouge_tol, std::min(width - kBar, 220));

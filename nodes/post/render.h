@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "nodes/post/simulate.h"
 #include "nodes/types/cloud.h"
+#include "nodes/types/simulation.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
@@ -31,9 +31,11 @@ std::string encode_png(const Picture& picture);
 Picture render_path(const Toolpath& path, const PointCloud* cloud, const std::string& view, int width);
 std::string render_path_svg(const Toolpath& path, const PointCloud* cloud, const std::string& view, int width);
 
-// Scallop heat map of a simulation (top view) with a labelled colour bar.
-Picture render_scallop(const SimulationResult& sim, double limit, double gouge_tol, int width);
-std::string render_scallop_png(const SimulationResult& sim, double limit, double gouge_tol, int width);
-std::string render_scallop_svg(const SimulationResult& sim, double limit, double gouge_tol, int width);
+// Scallop heat map of a simulation (top view) with a labelled colour bar, coloured against the
+// simulation's own limits (scallop_limit, gouge_tolerance). Throws std::invalid_argument for a
+// simulation without samples or limit, or width < 142 px.
+Picture render_scallop(const Simulation& sim, int width);
+std::string render_scallop_png(const Simulation& sim, int width);
+std::string render_scallop_svg(const Simulation& sim, int width);
 
 }  // namespace scallop

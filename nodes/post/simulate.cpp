@@ -190,9 +190,9 @@ std::vector<CentreSegment> feed_centres(const LinkedPath& path, double& rapid_le
 }
 
 // ----------------------------------------------------------------------------- simulation
-SimulationResult simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSegment>& feed,
-                              double rapid_length, const SimulateOptions& o,
-                              const std::function<void(double)>& progress) {
+Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSegment>& feed,
+                        double rapid_length, const SimulateOptions& o,
+                        const std::function<void(double)>& progress) {
   const double r = o.tool_radius, H = o.scallop;
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
   if (!(H > 0)) throw std::invalid_argument("scallop limit must be > 0");
@@ -380,8 +380,10 @@ SimulationResult simulate_cut(const HeightFieldModel& surf, const std::vector<Ce
   const double piece = std::clamp(lengths[lengths.size() * 9 / 10], spacing, std::max(spacing, r / 2));
   PieceIndex index(feed, piece);
 
-  SimulationResult res;
+  Simulation res;
   res.spacing = spacing;
+  res.scallop_limit = H;
+  res.gouge_tolerance = gouge_tol;
   res.samples.resize(raw.size());
   std::atomic<std::size_t> done{0};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, raw.size(), 1024), [&](const tbb::blocked_range<std::size_t>& rg) {

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "nodes/geom/height_field_model.h"
+#include "nodes/types/simulation.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
@@ -54,23 +55,9 @@ struct SimulateOptions {
   std::vector<std::vector<Eigen::Vector2d>> loops;
 };
 
-// One surface sample and what the path left there.
-struct SimSample {
-  double x, y, z;
-  double weight;     // surface area it stands for (mm²); 0 for refinement samples
-  double scallop;    // NaN when uncut
-  double gouge;
-  bool interior;
-};
-
-struct SimulationResult {
-  nlohmann::json report;          // the fields listed in the report (see simulate.cpp)
-  std::vector<SimSample> samples; // grid samples, then refinement samples
-  double spacing = 0;
-  std::vector<Eigen::Vector2d> outline;  // grid nodes just outside the patch (xy)
-};
-
-// Simulates the feed polyline `feed` (ball centres) over the surface `surface`.
+// Simulates the feed polyline `feed` (ball centres) over the surface `surface`: the samples
+// (nodes/types/simulation.h), the grid spacing, the outline, the limits judged against
+// (scallop_limit = h, gouge_tolerance = max(e, 0.001)) and the report.
 // Report keys: scallop_max, scallop_max_interior, scallop_p99, scallop_p99_interior,
 // scallop_mean, scallop_mean_interior, gouge_max, uncut_fraction, uncut_fraction_interior,
 // cut_length, rapid_length, samples, samples_interior, samples_refined, spacing, margin,
@@ -79,8 +66,8 @@ struct SimulationResult {
 // places {x, y, z, kind: "gouge" | "uncut" | "scallop", value}, worst first).
 // Throws std::invalid_argument for r ≤ 0, h ≤ 0, an empty path, a non-finite centre, or loops
 // whose outer polygon has fewer than 3 points or that have a non-finite point.
-SimulationResult simulate_cut(const HeightFieldModel& surface, const std::vector<CentreSegment>& feed,
-                              double rapid_length, const SimulateOptions& options,
-                              const std::function<void(double)>& progress = {});
+Simulation simulate_cut(const HeightFieldModel& surface, const std::vector<CentreSegment>& feed,
+                        double rapid_length, const SimulateOptions& options,
+                        const std::function<void(double)>& progress = {});
 
 }  // namespace scallop

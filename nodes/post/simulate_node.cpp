@@ -1,7 +1,6 @@
 #include <stdexcept>
 
 #include "engine/node.h"
-#include "nodes/post/render.h"
 #include "nodes/post/simulate.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
@@ -12,9 +11,10 @@ namespace scallop::post_nodes {
 NodeDecl make_simulate_node() {
   NodeDecl d;
   d.type = "post.simulate";
-  d.version = 5;  // 3: scallop and gouge are bounds that include the cloud's uncertainty
+  d.version = 6;  // 3: scallop and gouge are bounds that include the cloud's uncertainty
                   // 4: the uncertainty grows at gaps beyond the cloud's edge
                   // 5: pass asks the whole patch, rim included, not the interior only
+                  // 6: outputs the simulation (post.render draws it), no heat map of its own
   d.description = "cutting simulation over the cloud's surface: scallop, gouge and uncut area (the certificate)";
   d.input("path", "Toolpath", "planned passes (give this or 'linked')", false)
       .input("linked", "LinkedPath", "linked machine moves (give this or 'path')", false)
@@ -23,13 +23,18 @@ NodeDecl make_simulate_node() {
              "the patch is what lies inside them in xy, and the margin is measured from them; "
              "absent: the outline is guessed from the cloud", false)
       .output("report", "Report", "scallop/gouge/uncut statistics (whole patch, rim included, and interior), pass (the whole patch within the limits) and fail reasons, the 10 worst places")
-      .output("heatmap", "Image", "top view of the scallop left, colour bar 0..1.01 h")
+      .output("simulation", "Simulation",
+              "what the path left at every surface sample and the limits judged against, for "
+              "pictures (post.render, view 'scallop')")
       .param_float("scallop", 0, 0, 100, "mm", "scallop limit h; 0: the path's own")
-      .param_float("chord", -1, -1, 100, "mm", "chord tolerance e (gouges up to max(e, 0.001) pass); -1: the path's own")
-      .param_float("spacing", 0, 0, 100, "mm", "grid spacing; 0: sqrt(8 r h)/12")
-      .param_float("margin", 0, 0, 1000, "mm", "interior = farther than this from the outline; 0: sqrt(8 r h)")
-      .param_int("max_samples", 1500000, 1000, 100000000, "", "the spacing is raised to stay below this many samples")
-      .param_int("heatmap_width", 1000, 64, 8000, "px", "width of the heat map");
+      .param_float("chord", -1, -1, 100, "mm", "chord tolerance e (gouges up to max(e, 0.001) pass); -1: the path's own");
+  // scallop and chord stand for the path's own limits at 0 and -1: resolved in run, not bound
+  d.options<SimulateOptions>()
+      .number("spacing", &SimulateOptions::spacing, 0, 100, "mm", "grid spacing; 0: sqrt(8 r h)/12")
+      .number("margin", &SimulateOptions::margin, 0, 1000, "mm",
+              "interior = farther than this from the outline; 0: sqrt(8 r h)")
+      .integer("max_samples", &SimulateOptions::max_samples, 1000, 100000000, "",
+               "the spacing is raised to stay below this many samples");
   d.run = [](NodeContext& ctx) {
     if (ctx.has_input("path") == ctx.has_input("linked"))
       throw NodeError("give exactly one of the inputs 'path' and 'linked'");
@@ -45,13 +50,10 @@ NodeDecl make_simulate_node() {
       feed = feed_centres(*p, rapid);
       r = p->tool_radius, h = p->scallop_height, e = p->chord_error;
     }
-    SimulateOptions o;
+    SimulateOptions o = ctx.options<SimulateOptions>();
     o.tool_radius = r;
     o.scallop = ctx.number("scallop") > 0 ? ctx.number("scallop") : h;
     o.chord = ctx.number("chord") >= 0 ? ctx.number("chord") : e;
-    o.spacing = ctx.number("spacing");
-    o.margin = ctx.number("margin");
-    o.max_samples = static_cast<std::size_t>(ctx.integer("max_samples"));
     if (ctx.has_input("loops")) {
       auto loops = ctx.input<BoundaryLoops>("loops");
       if (loops->loops.empty()) throw NodeError("the input 'loops' has no loop");
@@ -68,13 +70,11 @@ NodeDecl make_simulate_node() {
     }
     try {
       HeightFieldModel surf(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
-      auto res = simulate_cut(surf, feed, rapid, o, [&](double f) { ctx.progress(f, "simulating"); });
-      Image img;
-      img.png = render_scallop_png(res, o.scallop, std::max(o.chord, 1e-3), static_cast<int>(ctx.integer("heatmap_width")));
+      Simulation sim = simulate_cut(surf, feed, rapid, o, [&](double f) { ctx.progress(f, "simulating"); });
       Report rep;
-      rep.data = std::move(res.report);
+      rep.data = sim.report;
       ctx.set("report", std::move(rep));
-      ctx.set("heatmap", std::move(img));
+      ctx.set("simulation", std::move(sim));
     } catch (const std::invalid_argument& ex) {
       throw NodeError(ex.what());
     }

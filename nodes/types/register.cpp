@@ -5,6 +5,7 @@
 #include "nodes/types/document.h"
 #include "nodes/types/mesh.h"
 #include "nodes/types/param.h"
+#include "nodes/types/simulation.h"
 #include "nodes/types/svg.h"
 #include "nodes/types/toolpath.h"
 
@@ -24,6 +25,8 @@ void register_types(Registry& r) {
   v.add({"LinkedPath", "bin", "linked machine moves (tool tip)", LinkedPath::deserialize});
   v.add({"GCode", "ngc", "a machine program", GCode::deserialize});
   v.add({"Report", "json", "a JSON report", Report::deserialize});
+  v.add({"Simulation", "bin", "a cutting simulation: what the path left at every surface sample, its limits and its report",
+         Simulation::deserialize, 1});
   v.add({"Image", "png", "a PNG picture", Image::deserialize});
   v.add({"Svg", "svg", "an SVG picture", Svg::deserialize});
 }

@@ -15,27 +15,16 @@ NodeDecl node(std::string type, std::string in_type = "Number", std::string out_
   return d;
 }
 
-// The message of the std::logic_error `f` throws ("" when it throws none).
-template <class F>
-std::string refusal(F f) {
-  try {
-    f();
-  } catch (const std::logic_error& e) {
-    return e.what();
-  }
-  return "";
-}
-
 TEST(Registry, RefusesADuplicateNodeType) {
   Registry reg = test::make_test_registry();
-  EXPECT_EQ(refusal([&] { reg.add(node("test.add")); }), "node type 'test.add' is registered twice");
+  EXPECT_EQ(test::error_of([&] { reg.add(node("test.add")); }), "node type 'test.add' is registered twice");
 }
 
 TEST(Registry, RefusesAPortWhoseValueTypeIsNotRegistered) {
   Registry reg = test::make_test_registry();
-  EXPECT_EQ(refusal([&] { reg.add(node("test.in", "Nmber")); }),
+  EXPECT_EQ(test::error_of([&] { reg.add(node("test.in", "Nmber")); }),
             "node type 'test.in': input 'a' has value type 'Nmber', which is not registered");
-  EXPECT_EQ(refusal([&] { reg.add(node("test.out", "Number", "Mesh")); }),
+  EXPECT_EQ(test::error_of([&] { reg.add(node("test.out", "Number", "Mesh")); }),
             "node type 'test.out': output 'out' has value type 'Mesh', which is not registered");
   EXPECT_EQ(reg.find("test.in"), nullptr);
   EXPECT_EQ(reg.find("test.out"), nullptr);
@@ -43,7 +32,7 @@ TEST(Registry, RefusesAPortWhoseValueTypeIsNotRegistered) {
 
 TEST(Registry, RefusesADuplicateValueType) {
   Registry reg = test::make_test_registry();
-  EXPECT_EQ(refusal([&] { reg.values().add({"Number", "txt", "again", nullptr}); }),
+  EXPECT_EQ(test::error_of([&] { reg.values().add({"Number", "txt", "again", nullptr}); }),
             "value type 'Number' is registered twice");
 }
 
@@ -53,9 +42,9 @@ TEST(Registry, ADomainNamesItsOwnNodes) {
   reg.add_domain("mesh", {node("mesh.denoise")});  // the same name in another domain: no clash
   EXPECT_NE(reg.find("cloud.denoise"), nullptr);
   EXPECT_NE(reg.find("mesh.denoise"), nullptr);
-  EXPECT_EQ(refusal([&] { reg.add_domain("mesh", {node("denoise")}); }),
+  EXPECT_EQ(test::error_of([&] { reg.add_domain("mesh", {node("denoise")}); }),
             "node type 'denoise' is in the domain 'mesh': name it 'mesh.<name>'");
-  EXPECT_EQ(refusal([&] { reg.add_domain("mesh", {node("meshes.x")}); }),
+  EXPECT_EQ(test::error_of([&] { reg.add_domain("mesh", {node("meshes.x")}); }),
             "node type 'meshes.x' is in the domain 'mesh': name it 'mesh.<name>'");
 }
 

@@ -382,6 +382,14 @@ TEST(DenoiseAuto, ExactQuadricIsLeftUnchanged) {
   EXPECT_TRUE(r.normals.empty());  // the input's: none
   EXPECT_EQ(r.moved_rms, 0);
   EXPECT_LT(r.noise_sigma, o.tolerance);
+  // each point is known as well as the noise lets it be, the same everywhere
+  const double u = std::max(kUncertaintyFloor, kUncertaintyFactor * r.noise_sigma);
+  EXPECT_EQ(r.uncertainty, std::vector<double>(P.size(), u));
+  EXPECT_EQ(r.uncertainty_median, u);
+  EXPECT_EQ(r.uncertainty_max, u);
+  EXPECT_EQ(r.uncertainty_max_at, P[0]);  // the first of the largest
+  EXPECT_EQ(r.uncertainty_factor, kUncertaintyFactor);
+  EXPECT_EQ(r.bias_max, 0);
 }
 
 TEST(DenoiseAuto, EstimatesTheNoiseOfAPlane) {
@@ -451,6 +459,11 @@ TEST(DenoiseNode, Declaration) {
     EXPECT_TRUE(d.find_param(p)) << p;
   EXPECT_EQ(d.find_param("k")->default_value, 0);
   EXPECT_EQ(d.find_param("tolerance")->default_value, 0.002);
+  // the parameters are bound to DenoiseOptions: one default each, the struct's (its k was 64
+  // while the node's was 0; automatic, the node's, is what users got and get)
+  const DenoiseOptions def;
+  EXPECT_EQ(d.find_param("k")->default_value, def.k);
+  EXPECT_EQ(d.find_param("normals")->default_value, def.set_normals);
 }
 
 TEST(DenoiseNode, AutomaticModeReports) {
@@ -487,8 +500,10 @@ TEST(DenoiseNode, AutomaticModeReports) {
   ASSERT_TRUE(denoised && denoised->has_uncertainty());
   const auto& u = report->data.at("uncertainty");
   EXPECT_EQ(u.at("factor"), kUncertaintyFactor);
-  EXPECT_EQ(u.at("max").get<double>(),
-            *std::max_element(denoised->uncertainty.begin(), denoised->uncertainty.end()));
+  const auto worst = std::max_element(denoised->uncertainty.begin(), denoised->uncertainty.end());
+  EXPECT_EQ(u.at("max").get<double>(), *worst);
+  const Vector3d at = denoised->points[worst - denoised->uncertainty.begin()];
+  EXPECT_EQ(u.at("max_at"), (nlohmann::json{at.x(), at.y(), at.z()}));
   EXPECT_GT(u.at("median").get<double>(), 0.0);
   EXPECT_LT(u.at("median").get<double>(), kUncertaintyFactor * sigma);
   // explicit k: the noise is still estimated (for the uncertainty)

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <random>
 
+#include "engine/graph.h"
 #include "engine/node.h"
 #include "nodes/all_nodes.h"
 #include "nodes/types/cloud.h"
@@ -109,6 +110,29 @@ TEST(TrimSteep, ALineIsNamedOneDimensionalNotTrimmedAsSteep) {
     EXPECT_STREQ(e.what(), "the cloud is one-dimensional: its points lie along a line 50 mm long and 0.002 mm wide "
                            "(points 0.1 mm apart), not on a surface; scallop machines surface patches");
   }
+}
+
+TEST(TrimSteepNode, ItsParametersAreTrimSteepOptions) {
+  // one default each, the struct's (its max_slope_deg was 75 while the node's was 90; 90, what
+  // users got, is the struct's now)
+  const NodeDecl& d = *builtin_registry().find("cloud.trim_steep");
+  const TrimSteepOptions def;
+  EXPECT_EQ(d.find_param("max_slope")->default_value, def.max_slope_deg);
+  EXPECT_EQ(d.find_param("max_slope")->default_value, 90.0);
+  EXPECT_EQ(d.find_param("k")->default_value, def.k);
+  // a value out of the declared range is refused before anything runs, as any parameter's
+  std::vector<std::string> errors;
+  try {
+    compile(parse_graph(R"({"scallop_graph": 1, "inputs": {"cloud": {"type": "File"}}, "nodes": [
+        {"id": "read", "type": "io.read_cloud", "inputs": {"file": "@cloud"}},
+        {"id": "trim", "type": "cloud.trim_steep", "params": {"max_slope": 95}, "inputs": {"cloud": "read.cloud"}}]})"),
+            builtin_registry());
+  } catch (const ValidationError& e) {
+    errors = e.errors;
+  }
+  ASSERT_FALSE(errors.empty());  // (the graph input not given is the other error)
+  EXPECT_EQ(errors[0], "nodes[1].params.max_slope: node 'trim': parameter 'max_slope' = 95 is out of range; "
+                       "expected 1 .. 90 deg");
 }
 
 TEST(TrimSteepNode, SaysWhatIsNotMachinedAndKeepsTheRest) {

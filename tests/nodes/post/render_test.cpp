@@ -4,6 +4,13 @@
 
 #include <cmath>
 #include <set>
+#include <sstream>
+
+#include "engine/node.h"
+#include "nodes/all_nodes.h"
+#include "nodes/types/document.h"
+#include "nodes/types/svg.h"
+#include "tests/test_support.h"
 
 namespace scallop {
 namespace {
@@ -78,23 +85,72 @@ TEST(Render, SvgHasThePasses) {
 }
 
 TEST(Render, ScallopHeatMapWithColourBar) {
-  SimulationResult sim;
+  Simulation sim;
   sim.spacing = 0.1;
+  sim.scallop_limit = 0.05;
+  sim.gouge_tolerance = 0.001;
   for (int i = 0; i < 200; ++i)
     for (int j = 0; j < 100; ++j) {
       SimSample s{i * 0.1, j * 0.1, 0, 0.01, 0.06 * i / 200.0, 0, true};
       if (i > 190) s.scallop = NAN;  // uncut strip
       sim.samples.push_back(s);
     }
-  Picture p = render_scallop(sim, 0.05, 0.001, 600);
+  Picture p = render_scallop(sim, 600);
   EXPECT_EQ(p.width, 600);
   EXPECT_GT(distinct_colours(p), 20u);
   auto px = [&](int x, int y) { std::size_t i = (std::size_t(y) * p.width + x) * 3; return std::array<int, 3>{p.rgb[i], p.rgb[i + 1], p.rgb[i + 2]}; };
   // The right end of the plot (scallop > 1.01 h, then uncut) is red then magenta.
   int y = p.height / 2 < 200 ? 60 : p.height / 2;
   EXPECT_EQ(px(478, y), (std::array<int, 3>{230, 0, 230}));
-  std::string svg = render_scallop_svg(sim, 0.05, 0.001, 600);
+  std::string svg = render_scallop_svg(sim, 600);
   EXPECT_NE(svg.find("0.0505 mm"), std::string::npos);
+}
+
+// The output `port` of a node run (test::run_node), of value type T.
+template <class T>
+std::shared_ptr<const T> output(const std::map<std::string, ValuePtr>& outputs, const std::string& port) {
+  auto v = std::dynamic_pointer_cast<const T>(outputs.at(port));
+  if (!v) throw std::runtime_error("output '" + port + "' is missing or of another type");
+  return v;
+}
+
+TEST(RenderNode, DrawsTheScallopMapOfPostSimulatesSimulation) {
+  const NodeDecl& simulate = *builtin_registry().find("post.simulate");
+  const NodeDecl& render = *builtin_registry().find("post.render");
+  auto path = std::make_shared<const Toolpath>(wave_path(false));  // h = 0.05
+  auto cloud = std::make_shared<const PointCloud>(wave_cloud());
+  // the certificate judged against h = 0.02, not the path's own 0.05
+  auto simulated = test::run_node(simulate, {{"scallop", 0.02}}, {{"path", path}, {"cloud", cloud}});
+  auto sim = output<Simulation>(simulated, "simulation");
+  EXPECT_EQ(sim->report, output<Report>(simulated, "report")->data);
+  EXPECT_EQ(sim->scallop_limit, 0.02);
+  EXPECT_EQ(sim->gouge_tolerance, 0.001);  // max(e, 0.001), the path's e being 0
+  EXPECT_GT(sim->samples.size(), 10000u);
+  // the map is that simulation's, drawn against its limits; no path, no cloud, nothing simulated again
+  auto drawn = test::run_node(render, {{"view", "scallop"}, {"width", 600}}, {{"simulation", sim}});
+  EXPECT_EQ(output<Image>(drawn, "image")->png, render_scallop_png(*sim, 600));
+  const std::string svg = output<Svg>(drawn, "svg")->text;
+  EXPECT_EQ(svg, render_scallop_svg(*sim, 600));
+  EXPECT_NE(svg.find("0.0202 mm"), std::string::npos);  // the colour bar ends at 1.01 h of the simulation
+  // the same picture from the simulation's disk-cache form
+  std::stringstream bytes;
+  sim->serialize(bytes);
+  auto cached = std::dynamic_pointer_cast<const Simulation>(Simulation::deserialize(bytes));
+  ASSERT_TRUE(cached);
+  auto again = test::run_node(render, {{"view", "scallop"}, {"width", 600}}, {{"simulation", cached}});
+  EXPECT_EQ(output<Image>(again, "image")->png, output<Image>(drawn, "image")->png);
+}
+
+TEST(RenderNode, SaysWhichInputAViewNeeds) {
+  const NodeDecl& render = *builtin_registry().find("post.render");
+  auto path = std::make_shared<const Toolpath>(wave_path(false));
+  auto message = [&](const nlohmann::json& params, std::map<std::string, ValuePtr> inputs) {
+    return test::error_of<NodeError>([&] { test::run_node(render, params, std::move(inputs)); });
+  };
+  EXPECT_EQ(message({{"view", "scallop"}}, {{"path", path}}),
+            "view 'scallop' needs the input 'simulation' (post.simulate's)");
+  EXPECT_EQ(message({{"view", "iso"}}, {}), "view 'iso' needs the input 'path'");
+  EXPECT_EQ(message({{"view", "top"}}, {{"path", path}}), "");
 }
 
 }  // namespace

@@ -50,7 +50,7 @@ double line_gap(double s) {
   return (step - step.dot(dir) * dir).norm();
 }
 
-SimulationResult run(const Toolpath& t, double h) {
+Simulation run(const Toolpath& t, double h) {
   static const auto cloud = plane_cloud();
   HeightFieldModel surf(cloud);
   SimulateOptions o;
@@ -235,7 +235,7 @@ SparsePatch sparse_patch() {
   return p;
 }
 
-SimulationResult run_sparse(double r, double s) {
+Simulation run_sparse(double r, double s) {
   static const SparsePatch patch = sparse_patch();
   HeightFieldModel surf(patch.cloud);
   Toolpath t;
