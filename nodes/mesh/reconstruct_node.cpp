@@ -24,40 +24,34 @@ NodeDecl make_reconstruct_node() {
               "each input point to the mesh), components, boundary_loops, genus, non_manifold_edges}")
       .param_choice("method", "advancing_front", {"advancing_front", "poisson"},
                     "advancing_front: every vertex is a cloud point, sharp edges kept; poisson: a "
-                    "smooth watertight surface fitted to points and oriented normals")
-      .param_int("smooth_iterations", 0, 0, 20, "",
+                    "smooth watertight surface fitted to points and oriented normals");
+  d.options<ReconstructOptions>()
+      .integer("smooth_iterations", &ReconstructOptions::smooth_iterations, 0, 20, "",
                  "advancing_front: bilateral smoothing passes (CGAL bilateral_smooth_point_set) before "
                  "meshing; 2-3 on noisy scans, 0 on clean or already denoised clouds. Each pass moves "
                  "points onto their neighbours' tangent planes, so a curved surface shrinks by about "
                  "d^2 / 2R (d the neighbourhood's radius, R the surface's): fine on flat faces, keep "
                  "smooth_neighbors small on tightly curved parts")
-      .param_int("smooth_neighbors", 24, 4, 256, "", "neighbours of each bilateral fit")
-      .param_float("sharpness_angle", 25.0, 0.0, 90.0, "deg",
+      .integer("smooth_neighbors", &ReconstructOptions::smooth_neighbors, 4, 256, "", "neighbours of each bilateral fit")
+      .number("sharpness_angle", &ReconstructOptions::sharpness_angle, 0.0, 90.0, "deg",
                    "bilateral smoothing: normals further apart than about this are treated as "
                    "across an edge and not averaged (smaller keeps edges sharper)")
-      .param_float("radius_ratio_bound", 5.0, 1.0, 1000.0, "",
+      .number("radius_ratio_bound", &ReconstructOptions::radius_ratio_bound, 1.0, 1000.0, "",
                    "advancing_front: candidate triangles much larger than their neighbours are "
                    "refused above this ratio (larger fills bigger holes)")
-      .param_float("beta", 0.52, 0.01, 1.57, "rad",
+      .number("beta", &ReconstructOptions::beta, 0.01, 1.57, "rad",
                    "advancing_front: half-angle of the wedge in which only the triangle's size counts")
-      .param_float("trim_spacings", 3.0, 0.5, 1000.0, "spacings",
+      .number("trim_spacings", &ReconstructOptions::trim_spacings, 0.5, 1000.0, "spacings",
                    "poisson: faces farther than this from every point are removed (Poisson invents "
                    "surface where there are no points)")
-      .param_float("poisson_approximation", 0.375, 0.01, 10.0, "spacings",
+      .number("poisson_approximation", &ReconstructOptions::poisson_approximation, 0.01, 10.0, "spacings",
                    "poisson: how far the mesh's triangles may stray from the fitted implicit surface "
                    "(smaller: finer triangles, slower)");
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");
     if (cloud->size() == 0) throw NodeError("the cloud is empty");
-    ReconstructOptions o;
+    ReconstructOptions o = ctx.options<ReconstructOptions>();
     o.method = ctx.text("method") == "poisson" ? ReconstructMethod::poisson : ReconstructMethod::advancing_front;
-    o.smooth_iterations = static_cast<int>(ctx.integer("smooth_iterations"));
-    o.smooth_neighbors = static_cast<int>(ctx.integer("smooth_neighbors"));
-    o.sharpness_angle = ctx.number("sharpness_angle");
-    o.radius_ratio_bound = ctx.number("radius_ratio_bound");
-    o.beta = ctx.number("beta");
-    o.trim_spacings = ctx.number("trim_spacings");
-    o.poisson_approximation = ctx.number("poisson_approximation");
     ReconstructResult r;
     try {
       r = reconstruct_surface(cloud->points, cloud->normals, o,

@@ -134,4 +134,23 @@ Picture render_mesh(const Mesh& mesh, const MeshPictureOptions& o) {
   return pic;
 }
 
+std::string svg_of_png(const Picture& picture, const std::string& png) {
+  static const char* const digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string b64;
+  b64.reserve((png.size() + 2) / 3 * 4);
+  for (std::size_t i = 0; i < png.size(); i += 3) {
+    const std::uint32_t n = (std::uint32_t(std::uint8_t(png[i])) << 16) |
+                            (i + 1 < png.size() ? std::uint32_t(std::uint8_t(png[i + 1])) << 8 : 0) |
+                            (i + 2 < png.size() ? std::uint32_t(std::uint8_t(png[i + 2])) : 0);
+    b64 += digits[(n >> 18) & 63];
+    b64 += digits[(n >> 12) & 63];
+    b64 += i + 1 < png.size() ? digits[(n >> 6) & 63] : '=';
+    b64 += i + 2 < png.size() ? digits[n & 63] : '=';
+  }
+  const std::string w = std::to_string(picture.width), h = std::to_string(picture.height);
+  return "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + w + "\" height=\"" + h + "\" viewBox=\"0 0 " + w +
+         " " + h + "\">\n<image width=\"" + w + "\" height=\"" + h + "\" href=\"data:image/png;base64," + b64 +
+         "\"/>\n</svg>\n";
+}
+
 }  // namespace scallop

@@ -21,4 +21,8 @@ struct MeshPictureOptions {
 // for an unknown view or a mesh with no faces.
 Picture render_mesh(const Mesh& mesh, const MeshPictureOptions& options);
 
+// An SVG holding a PNG picture (base64 data URI): the vector form of a picture with too many
+// faces to draw as vectors.
+std::string svg_of_png(const Picture& picture, const std::string& png);
+
 }  // namespace scallop

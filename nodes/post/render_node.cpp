@@ -2,8 +2,10 @@
 
 #include "engine/node.h"
 #include "nodes/post/render.h"
+#include "nodes/post/render_mesh.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
+#include "nodes/types/mesh.h"
 #include "nodes/types/simulation.h"
 #include "nodes/types/svg.h"
 #include "nodes/types/toolpath.h"
@@ -12,25 +14,36 @@ namespace scallop::post_nodes {
 NodeDecl make_render_node() {
   NodeDecl d;
   d.type = "post.render";
-  d.version = 2;  // 2: view 'scallop' draws post.simulate's simulation instead of simulating again
+  d.version = 3;  // 2: view 'scallop' draws post.simulate's simulation instead of simulating again; 3: meshes
   d.description =
-      "picture of the passes over the cloud (top, iso, uv) or of the scallop a simulation found (heat map), PNG and SVG";
+      "picture of the passes over the cloud (top, iso, uv), of the scallop a simulation found (heat map), or of a "
+      "mesh (shaded, feature edges red, optionally a colour per face label), PNG and SVG";
   d.input("path", "Toolpath", "the passes (views top, iso, uv)", false)
       .input("cloud", "Cloud", "the surface points, drawn shaded by height under the passes", false)
       .input("simulation", "Simulation", "post.simulate's simulation (view 'scallop')", false)
+      .input("mesh", "Mesh", "a mesh to draw instead of passes (views iso, top, front)", false)
       .output("image", "Image", "PNG picture")
       .output("svg", "Svg", "the same as SVG")
-      .param_choice("view", "top", {"top", "iso", "uv", "scallop"},
-                    "top: xy; iso: isometric; uv: parameter domain; scallop: heat map of the simulation, "
-                    "top view, colour bar 0..1.01 h of its limits")
-      .param_int("width", 1000, 64, 8000, "px", "picture width");
+      .param_choice("view", "top", {"top", "iso", "front", "uv", "scallop"},
+                    "top: xy; iso: isometric, seen from (-1, -1, 1); front: seen from -y (meshes); uv: "
+                    "parameter domain; scallop: heat map of the simulation, top view, colour bar 0..1.01 h of its "
+                    "limits")
+      .param_int("width", 1000, 64, 8000, "px", "picture width")
+      .param_bool("labels", false, "a mesh's faces coloured by their label (segments), grey where unlabelled")
+      .param_bool("wireframe", false, "a mesh's polygon edges drawn thin and dark (for a few thousand faces)");
   d.run = [](NodeContext& ctx) {
     const std::string view = ctx.text("view");
     const int width = static_cast<int>(ctx.integer("width"));
     Image img;
     Svg svg;
     try {
-      if (view == "scallop") {
+      if (ctx.has_input("mesh")) {
+        MeshPictureOptions o;
+        o.view = view, o.width = width, o.by_label = ctx.flag("labels"), o.wireframe = ctx.flag("wireframe");
+        const Picture picture = render_mesh(*ctx.input<Mesh>("mesh"), o);
+        img.png = encode_png(picture);
+        svg.text = svg_of_png(picture, img.png);
+      } else if (view == "scallop") {
         if (!ctx.has_input("simulation")) throw NodeError("view 'scallop' needs the input 'simulation' (post.simulate's)");
         auto sim = ctx.input<Simulation>("simulation");
         img.png = render_scallop_png(*sim, width);

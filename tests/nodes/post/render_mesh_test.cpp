@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include "nodes/types/document.h"
+#include "nodes/types/svg.h"
 #include "tests/nodes/mesh/mesh_test_util.h"
+#include "tests/test_support.h"
 
 namespace scallop {
 namespace {
@@ -41,6 +44,31 @@ TEST(RenderMesh, LabelsColourTheirFacesAndBadInputIsRefused) {
   o.view = "side";
   EXPECT_THROW(render_mesh(m, o), std::invalid_argument);
   EXPECT_THROW(render_mesh(Mesh{}, {}), std::invalid_argument);
+}
+
+TEST(RenderMesh, SvgOfPngEmbedsThePictureAsBase64) {
+  Picture p;
+  p.width = 3, p.height = 2;
+  EXPECT_EQ(svg_of_png(p, "Man"),
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"3\" height=\"2\" viewBox=\"0 0 3 2\">\n"
+            "<image width=\"3\" height=\"2\" href=\"data:image/png;base64,TWFu\"/>\n</svg>\n");
+  EXPECT_NE(svg_of_png(p, "Ma").find("base64,TWE=\""), std::string::npos);
+}
+
+}  // namespace
+
+namespace post_nodes {
+NodeDecl make_render_node();
+}  // namespace post_nodes
+namespace {
+
+TEST(RenderMesh, TheRenderNodeDrawsAMeshWithoutAPath) {
+  auto out = test::run_node(post_nodes::make_render_node(), {{"view", "iso"}, {"width", 200}},
+                            {{"mesh", std::make_shared<Mesh>(unit_cube())}});
+  const std::string& png = std::dynamic_pointer_cast<const Image>(out.at("image"))->png;
+  EXPECT_EQ(png.substr(1, 3), "PNG");
+  EXPECT_EQ(encode_png(render_mesh(unit_cube(), {"iso", 200, false, false})), png);
+  EXPECT_NE(std::dynamic_pointer_cast<const Svg>(out.at("svg"))->text.find("data:image/png;base64,"), std::string::npos);
 }
 
 }  // namespace
