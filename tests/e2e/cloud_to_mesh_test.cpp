@@ -62,7 +62,8 @@ TEST(CloudToMesh, ANoisyCubesCloudComesBackClosedFlatAndWithItsEdgesSharp) {
   EXPECT_EQ(t.genus, 0);
 
   // Faces farther than 1 mm from the edges lie flat on their side: area-weighted mean error
-  // against the side's normal (measured 0.87 degrees).
+  // against the side's normal (measured 0.99 degrees with the graph's 25 TGV iterations, 0.87 with
+  // 50).
   const FaceGeometry g = face_geometry(m);
   double sum = 0, area = 0;
   for (std::size_t f = 0; f < m.num_faces(); ++f) {
@@ -75,11 +76,11 @@ TEST(CloudToMesh, ANoisyCubesCloudComesBackClosedFlatAndWithItsEdgesSharp) {
     sum += g.area[f] * angle_deg(g.normal[f], side);
     area += g.area[f];
   }
-  EXPECT_LE(sum / area, 1.0);
+  EXPECT_LE(sum / area, 1.25);
 
   // The sharp edges lie on the cube's edges (within 2 point spacings, ~0.9 mm: precision, by
   // length) and cover them (every mm of the 240 mm within 0.9 mm of a sharp edge: recall); measured
-  // 0.999 and 0.992, 239.4 mm of sharp edges.
+  // 0.999 and 0.992, 233.5 mm of sharp edges.
   ASSERT_FALSE(m.feature_edges.empty());
   double length = 0, on_edges = 0;
   for (const auto& e : m.feature_edges) {
