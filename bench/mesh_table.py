@@ -141,8 +141,8 @@ of `../shared/data` (fandisk ×50, block ×5, the ABC plate ×1000, in mm) sampl
 true face (area-weighted); of the true edges sharper than 50 degrees, the share with a detected
 feature edge within 2 point spacings (recall), and of the detected, the share near a true one
 (precision). Wall time is the whole run; the slowest nodes with the process's memory peak while
-each ran (scallop's `--events`). Times were taken with other work on the 2 cores (see the README
-for a quiet measurement).
+each ran (scallop's `--events`). Times were taken with other work on the 2 cores (the tgv rows of
+2026-11-23 while a sanitizer build ran at higher priority): the README gives a quiet measurement.
 
 """
 
