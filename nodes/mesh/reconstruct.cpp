@@ -29,24 +29,18 @@ using Vector3 = Kernel::Vector_3;
 Point3 to_cgal(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
 Eigen::Vector3d to_eigen(const Point3& p) { return {p.x(), p.y(), p.z()}; }
 
-// A mesh of the triangles over the vertices they use (others dropped, order kept).
+// A mesh of the triangles over the vertices they use (others dropped; input order kept, so a mesh
+// of the same points numbers them the same way).
 Mesh compact_mesh(const std::vector<Eigen::Vector3d>& V, const std::vector<std::array<std::size_t, 3>>& T) {
   std::vector<std::int64_t> new_index(V.size(), -1);
-  Mesh m;
   for (const auto& t : T)
-    for (auto v : t)
-      if (new_index[v] < 0) {
-        new_index[v] = static_cast<std::int64_t>(m.vertices.size());
-        m.vertices.push_back(V[v]);
-      }
-  // Vertices in their input order, so a mesh of the same points numbers them the same way.
-  std::vector<std::size_t> used;
+    for (auto v : t) new_index[v] = 0;
+  Mesh m;
   for (std::size_t v = 0; v < V.size(); ++v)
-    if (new_index[v] >= 0) used.push_back(v);
-  for (std::size_t i = 0; i < used.size(); ++i) {
-    new_index[used[i]] = static_cast<std::int64_t>(i);
-    m.vertices[i] = V[used[i]];
-  }
+    if (new_index[v] >= 0) {
+      new_index[v] = static_cast<std::int64_t>(m.vertices.size());
+      m.vertices.push_back(V[v]);
+    }
   for (const auto& t : T)
     m.add_face({static_cast<std::uint32_t>(new_index[t[0]]), static_cast<std::uint32_t>(new_index[t[1]]),
                 static_cast<std::uint32_t>(new_index[t[2]])});
@@ -193,16 +187,12 @@ Mesh poisson(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vec
   std::vector<std::array<std::size_t, 3>> tris;
   const double limit = o.trim_spacings * r.spacing;
   for (auto f : sm.faces()) {
-    std::array<std::size_t, 3> t{};
-    int k = 0;
-    Eigen::Vector3d c = Eigen::Vector3d::Zero();
-    for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) {
-      if (k < 3) t[k] = static_cast<std::size_t>(vindex[v.idx()]);
-      c += V[t[std::min(k, 2)]];
-      ++k;
-    }
-    if (k != 3) continue;
-    if ((P[index.nearest(c / 3.0)] - c / 3.0).norm() > limit) {
+    std::vector<std::size_t> corners;
+    for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) corners.push_back(static_cast<std::size_t>(vindex[v.idx()]));
+    if (corners.size() != 3) continue;  // the mesher makes triangles
+    const std::array<std::size_t, 3> t{corners[0], corners[1], corners[2]};
+    const Eigen::Vector3d c = (V[t[0]] + V[t[1]] + V[t[2]]) / 3.0;
+    if ((P[index.nearest(c)] - c).norm() > limit) {
       ++r.trimmed_faces;
       continue;
     }
@@ -229,9 +219,9 @@ ReconstructResult reconstruct_surface(const std::vector<Eigen::Vector3d>& P, con
   check_input(P, N, o);
   ReconstructResult r;
   r.spacing = mean_spacing(P);
-  const std::string line = one_dimensional_problem(principal_extents(P), r.spacing);
-  if (!line.empty()) throw std::invalid_argument(line);
   const PrincipalExtents extents = principal_extents(P);
+  const std::string line = one_dimensional_problem(extents, r.spacing);
+  if (!line.empty()) throw std::invalid_argument(line);
   if (extents.thickness <= 1e-9 * extents.length)
     throw std::invalid_argument(
         "the points lie exactly in one plane; a 3-D reconstruction has no volume to work in: "

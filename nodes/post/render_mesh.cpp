@@ -7,6 +7,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "nodes/mesh/mesh_topology.h"
+
 namespace scallop {
 namespace {
 
@@ -104,13 +106,11 @@ Picture render_mesh(const Mesh& mesh, const MeshPictureOptions& o) {
 
   Raster r(width, height);
   const bool labels = o.by_label && mesh.has_labels();
+  const Eigen::Vector3d light = (-cam.forward + 0.35 * cam.up - 0.25 * cam.right).normalized();
   for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
     // Newell normal of the polygon, lit by a headlight a little from the upper left.
-    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    const Eigen::Vector3d n = face_area_vector(mesh, f);
     const std::size_t m = mesh.face_size(f);
-    for (std::size_t c = 0; c < m; ++c)
-      n += mesh.vertices[mesh.face(f)[c]].cross(mesh.vertices[mesh.face(f)[(c + 1) % m]]);
-    const Eigen::Vector3d light = (-cam.forward + 0.35 * cam.up - 0.25 * cam.right).normalized();
     const double lambert = n.norm() > 0 ? std::abs(n.normalized().dot(light)) : 0.0;
     const RGB base = labels ? label_colour(mesh.face_label[f]) : RGB{0.62, 0.70, 0.80};
     const double shade = 0.25 + 0.75 * lambert;
