@@ -5,6 +5,9 @@ packages=(build-essential cmake ninja-build ccache pkg-config
   libeigen3-dev libcgal-dev libopenmesh-dev libpcl-dev libsuitesparse-dev libtbb-dev nlohmann-json3-dev
   libnanoflann-dev libspectra-dev libcli11-dev libgtest-dev libbenchmark-dev liblzf-dev libxxhash-dev libpng-dev
   linuxcnc-uspace
+  libboost-graph-dev  # mesh.segment: Kruskal's minimum spanning tree
+  libocct-data-exchange-dev libocct-visualization-dev libocct-modeling-algorithms-dev  # B-spline fit, STEP
+  blender  # mesh.quad_remesh runs QuadriFlow inside Blender, headless
   clang libclang-rt-14-dev)  # scripts/fuzz.sh: clang++ and libFuzzer's runtime (libclang_rt.fuzzer-x86_64.a)
 missing=()
 for p in "${packages[@]}"; do

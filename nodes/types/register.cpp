@@ -5,6 +5,7 @@
 #include "nodes/types/document.h"
 #include "nodes/types/mesh.h"
 #include "nodes/types/param.h"
+#include "nodes/types/segments.h"
 #include "nodes/types/simulation.h"
 #include "nodes/types/svg.h"
 #include "nodes/types/toolpath.h"
@@ -17,6 +18,8 @@ void register_types(Registry& r) {
   // format 2: per-point uncertainty
   v.add({"Cloud", "ply", "points with optional unit normals (mm)", PointCloud::deserialize, 2});
   v.add({"Mesh", "ply", "polygon mesh: vertices, faces, optional normals, face labels, feature edges (mm)", Mesh::deserialize});
+  v.add({"Segments", "ply", "a quad mesh cut into sharp height fields: per patch its grid of vertices and machining direction",
+         Segments::deserialize});
   v.add({"Neighbors", "bin", "k nearest neighbours of every point", Neighborhoods::deserialize});
   v.add({"Loops", "bin", "boundary points ordered into loops, outer first", BoundaryLoops::deserialize});
   v.add({"Laplacian", "bin", "sparse meshless Laplacian", Laplacian::deserialize});
