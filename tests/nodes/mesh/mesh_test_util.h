@@ -159,4 +159,51 @@ inline double cube_normal_error_deg(const Mesh& m, double margin) {
   return sum / area;
 }
 
+// The box [0, size.x] x [0, size.y] x [0, size.z] as quads: each side a grid of n[b] x n[c]
+// squares along its two axes b, c, vertices shared along the box's edges, faces counter-
+// clockwise seen from outside; face_label is the side (cube_side_normal).
+inline Mesh quad_box(std::array<int, 3> n, Eigen::Vector3d size) {
+  Mesh m;
+  std::map<std::array<int, 3>, std::uint32_t> index;
+  auto vertex = [&](std::array<int, 3> p) {
+    auto [it, added] = index.try_emplace(p, static_cast<std::uint32_t>(m.vertices.size()));
+    if (added)
+      m.vertices.push_back(Eigen::Vector3d(p[0] * size.x() / n[0], p[1] * size.y() / n[1], p[2] * size.z() / n[2]));
+    return it->second;
+  };
+  for (int s = 0; s < 6; ++s) {
+    const int a = s % 3, b = (a + 1) % 3, c = (a + 2) % 3;
+    const bool high = s >= 3;
+    for (int u = 0; u < n[b]; ++u)
+      for (int v = 0; v < n[c]; ++v) {
+        std::array<std::uint32_t, 4> q;
+        const int du[4] = {0, 1, 1, 0}, dv[4] = {0, 0, 1, 1};
+        for (int k = 0; k < 4; ++k) {
+          std::array<int, 3> p;
+          p[a] = high ? n[a] : 0;
+          p[b] = u + du[k];
+          p[c] = v + dv[k];
+          q[k] = vertex(p);
+        }
+        if (!high) std::swap(q[1], q[3]);
+        m.add_face({q[0], q[1], q[2], q[3]});
+        m.face_label.push_back(s);
+      }
+  }
+  return m;
+}
+
+// A flat open grid of nx by ny unit squares in the plane z = 0, faces counter-clockwise seen
+// from +z, vertex (i, j) at index j * (nx + 1) + i; `height` lifts each vertex to z = height(x, y).
+template <class Height>
+inline Mesh quad_sheet(int nx, int ny, double step, Height height) {
+  Mesh m;
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) m.vertices.push_back({i * step, j * step, height(i * step, j * step)});
+  auto at = [&](int i, int j) { return static_cast<std::uint32_t>(j * (nx + 1) + i); };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) m.add_face({at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+  return m;
+}
+
 }  // namespace scallop::test
