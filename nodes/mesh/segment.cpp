@@ -388,6 +388,121 @@ void split_to_height_fields(const GridPatch& p, const std::vector<Eigen::Vector3
   split_to_height_fields(b, face_normal, min_dot, q, clip, out, stats);
 }
 
+// A patch turned a quarter counter-clockwise in its (u, v) = (column, row) map, orientation kept:
+// (u', v') = (v, cols - 1 - u), so its right side becomes its bottom.
+SegmentPatch turned(const SegmentPatch& p) {
+  SegmentPatch t = p;
+  t.rows = p.cols;
+  t.cols = p.rows;
+  for (std::uint32_t i = 0; i < t.rows; ++i)
+    for (std::uint32_t j = 0; j < t.cols; ++j) t.grid[std::size_t(i) * t.cols + j] = p.at(j, p.cols - 1 - i);
+  for (std::uint32_t i = 0; i + 1 < t.rows; ++i)
+    for (std::uint32_t j = 0; j + 1 < t.cols; ++j)
+      t.faces[std::size_t(i) * (t.cols - 1) + j] = p.faces[std::size_t(j) * (p.cols - 1) + (p.cols - 2 - i)];
+  return t;
+}
+
+// a and b side by side, when a whole side of a is a whole side of b and side_ok(its vertices)
+// holds; with the shared side's vertices.
+template <class SideOk>
+std::optional<std::pair<SegmentPatch, std::vector<std::uint32_t>>> joined(const SegmentPatch& a0,
+                                                                           const SegmentPatch& b0, SideOk side_ok) {
+  SegmentPatch a = a0;
+  for (int ra = 0; ra < 4; ++ra, a = turned(a)) {
+    SegmentPatch b = b0;
+    for (int rb = 0; rb < 4; ++rb, b = turned(b)) {
+      if (a.rows != b.rows) continue;
+      std::vector<std::uint32_t> side;
+      for (std::uint32_t i = 0; i < a.rows && a.at(i, a.cols - 1) == b.at(i, 0); ++i) side.push_back(a.at(i, a.cols - 1));
+      if (side.size() != a.rows || !side_ok(side)) continue;
+      SegmentPatch j;
+      j.rows = a.rows;
+      j.cols = a.cols + b.cols - 1;
+      for (std::uint32_t i = 0; i < j.rows; ++i) {
+        for (std::uint32_t c = 0; c < a.cols; ++c) j.grid.push_back(a.at(i, c));
+        for (std::uint32_t c = 1; c < b.cols; ++c) j.grid.push_back(b.at(i, c));
+      }
+      for (std::uint32_t i = 0; i + 1 < j.rows; ++i) {
+        for (std::uint32_t c = 0; c + 1 < a.cols; ++c) j.faces.push_back(a.faces[std::size_t(i) * (a.cols - 1) + c]);
+        for (std::uint32_t c = 0; c + 1 < b.cols; ++c) j.faces.push_back(b.faces[std::size_t(i) * (b.cols - 1) + c]);
+      }
+      return std::make_pair(std::move(j), std::move(side));
+    }
+  }
+  return std::nullopt;
+}
+
+// Joins neighbouring patches that share a whole side without a sharp edge on it while the union
+// stays a height field with every n . d above min_dot, the best union first; the shared sides
+// stop being clipping edges. Returns the number of joins.
+std::size_t join_patches(std::vector<SegmentPatch>& patches, const std::vector<Eigen::Vector3d>& face_normal,
+                         double min_dot, const QuadConnectivity& q, const std::vector<bool>& sharp, Clipping& clip) {
+  std::size_t joins = 0;
+  std::vector<bool> alive(patches.size(), true);
+  std::vector<int> patch_of(q.mesh.num_faces(), -1);
+  for (std::size_t i = 0; i < patches.size(); ++i)
+    for (auto f : patches[i].faces) patch_of[f] = static_cast<int>(i);
+  auto smooth_side = [&](const std::vector<std::uint32_t>& side) {
+    for (std::size_t k = 1; k < side.size(); ++k)
+      if (sharp[*q.edges.find(side[k - 1], side[k])]) return false;
+    return true;
+  };
+  // Candidate joins, dropped when either patch changes.
+  using Join = std::optional<std::pair<SegmentPatch, std::vector<std::uint32_t>>>;
+  std::map<std::pair<int, int>, Join> tried;
+  auto evaluate = [&](int a, int b) -> const Join& {
+    auto [it, added] = tried.try_emplace({a, b});
+    if (!added) return it->second;
+    if (auto j = joined(patches[a], patches[b], smooth_side)) {
+      std::vector<Eigen::Vector3d> normals;
+      for (auto f : j->first.faces) normals.push_back(face_normal[f]);
+      const auto [d, worst] = best_height_field_direction(normals);
+      if (worst > min_dot) {
+        j->first.direction = d;
+        j->first.min_normal_dot = worst;
+        it->second = std::move(j);
+      }
+    }
+    return it->second;
+  };
+  while (true) {
+    // Neighbouring pairs across non-sharp clipping edges.
+    std::vector<std::pair<int, int>> pairs;
+    for (std::uint32_t e = 0; e < q.edges.size(); ++e) {
+      if (!clip.at(e) || sharp[e] || q.edges.faces_on(e) != 2) continue;
+      int a = patch_of[q.edges.faces(e)[0]], b = patch_of[q.edges.faces(e)[1]];
+      if (a == b) continue;
+      pairs.emplace_back(std::min(a, b), std::max(a, b));
+    }
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    int best_a = -1, best_b = -1;
+    double best = -2;
+    for (auto [a, b] : pairs)
+      if (const auto& j = evaluate(a, b); j && j->first.min_normal_dot > best) {
+        best = j->first.min_normal_dot;
+        best_a = a, best_b = b;
+      }
+    if (best_a < 0) break;
+    auto [j, side] = *tried.at({best_a, best_b});
+    for (std::size_t k = 1; k < side.size(); ++k) clip.priority[*q.edges.find(side[k - 1], side[k])] = 0;
+    patches[best_a] = std::move(j);
+    alive[best_b] = false;
+    for (auto f : patches[best_a].faces) patch_of[f] = best_a;
+    for (auto it = tried.begin(); it != tried.end();)
+      it = (it->first.first == best_a || it->first.second == best_a || it->first.first == best_b ||
+            it->first.second == best_b)
+               ? tried.erase(it)
+               : std::next(it);
+    ++joins;
+  }
+  std::vector<SegmentPatch> kept;
+  for (std::size_t i = 0; i < patches.size(); ++i)
+    if (alive[i]) kept.push_back(std::move(patches[i]));
+  patches = std::move(kept);
+  return joins;
+}
+
 // Faces joined across edges that are not clipping edges: region id per face, and the faces of each.
 std::vector<std::vector<std::uint32_t>> regions(const QuadConnectivity& q, const Clipping& clip,
                                                 std::vector<int>& region_of) {
@@ -533,6 +648,11 @@ Segments segment_shf(const Mesh& mesh, const SegmentOptions& o, SegmentStats* st
   const FaceGeometry geometry = face_geometry(mesh);
   Segments out;
   for (const auto& r : rects) split_to_height_fields(r, geometry.normal, o.min_normal_dot, q, clip, out.patches, stats);
+  if (o.join) {
+    say(0.9, "joining neighbouring patches");
+    stats.joins = join_patches(out.patches, geometry.normal, std::max(o.join_min_normal_dot, o.min_normal_dot), q,
+                               sharp, clip);
+  }
   // Patches in a stable order: by their smallest face.
   std::sort(out.patches.begin(), out.patches.end(), [](const SegmentPatch& a, const SegmentPatch& b) {
     return *std::min_element(a.faces.begin(), a.faces.end()) < *std::min_element(b.faces.begin(), b.faces.end());

@@ -24,6 +24,11 @@
 //   7. a rectangle that is not a height field along any direction (the smallest n . d over its
 //      faces not above min_normal_dot for the best d) is halved across its longer side until
 //      every part is.
+// Then, unless join is off, neighbouring rectangles that share a whole side with no sharp edge on
+// it are joined while their union is a height field with every n . d above join_min_normal_dot,
+// the best union first (the paper lets the number of patches be controlled; the lines of
+// priorities 4-6 cut more than the sharp edges and EPs need). Joined patches keep the SHF's
+// conditions: the shared side's inner vertices had two faces on either side, so they are regular.
 // Each patch's direction d maximises the smallest n . d over its faces' unit normals (the axis
 // of the smallest cap holding them, by 400 Badoiu-Clarkson steps on the normals: within about
 // 1e-3 of the best smallest n . d; the reported smallest n . d is exact for the d returned).
@@ -46,6 +51,8 @@ struct SegmentOptions {
   double sharp_coefficient = 0.1;  // SC on sharp edges
   double nf_coefficient = 0.1;     // NC
   double auxiliary_coefficient = 1000;  // AC
+  bool join = true;                     // join neighbouring rectangles (see above)
+  double join_min_normal_dot = 0.5;     // ... while the union's smallest n . d stays above this
 };
 
 // What the segmentation did, for the report.
@@ -58,6 +65,7 @@ struct SegmentStats {
   std::size_t graph_edges = 0, mst_edges = 0, nf_edges = 0;
   std::array<std::size_t, 8> clipping_by_priority{};  // mesh edges first set at priority 1..7
   std::size_t height_field_splits = 0;
+  std::size_t joins = 0;  // pairs of neighbouring patches joined
 };
 
 // mesh      a manifold quad mesh, faces counter-clockwise seen from outside (every face 4

@@ -22,16 +22,21 @@ NodeDecl make_segment_node() {
       .output("report", "Report",
               "{patches: [{direction, min_normal_dot, rows, cols, faces, area}], extraordinary_points, sharp_edges, "
               "connection_lines, dropped_connection_lines, auxiliary_vertices, graph_edges, mst_edges, nf_edges, "
-              "clipping_edges: {priority_1 .. priority_7}, height_field_splits, base_direction}")
+              "clipping_edges: {priority_1 .. priority_7}, height_field_splits, joins, base_direction}")
       .param_float("angle", 50.0, 0, 179.9, "deg", "an edge is sharp when its faces' normals differ by more (theta)")
       .param_float("min_normal_dot", 0.05, -1, 0.99, "",
                    "a patch is a height field along d when every face normal n has n.d above this; patches that "
-                   "are not are halved until they are");
+                   "are not are halved until they are")
+      .param_bool("join", true, "join neighbouring patches sharing a whole side without a sharp edge")
+      .param_float("join_min_normal_dot", 0.5, -1, 1, "",
+                   "... while every face normal n of the union has n.d above this (0.5: within 60 degrees)");
   d.run = [](NodeContext& ctx) {
     auto mesh = ctx.input<Mesh>("mesh");
     SegmentOptions o;
     o.sharp_angle_deg = ctx.number("angle");
     o.min_normal_dot = ctx.number("min_normal_dot");
+    o.join = ctx.flag("join");
+    o.join_min_normal_dot = ctx.number("join_min_normal_dot");
     SegmentStats stats;
     Segments s;
     try {
@@ -71,6 +76,7 @@ NodeDecl make_segment_node() {
                    {"nf_edges", stats.nf_edges},
                    {"clipping_edges", std::move(clipping)},
                    {"height_field_splits", stats.height_field_splits},
+                   {"joins", stats.joins},
                    {"base_direction", {s.base_direction.x(), s.base_direction.y(), s.base_direction.z()}}};
     ctx.set("report", std::move(report));
     ctx.set("segments", std::move(s));

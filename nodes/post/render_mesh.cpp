@@ -97,6 +97,8 @@ Picture render_mesh(const Mesh& mesh, const MeshPictureOptions& o) {
     q[v] = cam.project(mesh.vertices[v]);
     lo = lo.cwiseMin(q[v]), hi = hi.cwiseMax(q[v]);
   }
+  for (const auto& line : o.overlays)  // arrows may reach past the mesh: keep them in the frame
+    for (const auto& p : line.points) lo = lo.cwiseMin(cam.project(p)), hi = hi.cwiseMax(cam.project(p));
   const int pad = 10, width = std::max(64, o.width);
   const Eigen::Vector3d ext = (hi - lo).cwiseMax(1e-9);
   double scale = (width - 2 * pad) / ext.x();
@@ -124,6 +126,21 @@ Picture render_mesh(const Mesh& mesh, const MeshPictureOptions& o) {
       for (std::size_t c = 0; c < mesh.face_size(f); ++c)
         r.line(q[mesh.face(f)[c]], q[mesh.face(f)[(c + 1) % mesh.face_size(f)]], {0.2, 0.2, 0.25}, 1, bias);
   for (const auto& e : mesh.feature_edges) r.line(q[e[0]], q[e[1]], {0.85, 0.05, 0.05}, 2, bias);
+  auto screen = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d c = cam.project(p);
+    return Eigen::Vector3d(pad + (c.x() - lo.x()) * scale, height - pad - (c.y() - lo.y()) * scale, c.z());
+  };
+  for (const auto& o_line : o.overlays) {
+    if (o_line.points.empty()) continue;
+    if (o_line.whole_if_start_seen) {
+      const Eigen::Vector3d s = screen(o_line.points[0]);
+      const int x = static_cast<int>(s.x()), y = static_cast<int>(s.y());
+      if (x < 0 || y < 0 || x >= width || y >= height || s.z() > r.depth[std::size_t(y) * width + x] + bias) continue;
+    }
+    const double line_bias = o_line.whole_if_start_seen ? std::numeric_limits<double>::infinity() : bias;
+    for (std::size_t k = 1; k < o_line.points.size(); ++k)
+      r.line(screen(o_line.points[k - 1]), screen(o_line.points[k]), o_line.colour, o_line.thick, line_bias);
+  }
 
   Picture pic;
   pic.width = width, pic.height = height;

@@ -2,22 +2,35 @@
 // optionally a colour per face label (segments).
 #pragma once
 
+#include <Eigen/Core>
+#include <array>
 #include <string>
+#include <vector>
 
 #include "nodes/post/render.h"
 #include "nodes/types/mesh.h"
 
 namespace scallop {
 
+// A polyline drawn over the mesh: clipping edges, direction arrows, a surface's iso-lines.
+struct MeshOverlay {
+  std::vector<Eigen::Vector3d> points;  // mm, joined in order
+  std::array<double, 3> colour{0, 0, 0};  // RGB in [0, 1]
+  int thick = 1;                          // pixels
+  bool whole_if_start_seen = false;       // drawn whole when its first point is not hidden by a
+                                          // face (arrows standing out of it), else not at all
+};
+
 struct MeshPictureOptions {
   std::string view = "iso";  // "iso" (seen from (-1, -1, 1), as render_path's), "top", "front" (from -Y)
   int width = 1000;          // pixels; the height follows the mesh's projected aspect
   bool by_label = false;     // colour each face by its label (grey when -1 or no labels)
   bool wireframe = false;    // thin dark polygon edges (readable up to a few thousand faces)
+  std::vector<MeshOverlay> overlays;  // drawn last, in order
 };
 
 // The mesh shaded with a headlight (Lambert on both sides, so an inverted face still shows) over
-// white, feature edges drawn 2 px wide in red on top where visible. Throws std::invalid_argument
+// white, feature edges drawn 2 px wide in red on top where visible, then the overlays. Throws std::invalid_argument
 // for an unknown view or a mesh with no faces.
 Picture render_mesh(const Mesh& mesh, const MeshPictureOptions& options);
 

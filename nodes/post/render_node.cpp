@@ -3,9 +3,11 @@
 #include "engine/node.h"
 #include "nodes/post/render.h"
 #include "nodes/post/render_mesh.h"
+#include "nodes/post/render_segments.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
 #include "nodes/types/mesh.h"
+#include "nodes/types/segments.h"
 #include "nodes/types/simulation.h"
 #include "nodes/types/svg.h"
 #include "nodes/types/toolpath.h"
@@ -14,7 +16,9 @@ namespace scallop::post_nodes {
 NodeDecl make_render_node() {
   NodeDecl d;
   d.type = "post.render";
-  d.version = 3;  // 2: view 'scallop' draws post.simulate's simulation instead of simulating again; 3: meshes
+  // 2: view 'scallop' draws post.simulate's simulation instead of simulating again; 3: meshes;
+  // 4: segments
+  d.version = 4;
   d.description =
       "picture of the passes over the cloud (top, iso, uv), of the scallop a simulation found (heat map), or of a "
       "mesh (shaded, feature edges red, optionally a colour per face label), PNG and SVG";
@@ -22,6 +26,10 @@ NodeDecl make_render_node() {
       .input("cloud", "Cloud", "the surface points, drawn shaded by height under the passes", false)
       .input("simulation", "Simulation", "post.simulate's simulation (view 'scallop')", false)
       .input("mesh", "Mesh", "a mesh to draw instead of passes (views iso, top, front)", false)
+      .input("segments", "Segments",
+             "a segmentation to draw instead: faces coloured by patch, sharp edges red, clipping edges dark, an "
+             "arrow along each patch's machining direction (views iso, top, front)",
+             false)
       .output("image", "Image", "PNG picture")
       .output("svg", "Svg", "the same as SVG")
       .param_choice("view", "top", {"top", "iso", "front", "uv", "scallop"},
@@ -36,13 +44,22 @@ NodeDecl make_render_node() {
     const int width = static_cast<int>(ctx.integer("width"));
     Image img;
     Svg svg;
+    auto draw_mesh = [&](const Mesh& mesh, const MeshPictureOptions& o) {
+      const Picture picture = render_mesh(mesh, o);
+      img.png = encode_png(picture);
+      svg.text = svg_of_png(picture, img.png);
+    };
     try {
-      if (ctx.has_input("mesh")) {
+      if (ctx.has_input("segments")) {
+        const auto segments = ctx.input<Segments>("segments");
+        MeshPictureOptions o;
+        o.view = view, o.width = width, o.by_label = true, o.wireframe = ctx.flag("wireframe");
+        o.overlays = segment_overlays(*segments);
+        draw_mesh(patch_colour_mesh(*segments), o);
+      } else if (ctx.has_input("mesh")) {
         MeshPictureOptions o;
         o.view = view, o.width = width, o.by_label = ctx.flag("labels"), o.wireframe = ctx.flag("wireframe");
-        const Picture picture = render_mesh(*ctx.input<Mesh>("mesh"), o);
-        img.png = encode_png(picture);
-        svg.text = svg_of_png(picture, img.png);
+        draw_mesh(*ctx.input<Mesh>("mesh"), o);
       } else if (view == "scallop") {
         if (!ctx.has_input("simulation")) throw NodeError("view 'scallop' needs the input 'simulation' (post.simulate's)");
         auto sim = ctx.input<Simulation>("simulation");

@@ -17,7 +17,8 @@ namespace scallop {
 // One SHF.
 //   direction       unit machining direction: the tool axis, pointing from the surface to the
 //                   spindle; every face's outward normal n has n . direction >= min_normal_dot.
-//   faces           the patch's face indices into Segments::mesh.
+//   faces           the patch's faces (indices into Segments::mesh) cell by cell: the face between
+//                   grid rows i, i+1 and columns j, j+1 is faces[i * (cols-1) + j].
 //   rows, cols      the patch as a regular grid of mesh vertices, rows by cols (>= 2 each):
 //   grid            row-major vertex indices, grid[i * cols + j]; the four corners are
 //                   grid(0,0), grid(0,cols-1), grid(rows-1,cols-1), grid(rows-1,0), counter-

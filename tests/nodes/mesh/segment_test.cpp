@@ -8,6 +8,7 @@
 
 #include "nodes/all_nodes.h"
 #include "nodes/mesh/face_geometry.h"
+#include "nodes/mesh/mesh_topology.h"
 #include "nodes/types/document.h"
 #include "tests/nodes/mesh/mesh_test_util.h"
 #include "tests/test_support.h"
@@ -55,6 +56,13 @@ void expect_valid(const Segments& s) {
     EXPECT_GT(du.cross(dv).dot(p.direction), 0) << "patch " << i << " is not counter-clockwise";
   }
   for (std::size_t f = 0; f < m.num_faces(); ++f) EXPECT_EQ(seen[f], 1) << "face " << f;
+  // The sharp features are on the patches' borders (the SHF's condition 3).
+  const MeshEdges edges = mesh_edges(m);
+  for (const auto& [a, b] : m.feature_edges) {
+    const auto e = *edges.find(a, b);
+    if (edges.faces_on(e) == 2)
+      EXPECT_NE(m.face_label[edges.faces(e)[0]], m.face_label[edges.faces(e)[1]]) << "sharp edge " << a << "-" << b;
+  }
 }
 
 // The box's faces removed where keep(label) is false, vertices kept.
@@ -145,6 +153,26 @@ TEST(Segment, ACylinderWithCapsGivesTheCapsAndFourSideHeightFields) {
   }
   EXPECT_EQ(caps, 2);
   EXPECT_EQ(sides, 4);
+}
+
+TEST(Segment, NeighboursJoinWhileTheUnionStaysAHeightFieldAboveTheLimit) {
+  const Mesh m = capped_cylinder(8);
+  SegmentOptions o;
+  o.join_min_normal_dot = 0.06;  // a half side's end facets are about 86 degrees from its middle
+  SegmentStats stats;
+  const Segments s = segment_shf(m, o, &stats);
+  expect_valid(s);
+  EXPECT_EQ(stats.joins, 2u);  // four quarters into two halves; three quarters see no direction
+  ASSERT_EQ(s.patches.size(), 4u);
+  for (const auto& p : s.patches) {
+    EXPECT_GT(p.min_normal_dot, 0.06);
+    if (std::abs(p.direction.z()) < 1e-9) {
+      EXPECT_EQ(p.faces.size(), 128u);
+      EXPECT_LT(p.min_normal_dot, 0.15);  // the end facets of a half turn face nearly sideways
+    }
+  }
+  o.join = false;
+  EXPECT_EQ(segment_shf(m, o).patches.size(), 6u);
 }
 
 TEST(Segment, ASphereWithoutSharpEdgesIsCutByItsExtraordinaryPoints) {
