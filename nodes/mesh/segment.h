@@ -23,7 +23,7 @@
 //      until every region is a rectangle (the B-spline fit needs a grid);
 //   7. a rectangle that is not a height field along any direction (the smallest n . d over its
 //      faces not above min_normal_dot for the best d) is halved across its longer side until
-//      every part is.
+//      every part is (a single quad is one, along its own normal, so the halving ends).
 // Then, unless join is off, neighbouring rectangles that share a whole side with no sharp edge on
 // it are joined while their union is a height field with every n . d above join_min_normal_dot,
 // the best union first (the paper lets the number of patches be controlled; the lines of
