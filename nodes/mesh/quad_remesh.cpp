@@ -3,14 +3,13 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <fstream>
-#include <limits>
 #include <numeric>
-#include <sstream>
 
 #include "nodes/geom/kd_tree.h"
+#include "nodes/geom/union_find.h"
 #include "nodes/mesh/external_process.h"
 #include "nodes/mesh/face_geometry.h"
 #include "nodes/mesh/keep_faces.h"
@@ -168,23 +167,6 @@ Mesh read_output(const fs::path& file, const Eigen::Vector3d& centre, QuadRemesh
   return out;
 }
 
-// Drops a corner repeating the one before it (cyclically), faces left with fewer than 3, and
-// vertices no face uses.
-Mesh without_repeats(const Mesh& m, QuadRemeshReport& report) {
-  Mesh out;
-  out.vertices = m.vertices;
-  std::vector<std::uint32_t> face;
-  for (std::size_t f = 0; f < m.num_faces(); ++f) {
-    face.clear();
-    const std::size_t n = m.face_size(f);
-    for (std::size_t k = 0; k < n; ++k)
-      if (m.face(f)[k] != m.face(f)[(k + 1) % n]) face.push_back(m.face(f)[k]);
-    report.repeated_corners_removed += n - face.size();
-    if (face.size() >= 3) out.add_face_range(face);
-    else ++report.faces_dropped;
-  }
-  return keep_faces(out, std::vector<bool>(out.num_faces(), true));
-}
 
 // Turns each component of `quads` whose normals disagree with the input's nearby faces (area-
 // weighted sum of n_quad . n_input at the input face nearest each quad's centroid < 0).
@@ -277,153 +259,10 @@ std::string output_lines(const fs::path& log) {
   return s;
 }
 
-}  // namespace
-
-fs::path find_blender(const std::string& blender_option) {
-  const char* env = std::getenv("SCALLOP_BLENDER");
-  std::string name = blender_option, source = "the parameter blender";
-  if (name.empty() && env && *env) name = env, source = "SCALLOP_BLENDER";
-  std::string looked;
-  if (name.empty()) {
-    if (auto p = find_executable("blender")) return *p;
-    looked = "no blender on PATH";
-  } else {
-    if (auto p = find_executable(name)) return *p;
-    looked = "'" + name + "' (" + source + ") is not " +
-             (name.find('/') == std::string::npos ? "on PATH" : "an executable file");
-  }
-  throw BlenderMissing(
-      "needs Blender (QuadriFlow): install the Debian package blender (apt-get install blender), or name its "
-      "executable with the parameter blender or the environment variable SCALLOP_BLENDER; " + looked);
-}
-
-std::string orientable_manifold_problem(const Mesh& mesh) {
-  const std::string repair = "; run mesh.repair first";
-  if (mesh.num_faces() == 0) return "the mesh has no faces";
-  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
-    const std::size_t n = mesh.face_size(f);
-    if (n < 3) return "face " + std::to_string(f) + " has fewer than 3 corners" + repair;
-    for (std::size_t k = 0; k < n; ++k) {
-      if (mesh.face(f)[k] >= mesh.num_vertices())
-        return "face " + std::to_string(f) + " has corner " + std::to_string(mesh.face(f)[k]) + " but there are " +
-               std::to_string(mesh.num_vertices()) + " vertices";
-      for (std::size_t j = 0; j < k; ++j)
-        if (mesh.face(f)[j] == mesh.face(f)[k])
-          return "face " + std::to_string(f) + " has vertex " + std::to_string(mesh.face(f)[k]) + " twice" + repair;
-    }
-  }
-  const MeshEdges edges = mesh_edges(mesh);
-  auto joins = [&](std::size_t e) {
-    return " (the first joins vertices " + std::to_string(edges.edges[e][0]) + " and " +
-           std::to_string(edges.edges[e][1]) + ")";
-  };
-  std::size_t many = 0, first_many = 0;
-  for (std::size_t e = 0; e < edges.size(); ++e)
-    if (edges.faces_on(e) > 2 && many++ == 0) first_many = e;
-  if (many > 0) return "the mesh is not manifold: " + plural(many, "edge has", "edges have") + " 3 or more faces" + joins(first_many) + repair;
-
-  // Each face corner's slot; per edge, the slots its faces run it from and to.
-  struct Run {
-    std::uint32_t from_vertex, from_slot, to_slot;
-  };
-  std::vector<std::array<Run, 2>> runs(edges.size());
-  std::vector<std::uint8_t> count(edges.size(), 0);
-  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
-    const std::size_t n = mesh.face_size(f);
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::uint32_t s = mesh.face_start[f] + static_cast<std::uint32_t>(k);
-      const std::uint32_t e = edges.face_edge[s];
-      runs[e][count[e]++] = {mesh.face(f)[k], s, mesh.face_start[f] + static_cast<std::uint32_t>((k + 1) % n)};
-    }
-  }
-  std::size_t same_way = 0, first_same = 0;
-  for (std::size_t e = 0; e < edges.size(); ++e)
-    if (count[e] == 2 && runs[e][0].from_vertex == runs[e][1].from_vertex && same_way++ == 0) first_same = e;
-  if (same_way > 0)
-    return "the faces are not consistently oriented: " + plural(same_way, "edge runs", "edges run") +
-           " the same way in both its faces" + joins(first_same) + repair;
-
-  // A vertex is manifold when its faces make one fan: join the corners of a vertex across each
-  // edge with two faces; a vertex whose corners stay in two groups or more is not.
-  std::vector<std::uint32_t> parent(mesh.face_vertices.size());
-  std::iota(parent.begin(), parent.end(), 0u);
-  auto root = [&](std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  auto join = [&](std::uint32_t a, std::uint32_t b) {
-    a = root(a), b = root(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  };
-  for (std::size_t e = 0; e < edges.size(); ++e) {
-    if (count[e] != 2) continue;
-    const Run& r = runs[e][0];
-    const Run& q = runs[e][1];  // runs the other way: its from-corner is r's to-vertex
-    join(r.from_slot, q.to_slot);
-    join(r.to_slot, q.from_slot);
-  }
-  std::vector<std::uint32_t> fan(mesh.num_vertices(), UINT32_MAX);
-  std::size_t pinched = 0;
-  std::uint32_t first_pinched = 0;
-  std::vector<bool> counted(mesh.num_vertices(), false);
-  for (std::uint32_t s = 0; s < mesh.face_vertices.size(); ++s) {
-    const std::uint32_t v = mesh.face_vertices[s], r = root(s);
-    if (fan[v] == UINT32_MAX) fan[v] = r;
-    else if (fan[v] != r && !counted[v]) {
-      counted[v] = true;
-      if (pinched++ == 0) first_pinched = v;
-    }
-  }
-  if (pinched > 0)
-    return "the mesh is not manifold: " + plural(pinched, "vertex joins", "vertices join") +
-           " separate fans of faces (the first is vertex " + std::to_string(first_pinched) + ")" + repair;
-  return "";
-}
-
-std::size_t extraordinary_points(const Mesh& mesh) {
-  const MeshEdges edges = mesh_edges(mesh);
-  std::vector<std::uint32_t> valence(mesh.num_vertices(), 0);
-  std::vector<bool> boundary(mesh.num_vertices(), false);
-  for (std::size_t e = 0; e < edges.size(); ++e)
-    for (auto v : edges.edges[e]) {
-      ++valence[v];
-      if (edges.is_boundary(e)) boundary[v] = true;
-    }
-  std::size_t n = 0;
-  for (std::size_t v = 0; v < mesh.num_vertices(); ++v) n += !boundary[v] && valence[v] > 0 && valence[v] != 4;
-  return n;
-}
-
-Mesh quad_remesh(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshReport& report,
-                 const std::function<void(double, const std::string&)>& progress) {
-  auto say = [&](double f, const std::string& what) {
-    if (progress) progress(f, what);
-  };
-  report = QuadRemeshReport{};
-  report.seed = o.seed;
-  if (o.target_faces < 1) throw std::invalid_argument("target_faces must be at least 1");
-  if (!(o.target_edge_length >= 0)) throw std::invalid_argument("target_edge_length must be non-negative");
-  if (!(o.angle_deg >= 0 && o.angle_deg < 180)) throw std::invalid_argument("the angle must lie in [0, 180) degrees");
-  say(0, "checking the mesh");
-  if (const std::string problem = orientable_manifold_problem(mesh); !problem.empty()) throw std::invalid_argument(problem);
-  for (const auto& v : mesh.vertices)
-    if (!v.allFinite()) throw std::invalid_argument("a vertex is not finite");
-  report.blender = find_blender(o.blender);
-
-  const FaceGeometry g = face_geometry(mesh);
-  const double area = std::accumulate(g.area.begin(), g.area.end(), 0.0);
-  double target = o.target_faces;
-  if (o.target_edge_length > 0) target = std::round(area / (o.target_edge_length * o.target_edge_length));
-  report.target_faces = static_cast<std::size_t>(std::clamp(target, 1.0, 2147483647.0));
-
-  std::vector<std::array<std::uint32_t, 2>> reference = mesh.feature_edges;
-  report.feature_source = reference.empty() ? "angle" : "feature_edges";
-  if (reference.empty()) reference = sharp_edges(mesh, mesh_edges(mesh), o.angle_deg).edges;
-  report.feature_length_below_60 = length_below_60(mesh, reference);
-  if (report.feature_length_below_60 > 0)
-    report.warning = fmt(report.feature_length_below_60) + " mm of the feature curves are 60 degrees or softer: "
-                     "QuadriFlow does not keep them sharp";
-
+// Runs the script in Blender on `mesh` (report.target_faces quads, options.seed) and reads what
+// it wrote; fills the report's Blender figures. The temporary folder goes with it.
+template <class Say>
+Mesh run_quadriflow(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshReport& report, const Say& say) {
   Eigen::AlignedBox3d box;
   for (const auto& v : mesh.vertices) box.extend(v);
   const Eigen::Vector3d centre = box.center();
@@ -451,12 +290,193 @@ Mesh quad_remesh(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshReport&
   if (!fs::exists(out)) throw std::runtime_error(who + " wrote no mesh" + output_lines(log));
 
   say(0.9, "reading the quads");
-  Mesh quads = without_repeats(read_output(out, centre, report), report);
+  return read_output(out, centre, report);
+}
+
+
+}  // namespace
+
+fs::path find_blender(const std::string& blender_option) {
+  const char* env = std::getenv("SCALLOP_BLENDER");
+  std::string name = blender_option, source = "the parameter blender";
+  if (name.empty() && env && *env) name = env, source = "SCALLOP_BLENDER";
+  std::string looked;
+  if (name.empty()) {
+    if (auto p = find_executable("blender")) return *p;
+    looked = "no blender on PATH";
+  } else {
+    if (auto p = find_executable(name)) return *p;
+    looked = "'" + name + "' (" + source + ") is not " +
+             (name.find('/') == std::string::npos ? "on PATH" : "an executable file");
+  }
+  throw BlenderMissing(
+      "needs Blender (QuadriFlow): install the Debian package blender (apt-get install blender), or name its "
+      "executable with the parameter blender or the environment variable SCALLOP_BLENDER; " + looked);
+}
+
+std::string orientable_manifold_problem(const Mesh& mesh) {
+  if (mesh.num_faces() == 0) return "the mesh has no faces";
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
+    const std::size_t n = mesh.face_size(f);
+    if (n < 3) return "face " + std::to_string(f) + " has fewer than 3 corners";
+    for (std::size_t k = 0; k < n; ++k) {
+      if (mesh.face(f)[k] >= mesh.num_vertices())
+        return "face " + std::to_string(f) + " has corner " + std::to_string(mesh.face(f)[k]) + " but there are " +
+               std::to_string(mesh.num_vertices()) + " vertices";
+      for (std::size_t j = 0; j < k; ++j)
+        if (mesh.face(f)[j] == mesh.face(f)[k])
+          return "face " + std::to_string(f) + " has vertex " + std::to_string(mesh.face(f)[k]) + " twice";
+    }
+  }
+  const MeshEdges edges = mesh_edges(mesh);
+  auto joins = [&](std::size_t e) {
+    return " (the first joins vertices " + std::to_string(edges.edges[e][0]) + " and " +
+           std::to_string(edges.edges[e][1]) + ")";
+  };
+  std::size_t many = 0, first_many = 0;
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    if (edges.faces_on(e) > 2 && many++ == 0) first_many = e;
+  if (many > 0) return "the mesh is not manifold: " + plural(many, "edge has", "edges have") + " 3 or more faces" + joins(first_many);
+
+  // Each face corner's slot; per edge, the slots its faces run it from and to.
+  struct Run {
+    std::uint32_t from_vertex, from_slot, to_slot;
+  };
+  std::vector<std::array<Run, 2>> runs(edges.size());
+  std::vector<std::uint8_t> count(edges.size(), 0);
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
+    const std::size_t n = mesh.face_size(f);
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint32_t s = mesh.face_start[f] + static_cast<std::uint32_t>(k);
+      const std::uint32_t e = edges.face_edge[s];
+      runs[e][count[e]++] = {mesh.face(f)[k], s, mesh.face_start[f] + static_cast<std::uint32_t>((k + 1) % n)};
+    }
+  }
+  std::size_t same_way = 0, first_same = 0;
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    if (count[e] == 2 && runs[e][0].from_vertex == runs[e][1].from_vertex && same_way++ == 0) first_same = e;
+  if (same_way > 0)
+    return "the faces are not consistently oriented: " + plural(same_way, "edge runs", "edges run") +
+           " the same way in both its faces" + joins(first_same);
+
+  // A vertex is manifold when its faces make one fan: join the corners of a vertex across each
+  // edge with two faces; a vertex whose corners stay in two groups or more is not.
+  UnionFind fans(mesh.face_vertices.size());
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    if (count[e] != 2) continue;
+    const Run& r = runs[e][0];
+    const Run& q = runs[e][1];  // runs the other way: its from-corner is r's to-vertex
+    fans.join(r.from_slot, q.to_slot);
+    fans.join(r.to_slot, q.from_slot);
+  }
+  std::vector<std::uint32_t> fan(mesh.num_vertices(), UINT32_MAX);
+  std::size_t pinched = 0;
+  std::uint32_t first_pinched = 0;
+  std::vector<bool> counted(mesh.num_vertices(), false);
+  for (std::uint32_t s = 0; s < mesh.face_vertices.size(); ++s) {
+    const std::uint32_t v = mesh.face_vertices[s], r = fans.root(s);
+    if (fan[v] == UINT32_MAX) fan[v] = r;
+    else if (fan[v] != r && !counted[v]) {
+      counted[v] = true;
+      if (pinched++ == 0) first_pinched = v;
+    }
+  }
+  if (pinched > 0)
+    return "the mesh is not manifold: " + plural(pinched, "vertex joins", "vertices join") +
+           " separate fans of faces (the first is vertex " + std::to_string(first_pinched) + ")";
+  return "";
+}
+
+std::size_t extraordinary_points(const Mesh& mesh) {
+  const MeshEdges edges = mesh_edges(mesh);
+  std::vector<std::uint32_t> valence(mesh.num_vertices(), 0);
+  std::vector<bool> boundary(mesh.num_vertices(), false);
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    for (auto v : edges.edges[e]) {
+      ++valence[v];
+      if (edges.is_boundary(e)) boundary[v] = true;
+    }
+  std::size_t n = 0;
+  for (std::size_t v = 0; v < mesh.num_vertices(); ++v) n += !boundary[v] && valence[v] > 0 && valence[v] != 4;
+  return n;
+}
+
+Mesh clean_quadriflow_output(const Mesh& m, QuadRemeshReport& report) {
+  UnionFind weld(m.num_vertices());  // each group welded to its lowest vertex
+  for (std::size_t f = 0; f < m.num_faces(); ++f)
+    for (std::size_t i = 0; i < m.face_size(f); ++i)
+      for (std::size_t j = i + 1; j < m.face_size(f); ++j)
+        if (m.vertices[m.face(f)[i]] == m.vertices[m.face(f)[j]]) weld.join(m.face(f)[i], m.face(f)[j]);
+  Mesh out;
+  out.vertices = m.vertices;
+  std::vector<std::uint32_t> face;
+  for (std::size_t f = 0; f < m.num_faces(); ++f) {
+    face.clear();
+    const std::size_t n = m.face_size(f);
+    for (std::size_t k = 0; k < n; ++k)
+      if (weld.root(m.face(f)[k]) != weld.root(m.face(f)[(k + 1) % n])) face.push_back(weld.root(m.face(f)[k]));
+    if (face.size() == 4 && (face[0] == face[2] || face[1] == face[3])) {
+      ++report.doublets_zipped;
+      continue;
+    }
+    report.repeated_corners_removed += n - face.size();
+    if (face.size() >= 3) out.add_face_range(face);
+    else ++report.faces_dropped;
+  }
+  return keep_faces(out, std::vector<bool>(out.num_faces(), true));
+}
+
+std::string holes_torn(const Mesh& input, const Mesh& quads) {
+  const auto loops_in = boundary_loops(input, mesh_edges(input)), loops_out = boundary_loops(quads, mesh_edges(quads));
+  if (loops_out.size() <= loops_in.size()) return "";
+  std::string sizes;
+  for (std::size_t i = 0; i < loops_out.size() && i < 8; ++i)
+    sizes += (i ? ", " : "") + std::to_string(loops_out[i].size());
+  if (loops_out.size() > 8) sizes += ", ...";
+  return "QuadriFlow's quads have " + plural(loops_out.size(), "boundary loop", "boundary loops") + " (of " + sizes +
+         " edges) where the input has " + std::to_string(loops_in.size()) +
+         ": it tore holes, usually where the part has details finer than the quads; raise target_faces or try "
+         "another seed";
+}
+
+Mesh quad_remesh(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshReport& report,
+                 const std::function<void(double, const std::string&)>& progress) {
+  auto say = [&](double f, const std::string& what) {
+    if (progress) progress(f, what);
+  };
+  report = QuadRemeshReport{};
+  report.seed = o.seed;
+  if (o.target_faces < 1) throw std::invalid_argument("target_faces must be at least 1");
+  if (!(o.target_edge_length >= 0)) throw std::invalid_argument("target_edge_length must be non-negative");
+  if (!(o.angle_deg >= 0 && o.angle_deg < 180)) throw std::invalid_argument("the angle must lie in [0, 180) degrees");
+  say(0, "checking the mesh");
+  if (mesh.num_faces() == 0) throw std::invalid_argument("the mesh has no faces");
+  if (const std::string problem = orientable_manifold_problem(mesh); !problem.empty())
+    throw std::invalid_argument(problem + "; run mesh.repair first");
+  for (const auto& v : mesh.vertices)
+    if (!v.allFinite()) throw std::invalid_argument("a vertex is not finite");
+  report.blender = find_blender(o.blender);
+
+  const FaceGeometry g = face_geometry(mesh);
+  const double area = std::accumulate(g.area.begin(), g.area.end(), 0.0);
+  double target = o.target_faces;
+  if (o.target_edge_length > 0) target = std::round(area / (o.target_edge_length * o.target_edge_length));
+  report.target_faces = static_cast<std::size_t>(std::clamp(target, 1.0, 2147483647.0));
+
+  std::vector<std::array<std::uint32_t, 2>> reference = mesh.feature_edges;
+  report.feature_source = reference.empty() ? "angle" : "feature_edges";
+  if (reference.empty()) reference = sharp_edges(mesh, mesh_edges(mesh), o.angle_deg).edges;
+  report.feature_length_below_60 = length_below_60(mesh, reference);
+  if (report.feature_length_below_60 > 0)
+    report.warning = fmt(report.feature_length_below_60) + " mm of the feature curves are 60 degrees or softer: "
+                     "QuadriFlow does not keep them sharp";
+
+  Mesh quads = clean_quadriflow_output(run_quadriflow(mesh, o, report, say), report);
   if (quads.num_faces() == 0) throw std::runtime_error("QuadriFlow gave no face; try another seed or target_faces");
   report.components_reversed = match_orientation(quads, mesh);
   if (const std::string problem = orientable_manifold_problem(quads); !problem.empty())
-    throw std::runtime_error("QuadriFlow's quads are not usable: " + problem.substr(0, problem.find("; run mesh.repair")) +
-                             "; try another seed or target_faces");
+    throw std::runtime_error("QuadriFlow's quads are not usable: " + problem + "; try another seed or target_faces");
+  if (const std::string holes = holes_torn(mesh, quads); !holes.empty()) throw std::runtime_error(holes);
   quads.feature_edges = sharp_edges(quads, mesh_edges(quads), o.angle_deg).edges;
 
   say(0.95, "measuring the quads");

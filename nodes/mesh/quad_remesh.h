@@ -18,12 +18,17 @@
 // marking every edge sharp gives the same output byte for byte). Feature curves softer than 60
 // degrees are therefore not aligned with on purpose; the report gives their length.
 //
-// The output is checked and made to match the input's conventions: faces with a repeated corner
-// lose the repeat (a quad becomes a triangle, fewer are dropped), unused vertices are dropped,
-// each component is turned to the input's orientation when QuadriFlow reversed it (the area-
-// weighted agreement of its face normals with the nearest input face's), and it must come back
-// manifold and consistently oriented (else an error: another seed or target usually helps).
-// Its feature edges are the sharp edges at options.angle_deg (sharp_edges.h).
+// The output is checked and made to match the input's conventions. QuadriFlow writes a triangle
+// of its output as a quad of no area, two opposite corners at one place on two vertices (a, b,
+// a', c): such a doublet is zipped (a' welded to a, the face removed: its neighbours then share
+// the edges a-b and a-c), so the rest stays all quads; a face with a corner repeating the one
+// before loses the repeat (a quad becomes a triangle). Unused vertices are dropped; each
+// component is turned to the input's orientation when QuadriFlow reversed it (the area-weighted
+// agreement of its face normals with the nearest input face's). The result must be manifold and
+// consistently oriented, and have no more boundary loops than the input: QuadriFlow tears holes
+// where it leaves out a triangle (the fandisk at 1000 quads: two 3-edge holes), which would pass
+// for the part's border downstream. Otherwise an error says to raise target_faces or change the
+// seed. Its feature edges are the sharp edges at options.angle_deg (sharp_edges.h).
 //
 // Feature share, the fraction of the input's feature-curve length that lies on quad edges:
 // the input's feature edges (its feature_edges when it has them, else its sharp edges at
@@ -58,6 +63,7 @@ struct QuadRemeshReport {
   double quad_fraction = 0;       // quads / faces
   std::size_t extraordinary_points = 0;  // interior vertices whose valence is not 4
   double mean_edge_length = 0;    // mm
+  std::size_t doublets_zipped = 0;  // QuadriFlow's triangles written as quads of no area (see above)
   std::size_t repeated_corners_removed = 0, faces_dropped = 0, components_reversed = 0;
   std::string feature_source;     // "feature_edges" (the input's) or "angle"
   double feature_length = 0;      // mm, the input's feature curves
@@ -90,15 +96,28 @@ std::filesystem::path find_blender(const std::string& blender_option);
 // edges, no normals or labels. Throws std::invalid_argument naming what is wrong with the input
 // (no faces, a repeated corner, non-manifold edge or vertex, inconsistent orientation: run
 // mesh.repair), BlenderMissing, std::runtime_error when Blender fails (with its last lines of
-// output), times out, or gives a mesh that is not manifold and consistently oriented.
+// output), times out, or gives a mesh that is not manifold and consistently oriented or has holes
+// the input has not.
 Mesh quad_remesh(const Mesh& mesh, const QuadRemeshOptions& options, QuadRemeshReport& report,
                  const std::function<void(double, const std::string&)>& progress = {});
 
 // Interior vertices (on no boundary edge, on some face) whose number of edges is not 4.
 std::size_t extraordinary_points(const Mesh& mesh);
 
-// The reason `mesh` is not a manifold, consistently oriented mesh QuadriFlow can take, or "" when
-// it is (see quad_remesh).
+// What quad_remesh does to QuadriFlow's output first (see above): vertices of a face at one place
+// welded (to the lower index), doublets (a, b, a, c) removed, a corner repeating the one before
+// dropped, faces left with fewer than 3 corners dropped, unused vertices dropped (the others
+// keep their order). Counts go to report.doublets_zipped, repeated_corners_removed, faces_dropped.
+Mesh clean_quadriflow_output(const Mesh& quads, QuadRemeshReport& report);
+
+// "" when `quads` has no more boundary loops than `input`, else the error quad_remesh throws:
+// QuadriFlow tears a hole where it leaves out a triangle, which would pass for the part's border.
+std::string holes_torn(const Mesh& input, const Mesh& quads);
+
+// The reason `mesh` is not a manifold, consistently oriented polygon mesh, or "" when it is: no
+// faces, a face with fewer than 3 corners, a corner past the vertices or repeated, an edge with 3
+// or more faces, an edge both its faces run the same way, a vertex joining separate fans of faces
+// (each with a count and the first where it happens).
 std::string orientable_manifold_problem(const Mesh& mesh);
 
 }  // namespace scallop

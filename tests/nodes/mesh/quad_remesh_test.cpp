@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdlib>
 
@@ -116,6 +117,43 @@ TEST(QuadRemesh, TheSameSeedGivesTheSameQuadsAndAnEdgeLengthSetsTheCount) {
   EXPECT_EQ(qa.vertices, qb.vertices);
   EXPECT_EQ(qa.face_vertices, qb.face_vertices);
   EXPECT_EQ(qa.feature_edges, qb.feature_edges);
+}
+
+TEST(QuadRemesh, QuadriFlowsDoubletsAreZippedAwayAndItsHolesRefused) {
+  // The unit cube in 2 x 2 quads a side, slit along the top's middle line b - a - c (y = 0.5):
+  // the two top faces at y > 0.5 take a copy a' of the centre a, and the slit is filled with the
+  // quad (a, c, a', b) of no area, as QuadriFlow writes a triangle of its quads.
+  const Mesh cube = test::quad_box({2, 2, 2}, V(1, 1, 1));
+  auto at = [&](const V& p) {
+    return static_cast<std::uint32_t>(std::find(cube.vertices.begin(), cube.vertices.end(), p) - cube.vertices.begin());
+  };
+  const std::uint32_t a = at(V(0.5, 0.5, 1)), b = at(V(0, 0.5, 1)), c = at(V(1, 0.5, 1));
+  Mesh slit = cube;
+  const auto copy = static_cast<std::uint32_t>(slit.vertices.size());
+  slit.vertices.push_back(slit.vertices[a]);
+  for (std::size_t f = 0; f < slit.num_faces(); ++f) {
+    V centre = V::Zero();
+    for (auto v : test::corners(slit, f)) centre += slit.vertices[v] / 4;
+    if (centre.z() == 1 && centre.y() > 0.5)
+      std::replace(slit.face_vertices.begin() + slit.face_start[f], slit.face_vertices.begin() + slit.face_start[f + 1], a, copy);
+  }
+  slit.add_face({a, c, copy, b});
+  ASSERT_EQ(orientable_manifold_problem(slit), "");  // a valid mesh, but for the face of no area
+  QuadRemeshReport r;
+  const Mesh zipped = clean_quadriflow_output(slit, r);
+  EXPECT_EQ(r.doublets_zipped, 1u);
+  EXPECT_EQ(r.repeated_corners_removed, 0u);
+  EXPECT_EQ(zipped.vertices, cube.vertices);
+  EXPECT_EQ(zipped.face_vertices, cube.face_vertices);
+  EXPECT_EQ(zipped.face_start, cube.face_start);
+  // Had QuadriFlow left the slit's triangle out instead, the hole would be refused.
+  Mesh torn = slit;
+  torn.face_start.pop_back();
+  torn.face_vertices.resize(torn.face_start.back());
+  EXPECT_EQ(holes_torn(cube, zipped), "");
+  EXPECT_EQ(holes_torn(cube, torn),
+            "QuadriFlow's quads have 1 boundary loop (of 4 edges) where the input has 0: it tore holes, usually "
+            "where the part has details finer than the quads; raise target_faces or try another seed");
 }
 
 TEST(QuadRemesh, RefusesANonManifoldOrInconsistentMeshAndSaysToRepairIt) {
