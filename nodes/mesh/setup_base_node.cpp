@@ -44,7 +44,8 @@ NodeDecl make_setup_base_node() {
       .output("report", "Report",
               "{base_direction (the base's outward unit normal: mesh.segment's base input reads it), base_area "
               "(mm2), base_faces, base_fraction (of the area), plane_offset (the extreme plane: v.d = it, mm), how, "
-              "clusters: [{direction, faces, area, similarity S, quantity Gamma, objective, flat_area}] best "
+              "clusters: [{centre (the area-weighted mean of its unit normals), direction (the centre's), faces, area, "
+              "similarity S (the centre's length), quantity Gamma, objective, flat_area}] best "
               "objective first, chosen (index into clusters, -1: direction given), facing_kept: {faces, area} "
               "(facing the base but off its plane or not joined to it: not removed), vertices_removed}");
   d.options<SetupBaseOptions>()
@@ -77,7 +78,8 @@ NodeDecl make_setup_base_node() {
                " on the part's extreme plane: nothing removed");
     nlohmann::json clusters = nlohmann::json::array();
     for (const BaseCluster& c : r.clusters)
-      clusters.push_back({{"direction", xyz(c.direction)}, {"faces", c.faces}, {"area", c.area},
+      clusters.push_back({{"centre", xyz(c.similarity * c.direction)}, {"direction", xyz(c.direction)},
+                          {"faces", c.faces}, {"area", c.area},
                           {"similarity", c.similarity}, {"quantity", c.quantity}, {"objective", c.objective},
                           {"flat_area", c.flat_area}});
     Report report;
