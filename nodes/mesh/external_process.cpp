@@ -42,8 +42,8 @@ std::optional<fs::path> find_executable(const std::string& name) {
   return std::nullopt;
 }
 
-ProcessResult run_process(const std::vector<std::string>& argv, const fs::path& log, double timeout_s,
-                          const std::function<void(double)>& waiting) {
+ProcessResult run_process(const std::vector<std::string>& argv, const fs::path& log, const fs::path& tmpdir,
+                          double timeout_s, const std::function<void(double)>& waiting) {
   if (argv.empty()) throw std::runtime_error("no program to run");
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
@@ -53,8 +53,15 @@ ProcessResult run_process(const std::vector<std::string>& argv, const fs::path& 
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
+  std::vector<std::string> env_text;
+  for (char** e = environ; *e; ++e)
+    if (tmpdir.empty() || std::strncmp(*e, "TMPDIR=", 7) != 0) env_text.emplace_back(*e);
+  if (!tmpdir.empty()) env_text.push_back("TMPDIR=" + tmpdir.string());
+  std::vector<char*> env;
+  for (std::string& e : env_text) env.push_back(e.data());
+  env.push_back(nullptr);
   pid_t pid = 0;
-  const int err = posix_spawn(&pid, argv[0].c_str(), &actions, nullptr, args.data(), environ);
+  const int err = posix_spawn(&pid, argv[0].c_str(), &actions, nullptr, args.data(), env.data());
   posix_spawn_file_actions_destroy(&actions);
   if (err != 0) throw std::runtime_error("cannot run " + argv[0] + ": " + std::strerror(err));
 

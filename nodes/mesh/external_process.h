@@ -22,11 +22,13 @@ struct ProcessResult {
 };
 
 // Runs argv[0] (a path, not looked up) with arguments argv[1..], stdin from /dev/null, stdout and
-// stderr both appended to log. waiting(seconds so far) is called about every second while it
-// runs. A run longer than timeout_s is killed (SIGKILL, that child alone).
-// Throws std::runtime_error when the process cannot be started or the log not opened.
+// stderr both appended to log, in this process's environment with TMPDIR set to tmpdir when it is
+// not empty (so that what it leaves there when killed goes with that folder). waiting(seconds so
+// far) is called about every second while it runs. A run longer than timeout_s is killed
+// (SIGKILL, that child alone). Throws std::runtime_error when the process cannot be started.
 ProcessResult run_process(const std::vector<std::string>& argv, const std::filesystem::path& log,
-                          double timeout_s, const std::function<void(double)>& waiting = {});
+                          const std::filesystem::path& tmpdir, double timeout_s,
+                          const std::function<void(double)>& waiting = {});
 
 // The last n lines of a text file (fewer when it has fewer), without their line ends; empty
 // lines at its end skipped.

@@ -278,7 +278,7 @@ Mesh run_quadriflow(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshRepo
       run_process({report.blender.string(), "-b", "--factory-startup", "-noaudio", "--python-exit-code", "3", "--python",
                    script.string(), "--", in.string(), out.string(), std::to_string(report.target_faces),
                    std::to_string(o.seed)},
-                  log, o.timeout_s, [&](double s) { say(0.05, what + ": " + fmt(std::round(s)) + " s"); });
+                  log, dir.path(), o.timeout_s, [&](double s) { say(0.05, what + ": " + fmt(std::round(s)) + " s"); });
   report.seconds = run.seconds;
   const std::string who = "Blender (" + report.blender.string() + ")";
   if (run.timed_out)
