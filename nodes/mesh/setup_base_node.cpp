@@ -47,7 +47,7 @@ NodeDecl make_setup_base_node() {
               "clusters: [{centre (the area-weighted mean of its unit normals), direction (the centre's), faces, area, "
               "similarity S (the centre's length), quantity Gamma, objective, flat_area}] best "
               "objective first, chosen (index into clusters, -1: direction given), facing_kept: {faces, area} "
-              "(facing the base but off its plane or not joined to it: not removed), vertices_removed}");
+              "(facing the base but off its plane or not joined to it: not removed), vertices_removed, mu, gamma}");
   d.options<SetupBaseOptions>()
       .integer("clusters", &SetupBaseOptions::clusters, 1, 64, "", "k of the K-means of the face normals")
       .number("mu", &SetupBaseOptions::mu, 0, 1, "", "weight of a cluster's similarity S (its area-weighted mean cosine to its mean normal)")
