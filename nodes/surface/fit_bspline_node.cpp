@@ -1,0 +1,83 @@
+#include <algorithm>
+#include <stdexcept>
+
+#include "engine/node.h"
+#include "nodes/surface/fit_bspline.h"
+#include "nodes/surface/tessellate.h"
+#include "nodes/types/document.h"
+#include "nodes/types/mesh.h"
+#include "nodes/types/segments.h"
+
+namespace scallop::surface_nodes {
+
+NodeDecl make_fit_bspline_node() {
+  NodeDecl d;
+  d.type = "surface.fit_bspline";
+  d.version = 1;
+  d.description =
+      "fits each sharp height field with a bicubic B-spline on the unit square (the patch's quad grid as its "
+      "parameters, thin-plate smoothing relaxed until every grid vertex is within tolerance); patches sharing a "
+      "whole border share its curve";
+  d.input("segments", "Segments", "the patches (mesh.segment)")
+      .output("surfaces", "Surfaces", "per patch its B-spline surface, direction and fit figures")
+      .output("mesh", "Mesh", "the surfaces sampled as quads, face label = patch, patch outlines as feature edges")
+      .output("report", "Report",
+              "{tolerance, patches: [{direction, min_normal_dot, grid: [rows, cols], poles: [u, v], degree: [u, v], "
+              "fit_max_error, fit_mean_error, smoothing}], fit_max_error (largest over the patches), "
+              "patches_over_tolerance, shared_borders, shared_edges, boundary_gap_max (mm, between neighbouring "
+              "surfaces along shared mesh edges) and between which patches}");
+  d.options<FitBSplineOptions>()
+      .number("tolerance", &FitBSplineOptions::tolerance, 1e-9, 100, "mm",
+              "largest distance from a grid vertex to its point on the surface (a quarter of the chord error: "
+              "0.00125 for e = 0.005)")
+      .number("smoothing", &FitBSplineOptions::smoothing, 0, 1, "",
+              "the thin-plate weight alpha tried first (relative to the fitting term); 0: interpolate")
+      .integer("refinements", &FitBSplineOptions::refinements, 0, 30, "",
+               "tries with alpha divided by 10 each before interpolating");
+  d.param_int("samples", 16, 1, 256, "", "quads per patch side in the output mesh");
+  d.run = [](NodeContext& ctx) {
+    auto segments = ctx.input<Segments>("segments");
+    const FitBSplineOptions o = ctx.options<FitBSplineOptions>();
+    if (segments->patches.empty()) throw NodeError("the segments hold no patch: nothing to fit");
+    FitStats stats;
+    Surfaces s;
+    try {
+      s = fit_surfaces(*segments, o, &stats, [&](double f, const std::string& m) { ctx.progress(f, m); });
+    } catch (const std::invalid_argument& e) {
+      throw NodeError(e.what());
+    }
+    nlohmann::json patches = nlohmann::json::array();
+    double worst = 0;
+    std::size_t over = 0;
+    for (const auto& p : s.patches) {
+      worst = std::max(worst, p.fit_max_error);
+      over += p.fit_max_error > o.tolerance;
+      patches.push_back({{"direction", {p.direction.x(), p.direction.y(), p.direction.z()}},
+                         {"min_normal_dot", p.min_normal_dot},
+                         {"grid", {p.rows, p.cols}},
+                         {"poles", {p.surface.poles_u, p.surface.poles_v}},
+                         {"degree", {p.surface.degree_u, p.surface.degree_v}},
+                         {"fit_max_error", p.fit_max_error},
+                         {"fit_mean_error", p.fit_mean_error},
+                         {"smoothing", p.smoothing}});
+    }
+    if (over > 0)
+      ctx.warn(std::to_string(over) + " of " + std::to_string(s.patches.size()) +
+               " patches fit their grid less closely than the tolerance");
+    Report report;
+    report.data = {{"tolerance", o.tolerance},
+                   {"patches", std::move(patches)},
+                   {"fit_max_error", worst},
+                   {"patches_over_tolerance", over},
+                   {"shared_borders", stats.shared_borders},
+                   {"shared_edges", stats.shared_edges},
+                   {"boundary_gap_max", stats.boundary_gap_max},
+                   {"boundary_gap_between", {stats.boundary_gap_patch_a, stats.boundary_gap_patch_b}}};
+    ctx.set("mesh", tessellate_surfaces(s, static_cast<int>(ctx.integer("samples"))));
+    ctx.set("report", std::move(report));
+    ctx.set("surfaces", std::move(s));
+  };
+  return d;
+}
+
+}  // namespace scallop::surface_nodes
