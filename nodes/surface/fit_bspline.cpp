@@ -12,6 +12,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "nodes/mesh/mesh_distance.h"
+
 namespace scallop {
 
 namespace {
@@ -321,6 +323,21 @@ Surfaces fit_surfaces(const Segments& seg, const FitBSplineOptions& o, FitStats*
     out_p.smoothing = fit.smoothing;
     if (progress) progress(double(++done) / double(np), "fitting B-spline patches");
   });
+
+  // Each surface against the mesh, at quarter steps of its grid.
+  std::vector<Eigen::Vector3d> samples;
+  std::vector<std::size_t> first(np + 1, 0);
+  for (std::size_t p = 0; p < np; ++p) {
+    const SurfacePatch& sp = out.patches[p];
+    const std::uint32_t nu = kFine * (sp.cols - 1), nv = kFine * (sp.rows - 1);
+    for (std::uint32_t i = 0; i <= nv; ++i)
+      for (std::uint32_t j = 0; j <= nu; ++j) samples.push_back(surface_point(sp.surface, double(j) / nu, double(i) / nv));
+    first[p + 1] = samples.size();
+  }
+  const std::vector<double> distance = distances_to_mesh(samples, mesh);
+  for (std::size_t p = 0; p < np; ++p)
+    out.patches[p].mesh_distance_max =
+        *std::max_element(distance.begin() + std::ptrdiff_t(first[p]), distance.begin() + std::ptrdiff_t(first[p + 1]));
 
   if (stats) {
     *stats = FitStats{};

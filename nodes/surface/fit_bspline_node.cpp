@@ -23,7 +23,8 @@ NodeDecl make_fit_bspline_node() {
       .output("mesh", "Mesh", "the surfaces sampled as quads, face label = patch, patch outlines as feature edges")
       .output("report", "Report",
               "{tolerance, patches: [{direction, min_normal_dot, grid: [rows, cols], poles: [u, v], degree: [u, v], "
-              "fit_max_error, fit_mean_error, smoothing}], fit_max_error (largest over the patches), "
+              "fit_max_error, fit_mean_error, smoothing, mesh_distance_max (surface to the quad mesh: facet sag and any "
+              "bulge between vertices)}], fit_max_error and mesh_distance_max (largest over the patches), "
               "patches_over_tolerance, shared_borders, shared_edges, boundary_gap_max (mm, between neighbouring "
               "surfaces along shared mesh edges) and between which patches}");
   d.options<FitBSplineOptions>()
@@ -47,10 +48,11 @@ NodeDecl make_fit_bspline_node() {
       throw NodeError(e.what());
     }
     nlohmann::json patches = nlohmann::json::array();
-    double worst = 0;
+    double worst = 0, farthest = 0;
     std::size_t over = 0;
     for (const auto& p : s.patches) {
       worst = std::max(worst, p.fit_max_error);
+      farthest = std::max(farthest, p.mesh_distance_max);
       over += p.fit_max_error > o.tolerance;
       patches.push_back({{"direction", {p.direction.x(), p.direction.y(), p.direction.z()}},
                          {"min_normal_dot", p.min_normal_dot},
@@ -59,7 +61,8 @@ NodeDecl make_fit_bspline_node() {
                          {"degree", {p.surface.degree_u, p.surface.degree_v}},
                          {"fit_max_error", p.fit_max_error},
                          {"fit_mean_error", p.fit_mean_error},
-                         {"smoothing", p.smoothing}});
+                         {"smoothing", p.smoothing},
+                         {"mesh_distance_max", p.mesh_distance_max}});
     }
     if (over > 0)
       ctx.warn(std::to_string(over) + " of " + std::to_string(s.patches.size()) +
@@ -68,6 +71,7 @@ NodeDecl make_fit_bspline_node() {
     report.data = {{"tolerance", o.tolerance},
                    {"patches", std::move(patches)},
                    {"fit_max_error", worst},
+                   {"mesh_distance_max", farthest},
                    {"patches_over_tolerance", over},
                    {"shared_borders", stats.shared_borders},
                    {"shared_edges", stats.shared_edges},

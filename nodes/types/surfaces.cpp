@@ -34,6 +34,7 @@ void Surfaces::serialize(std::ostream& out) const {
     bin::write_f64(out, p.fit_max_error);
     bin::write_f64(out, p.fit_mean_error);
     bin::write_f64(out, p.smoothing);
+    bin::write_f64(out, p.mesh_distance_max);
   }
   bin::write_f64(out, tolerance);
   bin::write_vector(out, std::vector<Eigen::Vector3d>{base_direction});
@@ -63,6 +64,7 @@ ValuePtr Surfaces::deserialize(std::istream& in) {
     p.fit_max_error = bin::read_f64(in);
     p.fit_mean_error = bin::read_f64(in);
     p.smoothing = bin::read_f64(in);
+    p.mesh_distance_max = bin::read_f64(in);
   }
   s->tolerance = bin::read_f64(in);
   s->base_direction = read_vec3(in, "base direction");
@@ -85,6 +87,7 @@ void Surfaces::write_file(const std::string& path) const {
                     {"fit_max_error", p.fit_max_error},
                     {"fit_mean_error", p.fit_mean_error},
                     {"smoothing", p.smoothing},
+                    {"mesh_distance_max", p.mesh_distance_max},
                     {"degree", {s.degree_u, s.degree_v}},
                     {"knots_u", s.knots_u},
                     {"knots_v", s.knots_v},

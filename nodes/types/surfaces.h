@@ -21,6 +21,9 @@ namespace scallop {
 //   rows, cols      the grid fitted (vertex (i, j) at (u, v) = (j / (cols-1), i / (rows-1)))
 //   fit_max_error, fit_mean_error   |S(u, v) - vertex| over that grid (mm)
 //   smoothing       the thin-plate weight alpha the fit ended with (0: interpolation)
+//   mesh_distance_max  the largest distance from the surface (sampled at quarter steps of its
+//                   grid) to the mesh it was fitted to: the facets' sag where the part is curved,
+//                   and any bulge of the fit between the vertices
 struct SurfacePatch {
   BSplineSurface surface;
   Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
@@ -28,6 +31,7 @@ struct SurfacePatch {
   std::uint32_t segment = 0;
   std::uint32_t rows = 0, cols = 0;
   double fit_max_error = 0, fit_mean_error = 0, smoothing = 0;
+  double mesh_distance_max = 0;
 };
 
 // patches         the fitted patches
