@@ -1,0 +1,474 @@
+#include "nodes/mesh/quad_remesh.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <numeric>
+#include <sstream>
+
+#include "nodes/geom/kd_tree.h"
+#include "nodes/mesh/external_process.h"
+#include "nodes/mesh/face_geometry.h"
+#include "nodes/mesh/keep_faces.h"
+#include "nodes/mesh/mesh_topology.h"
+#include "nodes/mesh/sharp_edges.h"
+
+namespace scallop {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Run by Blender: reads the mesh (magic "SCQI", counts of vertices, faces and corners, then
+// float64 xyz, uint32 face sizes, uint32 corners, all little-endian), remeshes it with QuadriFlow
+// and writes "SCQO\n<Blender version>\n<seconds in QuadriFlow>\n" then uint32 counts, float32
+// xyz, int32 face sizes, int32 corners. Any failure prints a line "scallop: ..." and exits 3.
+// The mesh is built with from_pydata, which every Blender since 2.8 keeps (the lower-level
+// polygons.loop_total became read-only in 4.0).
+constexpr const char* kScript = R"PY(import array, os, struct, sys, time
+import bpy
+
+
+def fail(message):
+    print("scallop: " + message, flush=True)
+    sys.exit(3)
+
+
+def main():
+    argv = sys.argv[sys.argv.index("--") + 1:]
+    src, dst, target, seed = argv[0], argv[1], int(argv[2]), int(argv[3])
+    with open(src, "rb") as f:
+        magic, nv, nf, nc = struct.unpack("<4sIII", f.read(16))
+        if magic != b"SCQI":
+            fail("not a scallop mesh file: " + src)
+        co = array.array("d")
+        co.fromfile(f, 3 * nv)
+        sizes = array.array("I")
+        sizes.fromfile(f, nf)
+        corners = array.array("I")
+        corners.fromfile(f, nc)
+    verts = [(co[3 * i], co[3 * i + 1], co[3 * i + 2]) for i in range(nv)]
+    faces, at = [], 0
+    for s in sizes:
+        faces.append(corners[at:at + s])
+        at += s
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    mesh = bpy.data.meshes.new("part")
+    mesh.from_pydata(verts, [], faces)
+    mesh.update()
+    ob = bpy.data.objects.new("part", mesh)
+    bpy.context.scene.collection.objects.link(ob)
+    bpy.context.view_layer.objects.active = ob
+    ob.select_set(True)
+    start = time.time()
+    try:
+        result = bpy.ops.object.quadriflow_remesh(
+            mode="FACES", target_faces=target, seed=seed, use_mesh_symmetry=False, use_preserve_sharp=True,
+            use_preserve_boundary=True, preserve_paint_mask=False, smooth_normals=False)
+    except RuntimeError as e:
+        fail("quadriflow_remesh: " + str(e).strip())
+    seconds = time.time() - start
+    if result != {"FINISHED"}:
+        fail("quadriflow_remesh returned " + str(result))
+    out = ob.data
+    if len(out.vertices) == nv and len(out.polygons) == nf:
+        fail("QuadriFlow left the mesh as it was: it failed (see Blender's messages above)")
+    n, m = len(out.vertices), len(out.polygons)
+    co = array.array("f", bytes(12 * n))
+    out.vertices.foreach_get("co", co)
+    sizes = array.array("i", bytes(4 * m))
+    out.polygons.foreach_get("loop_total", sizes)
+    starts = array.array("i", bytes(4 * m))
+    out.polygons.foreach_get("loop_start", starts)
+    loops = array.array("i", bytes(4 * len(out.loops)))
+    out.loops.foreach_get("vertex_index", loops)
+    corners = array.array("i")
+    for s, t in zip(sizes, starts):
+        corners.extend(loops[t:t + s])
+    with open(dst + ".part", "wb") as f:
+        f.write(("SCQO\n%s\n%.6f\n" % (bpy.app.version_string, seconds)).encode())
+        f.write(struct.pack("<III", n, m, len(corners)))
+        co.tofile(f)
+        sizes.tofile(f)
+        corners.tofile(f)
+    os.replace(dst + ".part", dst)
+
+
+main()
+)PY";
+
+std::string plural(std::size_t n, const char* one, const char* many) {
+  return std::to_string(n) + " " + (n == 1 ? one : many);
+}
+
+std::string fmt(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", x);
+  return b;
+}
+
+template <class T>
+void put(std::ostream& out, T x) {
+  out.write(reinterpret_cast<const char*>(&x), sizeof x);
+}
+
+// The input for the script, centred on `centre` (Blender's floats then keep the most digits).
+void write_input(const fs::path& file, const Mesh& mesh, const Eigen::Vector3d& centre) {
+  std::ofstream out(file, std::ios::binary);
+  out.write("SCQI", 4);
+  put<std::uint32_t>(out, static_cast<std::uint32_t>(mesh.num_vertices()));
+  put<std::uint32_t>(out, static_cast<std::uint32_t>(mesh.num_faces()));
+  put<std::uint32_t>(out, static_cast<std::uint32_t>(mesh.face_vertices.size()));
+  for (const auto& v : mesh.vertices)
+    for (int k = 0; k < 3; ++k) put<double>(out, v[k] - centre[k]);
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f) put<std::uint32_t>(out, static_cast<std::uint32_t>(mesh.face_size(f)));
+  for (auto c : mesh.face_vertices) put<std::uint32_t>(out, c);
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+}
+
+template <class T>
+T get(std::istream& in) {
+  T x{};
+  in.read(reinterpret_cast<char*>(&x), sizeof x);
+  return x;
+}
+
+// The script's output, moved back by `centre`; the Blender version and QuadriFlow's seconds.
+Mesh read_output(const fs::path& file, const Eigen::Vector3d& centre, QuadRemeshReport& report) {
+  std::ifstream in(file, std::ios::binary);
+  std::string magic, seconds;
+  std::getline(in, magic);
+  std::getline(in, report.blender_version);
+  std::getline(in, seconds);
+  const auto n = get<std::uint32_t>(in), m = get<std::uint32_t>(in), c = get<std::uint32_t>(in);
+  if (magic != "SCQO" || !in) throw std::runtime_error("Blender's output " + file.string() + " is not the script's");
+  report.quadriflow_seconds = std::atof(seconds.c_str());
+  Mesh out;
+  out.vertices.resize(n);
+  for (auto& v : out.vertices)
+    for (int k = 0; k < 3; ++k) v[k] = static_cast<double>(get<float>(in)) + centre[k];
+  std::vector<std::int32_t> sizes(m);
+  for (auto& s : sizes) s = get<std::int32_t>(in);
+  out.face_vertices.resize(c);
+  std::size_t at = 0;
+  for (auto s : sizes) {
+    if (s < 3 || at + static_cast<std::size_t>(s) > c) throw std::runtime_error("Blender's output has a bad face size");
+    at += static_cast<std::size_t>(s);
+    out.face_start.push_back(static_cast<std::uint32_t>(at));
+  }
+  for (auto& v : out.face_vertices) {
+    const auto x = get<std::int32_t>(in);
+    if (x < 0 || static_cast<std::uint32_t>(x) >= n) throw std::runtime_error("Blender's output has a corner past its vertices");
+    v = static_cast<std::uint32_t>(x);
+  }
+  if (!in || at != c) throw std::runtime_error("Blender's output " + file.string() + " is cut short");
+  return out;
+}
+
+// Drops a corner repeating the one before it (cyclically), faces left with fewer than 3, and
+// vertices no face uses.
+Mesh without_repeats(const Mesh& m, QuadRemeshReport& report) {
+  Mesh out;
+  out.vertices = m.vertices;
+  std::vector<std::uint32_t> face;
+  for (std::size_t f = 0; f < m.num_faces(); ++f) {
+    face.clear();
+    const std::size_t n = m.face_size(f);
+    for (std::size_t k = 0; k < n; ++k)
+      if (m.face(f)[k] != m.face(f)[(k + 1) % n]) face.push_back(m.face(f)[k]);
+    report.repeated_corners_removed += n - face.size();
+    if (face.size() >= 3) out.add_face_range(face);
+    else ++report.faces_dropped;
+  }
+  return keep_faces(out, std::vector<bool>(out.num_faces(), true));
+}
+
+// Turns each component of `quads` whose normals disagree with the input's nearby faces (area-
+// weighted sum of n_quad . n_input at the input face nearest each quad's centroid < 0).
+std::size_t match_orientation(Mesh& quads, const Mesh& input) {
+  const FaceGeometry gi = face_geometry(input), gq = face_geometry(quads);
+  PointsAdaptor<Eigen::Vector3d> adaptor{gi.centroid};
+  KdTree<Eigen::Vector3d, 3> tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  const std::vector<int> comp = face_components(quads, mesh_edges(quads));
+  const int n_comp = comp.empty() ? 0 : *std::max_element(comp.begin(), comp.end()) + 1;
+  std::vector<double> agreement(n_comp, 0.0);
+  for (std::size_t f = 0; f < quads.num_faces(); ++f) {
+    std::uint32_t nearest = 0;
+    double d2 = 0;
+    tree.knnSearch(gq.centroid[f].data(), 1, &nearest, &d2);
+    agreement[comp[f]] += gq.area[f] * gq.normal[f].dot(gi.normal[nearest]);
+  }
+  std::size_t reversed = 0;
+  for (int c = 0; c < n_comp; ++c) reversed += agreement[c] < 0;
+  for (std::size_t f = 0; f < quads.num_faces(); ++f)
+    if (agreement[comp[f]] < 0)
+      std::reverse(quads.face_vertices.begin() + quads.face_start[f], quads.face_vertices.begin() + quads.face_start[f + 1]);
+  return reversed;
+}
+
+double point_segment_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+// The feature share (see the header) of the input's feature edges `reference` on the quads'.
+void measure_features(const Mesh& input, const std::vector<std::array<std::uint32_t, 2>>& reference, const Mesh& quads,
+                      double tolerance_fraction, QuadRemeshReport& report) {
+  const MeshEdges qe = mesh_edges(quads);
+  double sum = 0;
+  for (const auto& e : qe.edges) sum += (quads.vertices[e[0]] - quads.vertices[e[1]]).norm();
+  const double h = qe.size() > 0 ? sum / static_cast<double>(qe.size()) : 0;
+  const double tol = tolerance_fraction * h;
+  report.mean_edge_length = h;
+  report.feature_tolerance_mm = tol;
+  struct Segment {
+    Eigen::Vector3d a, b, mid;
+    double reach;  // half its length plus the tolerance: farther from mid, it cannot be within tol
+  };
+  std::vector<Segment> targets;
+  for (const auto& [a, b] : quads.feature_edges) {
+    const Eigen::Vector3d& pa = quads.vertices[a];
+    const Eigen::Vector3d& pb = quads.vertices[b];
+    targets.push_back({pa, pb, 0.5 * (pa + pb), 0.5 * (pb - pa).norm() + tol});
+  }
+  report.feature_length = report.feature_length_on_quad_edges = 0;
+  for (const auto& [a, b] : reference) {
+    const Eigen::Vector3d& pa = input.vertices[a];
+    const Eigen::Vector3d& pb = input.vertices[b];
+    const double len = (pb - pa).norm();
+    report.feature_length += len;
+    const int pieces = h > 0 ? std::max(1, static_cast<int>(std::ceil(4 * len / h))) : 1;
+    for (int i = 0; i < pieces; ++i) {
+      const Eigen::Vector3d p = pa + (i + 0.5) / pieces * (pb - pa);
+      const bool on = std::any_of(targets.begin(), targets.end(), [&](const Segment& s) {
+        return (p - s.mid).squaredNorm() <= s.reach * s.reach && point_segment_distance(p, s.a, s.b) <= tol;
+      });
+      if (on) report.feature_length_on_quad_edges += len / pieces;
+    }
+  }
+  report.feature_share = report.feature_length > 0 ? report.feature_length_on_quad_edges / report.feature_length : 1.0;
+}
+
+// QuadriFlow's own sharpness test: the faces' normals more than 60 degrees apart.
+double length_below_60(const Mesh& input, const std::vector<std::array<std::uint32_t, 2>>& reference) {
+  const MeshEdges edges = mesh_edges(input);
+  const FaceGeometry g = face_geometry(input);
+  double length = 0;
+  for (const auto& [a, b] : reference) {
+    const auto e = edges.find(a, b);
+    if (!e || edges.faces_on(*e) != 2) continue;
+    if (angle_deg(g.normal[edges.faces(*e)[0]], g.normal[edges.faces(*e)[1]]) <= 60)
+      length += (input.vertices[a] - input.vertices[b]).norm();
+  }
+  return length;
+}
+
+std::string output_lines(const fs::path& log) {
+  const std::vector<std::string> lines = last_lines(log, 12);
+  if (lines.empty()) return " (it wrote nothing)";
+  std::string s = "; its last lines of output:";
+  for (const auto& l : lines) s += "\n  " + l;
+  return s;
+}
+
+}  // namespace
+
+fs::path find_blender(const std::string& blender_option) {
+  const char* env = std::getenv("SCALLOP_BLENDER");
+  std::string name = blender_option, source = "the parameter blender";
+  if (name.empty() && env && *env) name = env, source = "SCALLOP_BLENDER";
+  std::string looked;
+  if (name.empty()) {
+    if (auto p = find_executable("blender")) return *p;
+    looked = "no blender on PATH";
+  } else {
+    if (auto p = find_executable(name)) return *p;
+    looked = "'" + name + "' (" + source + ") is not " +
+             (name.find('/') == std::string::npos ? "on PATH" : "an executable file");
+  }
+  throw BlenderMissing(
+      "needs Blender (QuadriFlow): install the Debian package blender (apt-get install blender), or name its "
+      "executable with the parameter blender or the environment variable SCALLOP_BLENDER; " + looked);
+}
+
+std::string orientable_manifold_problem(const Mesh& mesh) {
+  const std::string repair = "; run mesh.repair first";
+  if (mesh.num_faces() == 0) return "the mesh has no faces";
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
+    const std::size_t n = mesh.face_size(f);
+    if (n < 3) return "face " + std::to_string(f) + " has fewer than 3 corners" + repair;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (mesh.face(f)[k] >= mesh.num_vertices())
+        return "face " + std::to_string(f) + " has corner " + std::to_string(mesh.face(f)[k]) + " but there are " +
+               std::to_string(mesh.num_vertices()) + " vertices";
+      for (std::size_t j = 0; j < k; ++j)
+        if (mesh.face(f)[j] == mesh.face(f)[k])
+          return "face " + std::to_string(f) + " has vertex " + std::to_string(mesh.face(f)[k]) + " twice" + repair;
+    }
+  }
+  const MeshEdges edges = mesh_edges(mesh);
+  auto joins = [&](std::size_t e) {
+    return " (the first joins vertices " + std::to_string(edges.edges[e][0]) + " and " +
+           std::to_string(edges.edges[e][1]) + ")";
+  };
+  std::size_t many = 0, first_many = 0;
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    if (edges.faces_on(e) > 2 && many++ == 0) first_many = e;
+  if (many > 0) return "the mesh is not manifold: " + plural(many, "edge has", "edges have") + " 3 or more faces" + joins(first_many) + repair;
+
+  // Each face corner's slot; per edge, the slots its faces run it from and to.
+  struct Run {
+    std::uint32_t from_vertex, from_slot, to_slot;
+  };
+  std::vector<std::array<Run, 2>> runs(edges.size());
+  std::vector<std::uint8_t> count(edges.size(), 0);
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
+    const std::size_t n = mesh.face_size(f);
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint32_t s = mesh.face_start[f] + static_cast<std::uint32_t>(k);
+      const std::uint32_t e = edges.face_edge[s];
+      runs[e][count[e]++] = {mesh.face(f)[k], s, mesh.face_start[f] + static_cast<std::uint32_t>((k + 1) % n)};
+    }
+  }
+  std::size_t same_way = 0, first_same = 0;
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    if (count[e] == 2 && runs[e][0].from_vertex == runs[e][1].from_vertex && same_way++ == 0) first_same = e;
+  if (same_way > 0)
+    return "the faces are not consistently oriented: " + plural(same_way, "edge runs", "edges run") +
+           " the same way in both its faces" + joins(first_same) + repair;
+
+  // A vertex is manifold when its faces make one fan: join the corners of a vertex across each
+  // edge with two faces; a vertex whose corners stay in two groups or more is not.
+  std::vector<std::uint32_t> parent(mesh.face_vertices.size());
+  std::iota(parent.begin(), parent.end(), 0u);
+  auto root = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  auto join = [&](std::uint32_t a, std::uint32_t b) {
+    a = root(a), b = root(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  };
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    if (count[e] != 2) continue;
+    const Run& r = runs[e][0];
+    const Run& q = runs[e][1];  // runs the other way: its from-corner is r's to-vertex
+    join(r.from_slot, q.to_slot);
+    join(r.to_slot, q.from_slot);
+  }
+  std::vector<std::uint32_t> fan(mesh.num_vertices(), UINT32_MAX);
+  std::size_t pinched = 0;
+  std::uint32_t first_pinched = 0;
+  std::vector<bool> counted(mesh.num_vertices(), false);
+  for (std::uint32_t s = 0; s < mesh.face_vertices.size(); ++s) {
+    const std::uint32_t v = mesh.face_vertices[s], r = root(s);
+    if (fan[v] == UINT32_MAX) fan[v] = r;
+    else if (fan[v] != r && !counted[v]) {
+      counted[v] = true;
+      if (pinched++ == 0) first_pinched = v;
+    }
+  }
+  if (pinched > 0)
+    return "the mesh is not manifold: " + plural(pinched, "vertex joins", "vertices join") +
+           " separate fans of faces (the first is vertex " + std::to_string(first_pinched) + ")" + repair;
+  return "";
+}
+
+std::size_t extraordinary_points(const Mesh& mesh) {
+  const MeshEdges edges = mesh_edges(mesh);
+  std::vector<std::uint32_t> valence(mesh.num_vertices(), 0);
+  std::vector<bool> boundary(mesh.num_vertices(), false);
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    for (auto v : edges.edges[e]) {
+      ++valence[v];
+      if (edges.is_boundary(e)) boundary[v] = true;
+    }
+  std::size_t n = 0;
+  for (std::size_t v = 0; v < mesh.num_vertices(); ++v) n += !boundary[v] && valence[v] > 0 && valence[v] != 4;
+  return n;
+}
+
+Mesh quad_remesh(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshReport& report,
+                 const std::function<void(double, const std::string&)>& progress) {
+  auto say = [&](double f, const std::string& what) {
+    if (progress) progress(f, what);
+  };
+  report = QuadRemeshReport{};
+  report.seed = o.seed;
+  if (o.target_faces < 1) throw std::invalid_argument("target_faces must be at least 1");
+  if (!(o.target_edge_length >= 0)) throw std::invalid_argument("target_edge_length must be non-negative");
+  if (!(o.angle_deg >= 0 && o.angle_deg < 180)) throw std::invalid_argument("the angle must lie in [0, 180) degrees");
+  say(0, "checking the mesh");
+  if (const std::string problem = orientable_manifold_problem(mesh); !problem.empty()) throw std::invalid_argument(problem);
+  for (const auto& v : mesh.vertices)
+    if (!v.allFinite()) throw std::invalid_argument("a vertex is not finite");
+  report.blender = find_blender(o.blender);
+
+  const FaceGeometry g = face_geometry(mesh);
+  const double area = std::accumulate(g.area.begin(), g.area.end(), 0.0);
+  double target = o.target_faces;
+  if (o.target_edge_length > 0) target = std::round(area / (o.target_edge_length * o.target_edge_length));
+  report.target_faces = static_cast<std::size_t>(std::clamp(target, 1.0, 2147483647.0));
+
+  std::vector<std::array<std::uint32_t, 2>> reference = mesh.feature_edges;
+  report.feature_source = reference.empty() ? "angle" : "feature_edges";
+  if (reference.empty()) reference = sharp_edges(mesh, mesh_edges(mesh), o.angle_deg).edges;
+  report.feature_length_below_60 = length_below_60(mesh, reference);
+  if (report.feature_length_below_60 > 0)
+    report.warning = fmt(report.feature_length_below_60) + " mm of the feature curves are 60 degrees or softer: "
+                     "QuadriFlow does not keep them sharp";
+
+  Eigen::AlignedBox3d box;
+  for (const auto& v : mesh.vertices) box.extend(v);
+  const Eigen::Vector3d centre = box.center();
+  PrivateTempDir dir("scallop-quadriflow-");
+  const fs::path script = dir.path() / "quadriflow.py", in = dir.path() / "in.bin", out = dir.path() / "out.bin",
+                 log = dir.path() / "blender.log";
+  std::ofstream(script) << kScript;
+  write_input(in, mesh, centre);
+
+  const std::string what = "QuadriFlow in Blender, " + std::to_string(report.target_faces) + " quads";
+  say(0.05, what);
+  const ProcessResult run =
+      run_process({report.blender.string(), "-b", "--factory-startup", "-noaudio", "--python-exit-code", "3", "--python",
+                   script.string(), "--", in.string(), out.string(), std::to_string(report.target_faces),
+                   std::to_string(o.seed)},
+                  log, o.timeout_s, [&](double s) { say(0.05, what + ": " + fmt(std::round(s)) + " s"); });
+  report.seconds = run.seconds;
+  const std::string who = "Blender (" + report.blender.string() + ")";
+  if (run.timed_out)
+    throw std::runtime_error(who + " ran longer than " + fmt(o.timeout_s) + " s and was stopped" + output_lines(log));
+  if (run.signal != 0)
+    throw std::runtime_error(who + " was ended by signal " + std::to_string(run.signal) + output_lines(log));
+  if (run.exit_status != 0)
+    throw std::runtime_error(who + " failed with exit status " + std::to_string(run.exit_status) + output_lines(log));
+  if (!fs::exists(out)) throw std::runtime_error(who + " wrote no mesh" + output_lines(log));
+
+  say(0.9, "reading the quads");
+  Mesh quads = without_repeats(read_output(out, centre, report), report);
+  if (quads.num_faces() == 0) throw std::runtime_error("QuadriFlow gave no face; try another seed or target_faces");
+  report.components_reversed = match_orientation(quads, mesh);
+  if (const std::string problem = orientable_manifold_problem(quads); !problem.empty())
+    throw std::runtime_error("QuadriFlow's quads are not usable: " + problem.substr(0, problem.find("; run mesh.repair")) +
+                             "; try another seed or target_faces");
+  quads.feature_edges = sharp_edges(quads, mesh_edges(quads), o.angle_deg).edges;
+
+  say(0.95, "measuring the quads");
+  report.faces = quads.num_faces();
+  report.vertices = quads.num_vertices();
+  for (std::size_t f = 0; f < quads.num_faces(); ++f) report.quads += quads.face_size(f) == 4;
+  report.quad_fraction = static_cast<double>(report.quads) / static_cast<double>(report.faces);
+  report.extraordinary_points = extraordinary_points(quads);
+  report.sharp_edges = quads.feature_edges.size();
+  measure_features(mesh, reference, quads, o.feature_tolerance, report);
+  say(1, "done");
+  return quads;
+}
+
+}  // namespace scallop

@@ -1,0 +1,182 @@
+// Tests for quad_remesh (QuadriFlow run in Blender) and the mesh.quad_remesh node. Each Blender
+// run costs seconds: one box through the node, once more for determinism; the refusals run none.
+#include "nodes/mesh/quad_remesh.h"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <array>
+#include <cstdlib>
+
+#include "engine/node.h"
+#include "nodes/mesh/mesh_topology.h"
+#include "nodes/types/document.h"
+#include "tests/nodes/mesh/mesh_test_util.h"
+#include "tests/test_support.h"
+
+namespace scallop {
+namespace mesh_nodes {
+NodeDecl make_quad_remesh_node();
+}  // namespace mesh_nodes
+using mesh_nodes::make_quad_remesh_node;
+}  // namespace scallop
+
+namespace scallop {
+namespace {
+
+using V = Eigen::Vector3d;
+
+const V kLow(100, -40, 25), kSize(30, 20, 10);
+
+// The box [100, 130] x [-40, -20] x [25, 35] as 12 * 8^2 triangles: off the origin and of three
+// different sides, so that a moved or swapped axis shows.
+Mesh box() {
+  Mesh m = test::cube_mesh(8);
+  for (auto& v : m.vertices) v = kLow + v.cwiseProduct(kSize);
+  m.face_label.clear();
+  return m;
+}
+
+std::string refusal(const Mesh& m, const nlohmann::json& params = nlohmann::json::object()) {
+  return test::error_of<NodeError>(
+      [&] { test::run_node(make_quad_remesh_node(), params, {{"mesh", std::make_shared<Mesh>(m)}}); });
+}
+
+// Six times the signed volume (faces fanned from their first corner).
+double six_volume(const Mesh& m) {
+  double v = 0;
+  for (std::size_t f = 0; f < m.num_faces(); ++f)
+    for (std::size_t k = 1; k + 1 < m.face_size(f); ++k)
+      v += m.vertices[m.face(f)[0]].dot(m.vertices[m.face(f)[k]].cross(m.vertices[m.face(f)[k + 1]]));
+  return v;
+}
+
+TEST(QuadRemesh, ABoxComesBackAllQuadsClosedOutwardWithItsEdgesOnQuadEdges) {
+  std::string progress;
+  auto out = test::run_node(make_quad_remesh_node(), {{"target_faces", 600}}, {{"mesh", std::make_shared<Mesh>(box())}},
+                            &progress);
+  const Mesh& q = *std::dynamic_pointer_cast<const Mesh>(out.at("mesh"));
+  const nlohmann::json& r = std::dynamic_pointer_cast<const Report>(out.at("report"))->data;
+
+  // All quads, as many as asked within a fifth.
+  for (std::size_t f = 0; f < q.num_faces(); ++f) ASSERT_EQ(q.face_size(f), 4u) << "face " << f;
+  EXPECT_EQ(r["quad_fraction"], 1.0);
+  EXPECT_EQ(r["faces"], q.num_faces());
+  EXPECT_NEAR(static_cast<double>(q.num_faces()), 600, 120);
+  // Closed, one piece, a sphere's topology, manifold and consistently oriented.
+  const MeshTopology t = mesh_topology(q, mesh_edges(q));
+  EXPECT_EQ(t.components, 1);
+  EXPECT_EQ(t.boundary_loops, 0);
+  EXPECT_EQ(t.genus, 0);
+  EXPECT_EQ(orientable_manifold_problem(q), "");
+  // Outward, as the input: the volume is positive and the box's (30 * 20 * 10).
+  EXPECT_NEAR(six_volume(q) / 6, 6000, 6000 * 0.005);
+  // Euler on a closed quad mesh of genus 0: the sum over vertices of (4 - valence) is 8; its
+  // extraordinary points are at least the 8 corners.
+  const MeshEdges e = mesh_edges(q);
+  std::vector<int> valence(q.num_vertices(), 0);
+  for (const auto& [a, b] : e.edges) ++valence[a], ++valence[b];
+  int defect = 0;
+  for (int v : valence) defect += 4 - v;
+  EXPECT_EQ(defect, 8);
+  EXPECT_EQ(r["extraordinary_points"], extraordinary_points(q));
+  EXPECT_GE(r["extraordinary_points"].get<int>(), 8);
+  // The 12 edges (240 mm) are the feature curves, and nearly all of them lies on quad edges.
+  EXPECT_EQ(r["feature_source"], "angle");
+  EXPECT_NEAR(r["feature_length"].get<double>(), 4 * (30 + 20 + 10), 1e-9);
+  EXPECT_GE(r["feature_share"].get<double>(), 0.95);
+  EXPECT_EQ(r["feature_length_below_60"], 0.0);
+  EXPECT_FALSE(q.feature_edges.empty());
+  for (const auto& [a, b] : q.feature_edges) EXPECT_TRUE(e.find(a, b).has_value());
+  // In the part's frame: each corner of the box has a vertex near it, no vertex strays off it.
+  const double h = r["mean_edge_length"];
+  for (int i = 0; i < 8; ++i) {
+    const V corner = kLow + V(i & 1, (i >> 1) & 1, (i >> 2) & 1).cwiseProduct(kSize);
+    double nearest = 1e9;
+    for (const V& v : q.vertices) nearest = std::min(nearest, (v - corner).norm());
+    EXPECT_LT(nearest, 0.2 * h) << "corner " << i;
+  }
+  for (const V& v : q.vertices)
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_GT(v[k], kLow[k] - 0.2 * h);
+      EXPECT_LT(v[k], kLow[k] + kSize[k] + 0.2 * h);
+    }
+  EXPECT_FALSE(r["blender_version"].get<std::string>().empty());
+  EXPECT_EQ(r["seed"], 0);
+  EXPECT_EQ(r["target_faces"], 600);
+  EXPECT_EQ(progress, "done");
+}
+
+TEST(QuadRemesh, TheSameSeedGivesTheSameQuadsAndAnEdgeLengthSetsTheCount) {
+  QuadRemeshOptions o;
+  o.target_edge_length = 2;  // 2200 mm^2 / 4 mm^2 = 550 quads
+  QuadRemeshReport a, b;
+  const Mesh qa = quad_remesh(box(), o, a), qb = quad_remesh(box(), o, b);
+  EXPECT_EQ(a.target_faces, 550u);
+  EXPECT_EQ(qa.vertices, qb.vertices);
+  EXPECT_EQ(qa.face_vertices, qb.face_vertices);
+  EXPECT_EQ(qa.feature_edges, qb.feature_edges);
+}
+
+TEST(QuadRemesh, RefusesANonManifoldOrInconsistentMeshAndSaysToRepairIt) {
+  Mesh fin;  // three triangles on the edge 0-1
+  fin.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
+  fin.add_face({0, 1, 2});
+  fin.add_face({1, 0, 3});
+  fin.add_face({0, 1, 4});
+  EXPECT_EQ(refusal(fin),
+            "mesh.quad_remesh: the mesh is not manifold: 1 edge has 3 or more faces (the first joins vertices 0 and "
+            "1); run mesh.repair first");
+  Mesh flipped;  // an open sheet of two triangles, the second reversed
+  flipped.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  flipped.add_face({0, 1, 2});
+  flipped.add_face({1, 2, 3});
+  EXPECT_EQ(refusal(flipped),
+            "mesh.quad_remesh: the faces are not consistently oriented: 1 edge runs the same way in both its faces "
+            "(the first joins vertices 1 and 2); run mesh.repair first");
+  Mesh bow_tie;  // two triangles touching at vertex 0 alone
+  bow_tie.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}};
+  bow_tie.add_face({0, 1, 2});
+  bow_tie.add_face({0, 3, 4});
+  EXPECT_EQ(refusal(bow_tie),
+            "mesh.quad_remesh: the mesh is not manifold: 1 vertex joins separate fans of faces (the first is vertex "
+            "0); run mesh.repair first");
+  Mesh pinched = test::tetrahedron();
+  pinched.add_face({0, 1, 1});
+  EXPECT_EQ(refusal(pinched), "mesh.quad_remesh: face 4 has vertex 1 twice; run mesh.repair first");
+  EXPECT_EQ(refusal(Mesh{}), "mesh.quad_remesh: the mesh has no faces");
+}
+
+TEST(QuadRemesh, SaysHowToGetBlenderWhenItIsMissing) {
+  const std::string get =
+      "mesh.quad_remesh needs Blender (QuadriFlow): install the Debian package blender (apt-get install blender), or "
+      "name its executable with the parameter blender or the environment variable SCALLOP_BLENDER; ";
+  EXPECT_EQ(refusal(test::tetrahedron(), {{"blender", "/nonexistent/blender"}}),
+            get + "'/nonexistent/blender' (the parameter blender) is not an executable file");
+  const char* before = std::getenv("SCALLOP_BLENDER");
+  const std::string saved = before ? before : "";
+  ::setenv("SCALLOP_BLENDER", "/nonexistent/bin/blender", 1);
+  EXPECT_EQ(refusal(test::tetrahedron()), get + "'/nonexistent/bin/blender' (SCALLOP_BLENDER) is not an executable file");
+  ::setenv("SCALLOP_BLENDER", "no-such-blender", 1);
+  EXPECT_EQ(refusal(test::tetrahedron()), get + "'no-such-blender' (SCALLOP_BLENDER) is not on PATH");
+  if (before) ::setenv("SCALLOP_BLENDER", saved.c_str(), 1);
+  else ::unsetenv("SCALLOP_BLENDER");
+}
+
+TEST(QuadRemesh, WhenBlenderFailsTheErrorEndsWithItsLastLines) {
+  test::TempDir dir;
+  const auto fake = dir.path / "blender";
+  std::string script = "#!/bin/sh\n";
+  for (int i = 1; i <= 14; ++i) script += "echo line " + std::to_string(i) + (i % 2 ? "\n" : " >&2\n");
+  script += "exit 2\n";
+  test::write_file(fake, script);
+  ::chmod(fake.c_str(), 0755);
+  std::string lines;
+  for (int i = 3; i <= 14; ++i) lines += "\n  line " + std::to_string(i);
+  EXPECT_EQ(refusal(test::tetrahedron(), {{"blender", fake.string()}}),
+            "mesh.quad_remesh: Blender (" + fake.string() + ") failed with exit status 2; its last lines of output:" +
+                lines);
+}
+
+}  // namespace
+}  // namespace scallop
