@@ -19,6 +19,8 @@ NodeDecl make_fit_bspline_node() {
       "parameters, thin-plate smoothing relaxed until every grid vertex is within tolerance); patches sharing a "
       "whole border share its curve";
   d.input("segments", "Segments", "the patches (mesh.segment)")
+      .input("base", "Report", "mesh.setup_base's report, copied into this report as base", false)
+      .input("quads", "Report", "mesh.quad_remesh's report, copied into this report as quad_mesh", false)
       .output("surfaces", "Surfaces", "per patch its B-spline surface, direction and fit figures")
       .output("mesh", "Mesh", "the surfaces sampled as quads, face label = patch, patch outlines as feature edges")
       .output("report", "Report",
@@ -26,7 +28,7 @@ NodeDecl make_fit_bspline_node() {
               "fit_max_error, fit_mean_error, smoothing, mesh_distance_max (surface to the quad mesh: facet sag and any "
               "bulge between vertices)}], fit_max_error and mesh_distance_max (largest over the patches), "
               "patches_over_tolerance, shared_borders, shared_edges, boundary_gap_max (mm, between neighbouring "
-              "surfaces along shared mesh edges) and between which patches}");
+              "surfaces along shared mesh edges) and between which patches, base_direction; base and quad_mesh when given}");
   d.options<FitBSplineOptions>()
       .number("tolerance", &FitBSplineOptions::tolerance, 1e-9, 100, "mm",
               "largest distance from a grid vertex to its point on the surface (a quarter of the chord error: "
@@ -77,6 +79,11 @@ NodeDecl make_fit_bspline_node() {
                    {"shared_edges", stats.shared_edges},
                    {"boundary_gap_max", stats.boundary_gap_max},
                    {"boundary_gap_between", {stats.boundary_gap_patch_a, stats.boundary_gap_patch_b}}};
+    const Eigen::Vector3d& b = s.base_direction;
+    report.data["base_direction"] = {b.x(), b.y(), b.z()};
+    // One report a person reads for the whole segmentation: the base and the quads it rests on.
+    if (ctx.has_input("base")) report.data["base"] = ctx.input<Report>("base")->data;
+    if (ctx.has_input("quads")) report.data["quad_mesh"] = ctx.input<Report>("quads")->data;
     ctx.set("mesh", tessellate_surfaces(s, static_cast<int>(ctx.integer("samples"))));
     ctx.set("report", std::move(report));
     ctx.set("surfaces", std::move(s));
