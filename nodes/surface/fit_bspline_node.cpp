@@ -26,7 +26,7 @@ NodeDecl make_fit_bspline_node() {
       .output("report", "Report",
               "{tolerance, patches: [{direction, min_normal_dot, grid: [rows, cols], poles: [u, v], degree: [u, v], "
               "fit_max_error, fit_mean_error, smoothing, mesh_distance_max (surface to the quad mesh: facet sag and any "
-              "bulge between vertices)}], fit_max_error and mesh_distance_max (largest over the patches), "
+              "bulge between vertices)}], fit_max_error and mesh_distance_max, patches_bulging (farther from their quads than a quarter edge) (largest over the patches), "
               "patches_over_tolerance, shared_borders, shared_edges, boundary_gap_max (mm, between neighbouring "
               "surfaces along shared mesh edges) and between which patches, base_direction; base and quad_mesh when given}");
   d.options<FitBSplineOptions>()
@@ -66,6 +66,29 @@ NodeDecl make_fit_bspline_node() {
                          {"smoothing", p.smoothing},
                          {"mesh_distance_max", p.mesh_distance_max}});
     }
+    // A facet's sag stays under an eighth of its edge wherever the part curves no tighter than the
+    // quads are long; a surface farther from its quads than a quarter edge bulges between them.
+    std::size_t bulging = 0, worst_patch = 0;
+    double worst_ratio = 0;
+    for (std::size_t i = 0; i < s.patches.size(); ++i) {
+      const SegmentPatch& g = segments->patches[i];
+      double length = 0;
+      std::size_t edges = 0;
+      for (std::uint32_t r = 0; r < g.rows; ++r)
+        for (std::uint32_t c = 0; c < g.cols; ++c) {
+          const Eigen::Vector3d& v = segments->mesh.vertices[g.at(r, c)];
+          if (c + 1 < g.cols) length += (segments->mesh.vertices[g.at(r, c + 1)] - v).norm(), ++edges;
+          if (r + 1 < g.rows) length += (segments->mesh.vertices[g.at(r + 1, c)] - v).norm(), ++edges;
+        }
+      const double ratio = s.patches[i].mesh_distance_max / (length / double(edges));
+      bulging += ratio > 0.25;
+      if (ratio > worst_ratio) worst_ratio = ratio, worst_patch = i;
+    }
+    if (bulging > 0)
+      ctx.warn(std::to_string(bulging) + " of " + std::to_string(s.patches.size()) +
+               " patches bulge from their quads by more than a quarter of a quad's edge (worst: patch " +
+               std::to_string(worst_patch) + ", " + std::to_string(s.patches[worst_patch].mesh_distance_max) +
+               " mm): more quads, or a fit to the dense mesh, would follow the part better");
     if (over > 0)
       ctx.warn(std::to_string(over) + " of " + std::to_string(s.patches.size()) +
                " patches fit their grid less closely than the tolerance");
@@ -75,6 +98,7 @@ NodeDecl make_fit_bspline_node() {
                    {"fit_max_error", worst},
                    {"mesh_distance_max", farthest},
                    {"patches_over_tolerance", over},
+                   {"patches_bulging", bulging},
                    {"shared_borders", stats.shared_borders},
                    {"shared_edges", stats.shared_edges},
                    {"boundary_gap_max", stats.boundary_gap_max},
