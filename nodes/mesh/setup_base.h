@@ -25,7 +25,11 @@
 // plane_tolerance of the largest v . d over all vertices), and of those the connected group
 // (faces joined by shared edges) of the largest area. A face elsewhere with the same normal (the
 // underside of an overhang, a second face at another height) is never removed: such faces are
-// counted in the result. Clusters are tried in order of their objective; the first whose flat
+// counted in the result. A cluster's mean normal d may lean off its flat face by more than
+// flat_angle (the fandisk's back face shares its cluster with the fillets beside it: measured,
+// no flat part found), so the flat part is sought along the cluster's flattest direction: the
+// normal of its faces around which most of its area lies within flat_angle (tried from at most
+// 256 of its faces), averaged over those faces. Clusters are tried in order of their objective; the first whose flat
 // part holds at least min_area of the mesh's area is the base (a curved cluster such as a dome
 // has no flat part). When none has, the part has no base: setup_base throws, asking for the
 // direction. With options.direction given, that direction is the base's and its flat part is
@@ -47,7 +51,7 @@ struct SetupBaseOptions {
   double gamma = 0.3;             // weight of the quantity Gamma
   int seed = 1;                   // of the K-means seeding (deterministic)
   double flat_angle_deg = 5;      // a base face's normal lies within this of the base direction
-  double plane_tolerance = 0.002; // ... and its corners this far from the extreme plane, times the
+  double plane_tolerance = 0.005; // ... and its corners this far from the extreme plane, times the
                                   // bounding box diagonal
   double min_area = 0.02;         // the smallest flat part taken for a base, fraction of the area
   Eigen::Vector3d direction = Eigen::Vector3d::Zero();  // the base's outward normal; zero: find it
@@ -61,7 +65,8 @@ struct BaseCluster {
   double similarity = 0;      // S
   double quantity = 0;        // Gamma
   double objective = 0;       // epsilon
-  double flat_area = 0;       // mm^2 of the flat part along d (see above)
+  Eigen::Vector3d flat_direction;  // the cluster's flattest direction (see below)
+  double flat_area = 0;       // mm^2 of the flat part along flat_direction (see above)
 };
 
 // mesh          the part without its base: the faces not removed, in their order; the vertices

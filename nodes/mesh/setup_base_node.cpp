@@ -44,7 +44,7 @@ NodeDecl make_setup_base_node() {
       .output("report", "Report",
               "{base_direction (the base's outward unit normal: mesh.segment's base input reads it), base_area "
               "(mm2), base_faces, base_fraction (of the area), plane_offset (the extreme plane: v.d = it, mm), how, "
-              "clusters: [{direction, faces, area, similarity S, quantity Gamma, objective, flat_area}] best "
+              "clusters: [{direction, faces, area, similarity S, quantity Gamma, objective, flat_direction, flat_area}] best "
               "objective first, chosen (index into clusters, -1: direction given), facing_kept: {faces, area} "
               "(facing the base but off its plane or not joined to it: not removed), vertices_removed}");
   d.options<SetupBaseOptions>()
@@ -79,6 +79,7 @@ NodeDecl make_setup_base_node() {
     for (const BaseCluster& c : r.clusters)
       clusters.push_back({{"direction", xyz(c.direction)}, {"faces", c.faces}, {"area", c.area},
                           {"similarity", c.similarity}, {"quantity", c.quantity}, {"objective", c.objective},
+                          {"flat_direction", {c.flat_direction.x(), c.flat_direction.y(), c.flat_direction.z()}},
                           {"flat_area", c.flat_area}});
     Report report;
     report.data = {{"base_direction", xyz(r.direction)},
