@@ -20,6 +20,13 @@ std::vector<double> clamped_uniform_knots(int poles, int degree) {
   return k;
 }
 
+std::vector<double> averaged_knots(int poles, int degree) {
+  std::vector<double> k = clamped_uniform_knots(poles, degree);
+  // Inner knot j (1 .. poles - degree - 1): the mean of t_j .. t_{j+degree-1}.
+  for (int j = 1; j < poles - degree; ++j) k[std::size_t(degree + j)] = (j + (degree - 1) / 2.0) / (poles - 1);
+  return k;
+}
+
 BasisAt bspline_basis(const std::vector<double>& knots, int degree, double t, int derivatives) {
   TColStd_Array1OfReal flat(1, static_cast<int>(knots.size()));
   for (std::size_t i = 0; i < knots.size(); ++i) flat(static_cast<int>(i) + 1) = knots[i];

@@ -28,6 +28,13 @@ struct BSplineSurface {
 // knots equally spaced on [0, 1].
 std::vector<double> clamped_uniform_knots(int poles, int degree);
 
+// The clamped knot vector of `poles` poles of degree `degree` (1 <= degree < poles) for
+// interpolating as many points at t_k = k / (poles - 1): each inner knot the mean of `degree`
+// consecutive t_k (de Boor's averaging, The NURBS Book eq. 9.8). With equally spaced inner knots
+// that do not follow the points the interpolation is ill-conditioned: measured, a 91-point border
+// of the ABC plate swung 273 m off its points.
+std::vector<double> averaged_knots(int poles, int degree);
+
 // The B-spline basis functions of `knots` (degree `degree`) that are non-zero at t in [0, 1],
 // with derivatives up to `derivatives` (<= degree): values(d, k) is the d-th derivative of basis
 // function first + k, k = 0..degree.

@@ -34,7 +34,7 @@ struct Basis1D {
 Basis1D basis_1d(int n) {
   Basis1D b;
   b.degree = std::min(3, n - 1);
-  b.knots = clamped_uniform_knots(n, b.degree);
+  b.knots = averaged_knots(n, b.degree);
   b.B = Eigen::MatrixXd::Zero(n, n);
   b.Fine = Eigen::MatrixXd::Zero(kFine * (n - 1) + 1, n);
   for (int k = 0; k < b.Fine.rows(); ++k) {

@@ -6,7 +6,8 @@
 // a threshold. Here the SHF is a rectangle of the quad grid (mesh.segment), so its own grid
 // indices are the parameterisation: vertex (i, j) of a rows by cols grid sits at
 // (u, v) = (j / (cols-1), i / (rows-1)), and the surface has as many poles as the grid has
-// vertices along each direction (degree min(3, count - 1)), clamped uniform knots. Then:
+// vertices along each direction (degree min(3, count - 1)), knots averaged from those parameters
+// (averaged_knots: equally spaced knots made long borders swing off, 273 m on the ABC plate). Then:
 //   1. each of the four borders is fitted alone, as a curve through its own vertices (ends held
 //      at the corners), so two patches that share a whole border (same vertices) get the very
 //      same boundary curve: C0 by construction, not by tolerance;

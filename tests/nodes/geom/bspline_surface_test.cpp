@@ -18,6 +18,18 @@ TEST(BSplineSurface, ClampedUniformKnots) {
   EXPECT_THROW(clamped_uniform_knots(3, 3), std::invalid_argument);
 }
 
+TEST(BSplineSurface, AveragedKnotsAreTheMeansOfTheParameters) {
+  // 7 points at k / 6, degree 3: inner knots (1 + 2 + 3) / 18 = 1/3, (2 + 3 + 4) / 18 = 1/2, 2/3.
+  const auto k = averaged_knots(7, 3);
+  ASSERT_EQ(k.size(), 11u);
+  EXPECT_DOUBLE_EQ(k[4], 1.0 / 3);
+  EXPECT_DOUBLE_EQ(k[5], 0.5);
+  EXPECT_DOUBLE_EQ(k[6], 2.0 / 3);
+  EXPECT_EQ(k[3], 0.0);
+  EXPECT_EQ(k[7], 1.0);
+  EXPECT_EQ(averaged_knots(4, 3), clamped_uniform_knots(4, 3));
+}
+
 TEST(BSplineSurface, BasisIsAPartitionOfUnityAndItsDerivativesSumToZero) {
   const auto k = clamped_uniform_knots(9, 3);
   for (double t = 0; t <= 1.0; t += 0.0625) {
