@@ -6,6 +6,7 @@
 #include "nodes/param/register.h"
 #include "nodes/path/register.h"
 #include "nodes/post/register.h"
+#include "nodes/surface/register.h"
 #include "nodes/types/register.h"
 
 namespace scallop {
@@ -16,6 +17,7 @@ void register_builtins(Registry& r) {
   register_io(r);
   register_cloud(r);
   register_mesh(r);
+  register_surface(r);
   register_param(r);
   register_path(r);
   register_post(r);

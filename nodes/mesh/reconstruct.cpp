@@ -1,8 +1,5 @@
 #include "nodes/mesh/reconstruct.h"
 
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Advancing_front_surface_reconstruction.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
@@ -17,6 +14,7 @@
 
 #include "nodes/cloud/knn.h"
 #include "nodes/cloud/principal_extents.h"
+#include "nodes/mesh/mesh_distance.h"
 #include "nodes/mesh/mesh_topology.h"
 
 namespace scallop {
@@ -108,21 +106,8 @@ double mean_spacing(const std::vector<Eigen::Vector3d>& P) {
 
 // Distance from every point to the mesh's triangles: mean, 99th percentile, max.
 void point_distances(const std::vector<Eigen::Vector3d>& P, const Mesh& m, ReconstructResult& r) {
-  using Triangles = std::vector<Kernel::Triangle_3>;
-  using Primitive = CGAL::AABB_triangle_primitive<Kernel, Triangles::const_iterator>;
-  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
-  Triangles tris;
-  tris.reserve(m.num_faces());
-  for (std::size_t f = 0; f < m.num_faces(); ++f)
-    tris.emplace_back(to_cgal(m.vertices[m.face(f)[0]]), to_cgal(m.vertices[m.face(f)[1]]),
-                      to_cgal(m.vertices[m.face(f)[2]]));
-  if (tris.empty()) return;
-  Tree tree(tris.begin(), tris.end());
-  tree.accelerate_distance_queries();
-  std::vector<double> d(P.size());
-  tbb::parallel_for(std::size_t{0}, P.size(), [&](std::size_t i) {
-    d[i] = std::sqrt(tree.squared_distance(to_cgal(P[i])));
-  });
+  if (m.num_faces() == 0 || P.empty()) return;
+  std::vector<double> d = distances_to_mesh(P, m);
   double sum = 0;
   for (double x : d) sum += x;
   r.distance_mean = sum / static_cast<double>(d.size());

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <cstdio>
 #include <limits>
 #include <numeric>
@@ -105,6 +106,29 @@ std::vector<BaseCluster> rate_clusters(const FaceGeometry& g, const SetupBaseOpt
     b.quantity = b.area / largest;
     b.objective = o.mu * b.similarity + o.gamma * b.quantity;
   }
+  // Each cluster's flattest direction (see the header).
+  const double cos_flat = std::cos(o.flat_angle_deg * std::numbers::pi / 180);
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    std::vector<std::size_t> members;
+    for (std::size_t i = 0; i < normals.size(); ++i)
+      if (r.label[i] == static_cast<int>(c)) members.push_back(i);
+    clusters[c].flat_direction = clusters[c].direction;
+    if (members.empty()) continue;
+    const std::size_t stride = std::max<std::size_t>(1, members.size() / 256);
+    double best = -1;
+    for (std::size_t t = 0; t < members.size(); t += stride) {
+      const Eigen::Vector3d& n = normals[members[t]];
+      double around = 0;
+      for (auto i : members) around += normals[i].dot(n) >= cos_flat ? areas[i] : 0.0;
+      if (around > best) {
+        best = around;
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        for (auto i : members)
+          if (normals[i].dot(n) >= cos_flat) sum += areas[i] * normals[i];
+        clusters[c].flat_direction = sum.normalized();
+      }
+    }
+  }
   std::stable_sort(clusters.begin(), clusters.end(), [](const BaseCluster& a, const BaseCluster& b) {
     return a.objective != b.objective ? a.objective > b.objective : a.area > b.area;
   });
@@ -146,7 +170,7 @@ SetupBaseResult setup_base(const Mesh& mesh, const SetupBaseOptions& o) {
     for (std::size_t c = 0; c < r.clusters.size(); ++c) {
       BaseCluster& b = r.clusters[c];
       if (b.direction.squaredNorm() == 0) continue;  // normals that cancel out: no direction
-      FlatPart p = flat_part(mesh, g, b.direction, o.flat_angle_deg, tol);
+      FlatPart p = flat_part(mesh, g, b.flat_direction, o.flat_angle_deg, tol);
       b.flat_area = p.area;
       if (p.area > largest.area) largest = p;
       if (r.chosen < 0 && p.area >= o.min_area * total) r.chosen = static_cast<int>(c), base = std::move(p);

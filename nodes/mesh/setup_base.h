@@ -25,10 +25,15 @@
 // plane_tolerance of the largest v . d over all vertices), and of those the connected group
 // (faces joined by shared edges) of the largest area. A face elsewhere with the same normal (the
 // underside of an overhang, a second face at another height) is never removed: such faces are
-// counted in the result. The tolerance is generous (1 % of the diagonal) because the plane is
-// that of the most extreme vertex, and a quad mesh's vertices on sharp edges overshoot: the
-// fandisk x50 at 3000 quads from QuadriFlow has one rim vertex 0.52 mm (0.36 % of the diagonal)
-// below its base; the connectivity, not the tolerance, keeps a step at another height out.
+// counted in the result. A cluster's mean normal d may lean off its flat face by more than
+// flat_angle (the fandisk's back face shares its cluster with the fillets beside it: measured,
+// no flat part found), so the flat part is sought along the cluster's flattest direction: the
+// normal of its faces around which most of its area lies within flat_angle (tried from at most
+// 256 of its faces), averaged over those faces. The plane tolerance is generous (1 % of the
+// diagonal) because the plane is that of the most extreme vertex, and a quad mesh's vertices on
+// sharp edges overshoot: the fandisk x50 in 3000 quads from QuadriFlow has a rim vertex 0.52 mm
+// below its base and base faces with a corner 0.71 mm above that vertex (0.49 % of the
+// diagonal); the connectivity, not the tolerance, keeps a step at another height out.
 // Clusters are tried in order of their objective; the first whose flat
 // part holds at least min_area of the mesh's area is the base (a curved cluster such as a dome
 // has no flat part). When none has, the part has no base: setup_base throws, asking for the
@@ -65,7 +70,8 @@ struct BaseCluster {
   double similarity = 0;      // S
   double quantity = 0;        // Gamma
   double objective = 0;       // epsilon
-  double flat_area = 0;       // mm^2 of the flat part along d (see above)
+  Eigen::Vector3d flat_direction;  // the cluster's flattest direction (see below)
+  double flat_area = 0;       // mm^2 of the flat part along flat_direction (see above)
 };
 
 // mesh          the part without its base: the faces not removed, in their order; the vertices

@@ -45,7 +45,7 @@ NodeDecl make_setup_base_node() {
               "{base_direction (the base's outward unit normal: mesh.segment's base input reads it), base_area "
               "(mm2), base_faces, base_fraction (of the area), plane_offset (the extreme plane: v.d = it, mm), how, "
               "clusters: [{centre (the area-weighted mean of its unit normals), direction (the centre's), faces, area, "
-              "similarity S (the centre's length), quantity Gamma, objective, flat_area}] best "
+              "similarity S (the centre's length), quantity Gamma, objective, flat_direction, flat_area}] best "
               "objective first, chosen (index into clusters, -1: direction given), facing_kept: {faces, area} "
               "(facing the base but off its plane or not joined to it: not removed), vertices_removed, mu, gamma}");
   d.options<SetupBaseOptions>()
@@ -81,6 +81,7 @@ NodeDecl make_setup_base_node() {
       clusters.push_back({{"centre", xyz(c.similarity * c.direction)}, {"direction", xyz(c.direction)},
                           {"faces", c.faces}, {"area", c.area},
                           {"similarity", c.similarity}, {"quantity", c.quantity}, {"objective", c.objective},
+                          {"flat_direction", {c.flat_direction.x(), c.flat_direction.y(), c.flat_direction.z()}},
                           {"flat_area", c.flat_area}});
     Report report;
     report.data = {{"base_direction", xyz(r.direction)},

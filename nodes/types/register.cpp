@@ -7,6 +7,7 @@
 #include "nodes/types/param.h"
 #include "nodes/types/segments.h"
 #include "nodes/types/simulation.h"
+#include "nodes/types/surfaces.h"
 #include "nodes/types/svg.h"
 #include "nodes/types/toolpath.h"
 
@@ -20,6 +21,8 @@ void register_types(Registry& r) {
   v.add({"Mesh", "ply", "polygon mesh: vertices, faces, optional normals, face labels, feature edges (mm)", Mesh::deserialize});
   v.add({"Segments", "ply", "a quad mesh cut into sharp height fields: per patch its grid of vertices and machining direction",
          Segments::deserialize});
+  v.add({"Surfaces", "json", "one B-spline surface per sharp height field: poles, knots, machining direction, fit error",
+         Surfaces::deserialize});
   v.add({"Neighbors", "bin", "k nearest neighbours of every point", Neighborhoods::deserialize});
   v.add({"Loops", "bin", "boundary points ordered into loops, outer first", BoundaryLoops::deserialize});
   v.add({"Laplacian", "bin", "sparse meshless Laplacian", Laplacian::deserialize});

@@ -206,4 +206,17 @@ inline Mesh quad_sheet(int nx, int ny, double step, Height height) {
   return m;
 }
 
+// A closed cylinder of radius 10 and height 15 about the z axis: a quad box pressed onto it (the
+// square's rings onto circles), so its eight corners stay extraordinary points on the caps' rims.
+inline Mesh capped_cylinder(int n) {
+  Mesh m = test::quad_box({n, n, n}, {2, 2, 15});
+  for (auto& v : m.vertices) {
+    const Eigen::Vector2d xy(v.x() - 1, v.y() - 1);
+    const double r = xy.lpNorm<Eigen::Infinity>();
+    const Eigen::Vector2d d = r > 0 ? Eigen::Vector2d(xy * (r / xy.norm()) * 10) : Eigen::Vector2d::Zero();
+    v = Eigen::Vector3d(d.x(), d.y(), v.z());
+  }
+  return m;
+}
+
 }  // namespace scallop::test

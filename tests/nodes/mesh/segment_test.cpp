@@ -119,21 +119,8 @@ TEST(Segment, ABoxWithoutItsBaseGivesTheFiveOtherSides) {
   }
 }
 
-// A closed cylinder of radius 10 and height 15 about the z axis: a quad box pressed onto it (the
-// square's rings onto circles), so its eight corners stay extraordinary points on the caps' rims.
-Mesh capped_cylinder(int n) {
-  Mesh m = test::quad_box({n, n, n}, {2, 2, 15});
-  for (auto& v : m.vertices) {
-    const Eigen::Vector2d xy(v.x() - 1, v.y() - 1);
-    const double r = xy.lpNorm<Eigen::Infinity>();
-    const Eigen::Vector2d d = r > 0 ? Eigen::Vector2d(xy * (r / xy.norm()) * 10) : Eigen::Vector2d::Zero();
-    v = Eigen::Vector3d(d.x(), d.y(), v.z());
-  }
-  return m;
-}
-
 TEST(Segment, ACylinderWithCapsGivesTheCapsAndFourSideHeightFields) {
-  const Mesh m = capped_cylinder(8);
+  const Mesh m = test::capped_cylinder(8);
   const Segments s = segment(m);
   expect_valid(s);
   ASSERT_EQ(s.patches.size(), 6u);
@@ -156,7 +143,7 @@ TEST(Segment, ACylinderWithCapsGivesTheCapsAndFourSideHeightFields) {
 }
 
 TEST(Segment, NeighboursJoinWhileTheUnionStaysAHeightFieldAboveTheLimit) {
-  const Mesh m = capped_cylinder(8);
+  const Mesh m = test::capped_cylinder(8);
   SegmentOptions o;
   o.join_min_normal_dot = 0.06;  // a half side's end facets are about 86 degrees from its middle
   SegmentStats stats;

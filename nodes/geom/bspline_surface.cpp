@@ -1,0 +1,108 @@
+#include "nodes/geom/bspline_surface.h"
+
+#include <BSplCLib.hxx>
+#include <TColStd_Array1OfReal.hxx>
+#include <math_Matrix.hxx>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace scallop {
+
+std::vector<double> clamped_uniform_knots(int poles, int degree) {
+  if (degree < 1 || poles <= degree) throw std::invalid_argument("clamped_uniform_knots: need 1 <= degree < poles");
+  std::vector<double> k(std::size_t(poles + degree + 1), 0.0);
+  const int spans = poles - degree;
+  for (int i = 1; i < spans; ++i) k[std::size_t(degree + i)] = double(i) / spans;
+  std::fill(k.end() - degree - 1, k.end(), 1.0);
+  return k;
+}
+
+std::vector<double> averaged_knots(int poles, int degree) {
+  std::vector<double> k = clamped_uniform_knots(poles, degree);
+  // Inner knot j (1 .. poles - degree - 1): the mean of t_j .. t_{j+degree-1}.
+  for (int j = 1; j < poles - degree; ++j) k[std::size_t(degree + j)] = (j + (degree - 1) / 2.0) / (poles - 1);
+  return k;
+}
+
+BasisAt bspline_basis(const std::vector<double>& knots, int degree, double t, int derivatives) {
+  TColStd_Array1OfReal flat(1, static_cast<int>(knots.size()));
+  for (std::size_t i = 0; i < knots.size(); ++i) flat(static_cast<int>(i) + 1) = knots[i];
+  math_Matrix m(1, derivatives + 1, 1, degree + 1);
+  int first = 0;
+  // OpenCASCADE's index of the first non-zero function is 1-based.
+  if (BSplCLib::EvalBsplineBasis(derivatives, degree + 1, flat, std::clamp(t, 0.0, 1.0), first, m) != 0)
+    throw std::runtime_error("bspline_basis: OpenCASCADE could not evaluate the basis at " + std::to_string(t));
+  BasisAt b;
+  b.first = first - 1;
+  b.values.resize(derivatives + 1, degree + 1);
+  for (int d = 0; d <= derivatives; ++d)
+    for (int k = 0; k <= degree; ++k) b.values(d, k) = m(d + 1, k + 1);
+  return b;
+}
+
+SurfaceJet evaluate(const BSplineSurface& s, double u, double v) {
+  const int du = std::min(2, s.degree_u), dv = std::min(2, s.degree_v);
+  const BasisAt bu = bspline_basis(s.knots_u, s.degree_u, u, du);
+  const BasisAt bv = bspline_basis(s.knots_v, s.degree_v, v, dv);
+  auto at = [](const BasisAt& b, int d, int k) { return d < b.values.rows() ? b.values(d, k) : 0.0; };
+  SurfaceJet j;
+  j.point = j.du = j.dv = j.duu = j.duv = j.dvv = Eigen::Vector3d::Zero();
+  for (int b = 0; b <= s.degree_v; ++b)
+    for (int a = 0; a <= s.degree_u; ++a) {
+      const Eigen::Vector3d& p = s.pole(static_cast<std::uint32_t>(bu.first + a), static_cast<std::uint32_t>(bv.first + b));
+      j.point += at(bu, 0, a) * at(bv, 0, b) * p;
+      j.du += at(bu, 1, a) * at(bv, 0, b) * p;
+      j.dv += at(bu, 0, a) * at(bv, 1, b) * p;
+      j.duu += at(bu, 2, a) * at(bv, 0, b) * p;
+      j.duv += at(bu, 1, a) * at(bv, 1, b) * p;
+      j.dvv += at(bu, 0, a) * at(bv, 2, b) * p;
+    }
+  return j;
+}
+
+Eigen::Vector3d surface_point(const BSplineSurface& s, double u, double v) {
+  const BasisAt bu = bspline_basis(s.knots_u, s.degree_u, u, 0);
+  const BasisAt bv = bspline_basis(s.knots_v, s.degree_v, v, 0);
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  for (int b = 0; b <= s.degree_v; ++b)
+    for (int a = 0; a <= s.degree_u; ++a)
+      p += bu.values(0, a) * bv.values(0, b) *
+           s.pole(static_cast<std::uint32_t>(bu.first + a), static_cast<std::uint32_t>(bv.first + b));
+  return p;
+}
+
+namespace {
+std::string knot_problem(const std::vector<double>& k, int degree, std::uint32_t poles, const char* dir) {
+  const std::string d(dir);
+  if (degree < 1 || degree > 9) return "degree in " + d + " is " + std::to_string(degree) + " (1..9)";
+  if (poles <= static_cast<std::uint32_t>(degree))
+    return std::to_string(poles) + " poles in " + d + " for degree " + std::to_string(degree);
+  if (k.size() != poles + degree + 1)
+    return std::to_string(k.size()) + " knots in " + d + " for " + std::to_string(poles) + " poles of degree " +
+           std::to_string(degree);
+  for (std::size_t i = 0; i < k.size(); ++i)
+    if (!std::isfinite(k[i]) || (i > 0 && k[i] < k[i - 1])) return "knots in " + d + " not increasing at " + std::to_string(i);
+  for (int i = 0; i <= degree; ++i)
+    if (k[i] != 0.0 || k[k.size() - 1 - i] != 1.0) return "knots in " + d + " not clamped to [0, 1]";
+  // Inner multiplicity above the degree would break the surface.
+  for (std::size_t i = degree + 1; i + degree + 1 < k.size(); ++i)
+    if (k[i] == k[i + degree]) return "a knot in " + d + " repeats more than the degree";
+  return "";
+}
+}  // namespace
+
+std::string bspline_problem(const BSplineSurface& s) {
+  if (auto p = knot_problem(s.knots_u, s.degree_u, s.poles_u, "u"); !p.empty()) return p;
+  if (auto p = knot_problem(s.knots_v, s.degree_v, s.poles_v, "v"); !p.empty()) return p;
+  if (s.poles.size() != std::size_t(s.poles_u) * s.poles_v)
+    return std::to_string(s.poles.size()) + " poles for a " + std::to_string(s.poles_u) + " by " +
+           std::to_string(s.poles_v) + " net";
+  for (const auto& p : s.poles)
+    if (!p.allFinite()) return "a pole is not finite";
+  return "";
+}
+
+}  // namespace scallop

@@ -1,0 +1,58 @@
+// Non-rational tensor-product B-spline curves' bases and surfaces on the unit square: plain data,
+// and their evaluation with OpenCASCADE's basis functions (BSplCLib) behind this header.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace scallop {
+
+// A B-spline surface S(u, v) = sum_ij N_i(u) M_j(v) P_ij on [0, 1]^2.
+//   degree_u, degree_v  polynomial degrees (1..3 here: bicubic where the data allow)
+//   knots_u, knots_v    clamped flat knot vectors (the ends repeated degree + 1 times),
+//                       non-decreasing from 0 to 1, #poles + degree + 1 entries each
+//   poles_u, poles_v    how many poles along u and along v
+//   poles               poles_u * poles_v control points, P_ij at poles[j * poles_u + i]
+//                       (row j along v, column i along u: the same layout as a patch's grid)
+struct BSplineSurface {
+  int degree_u = 3, degree_v = 3;
+  std::vector<double> knots_u, knots_v;
+  std::uint32_t poles_u = 0, poles_v = 0;
+  std::vector<Eigen::Vector3d> poles;
+
+  const Eigen::Vector3d& pole(std::uint32_t i, std::uint32_t j) const { return poles[std::size_t(j) * poles_u + i]; }
+};
+
+// The clamped knot vector of `poles` poles of degree `degree` (1 <= degree < poles) with the inner
+// knots equally spaced on [0, 1].
+std::vector<double> clamped_uniform_knots(int poles, int degree);
+
+// The clamped knot vector of `poles` poles of degree `degree` (1 <= degree < poles) for
+// interpolating as many points at t_k = k / (poles - 1): each inner knot the mean of `degree`
+// consecutive t_k (de Boor's averaging, The NURBS Book eq. 9.8). With equally spaced inner knots
+// that do not follow the points the interpolation is ill-conditioned: measured, a 91-point border
+// of the ABC plate swung 273 m off its points.
+std::vector<double> averaged_knots(int poles, int degree);
+
+// The B-spline basis functions of `knots` (degree `degree`) that are non-zero at t in [0, 1],
+// with derivatives up to `derivatives` (<= degree): values(d, k) is the d-th derivative of basis
+// function first + k, k = 0..degree.
+struct BasisAt {
+  int first = 0;
+  Eigen::MatrixXd values;  // (derivatives + 1) by (degree + 1)
+};
+BasisAt bspline_basis(const std::vector<double>& knots, int degree, double t, int derivatives);
+
+// The surface and its partial derivatives at (u, v).
+struct SurfaceJet {
+  Eigen::Vector3d point, du, dv, duu, duv, dvv;
+};
+SurfaceJet evaluate(const BSplineSurface& s, double u, double v);
+Eigen::Vector3d surface_point(const BSplineSurface& s, double u, double v);
+
+// Empty when s is well formed (degrees, knot counts and order, pole count, finite poles),
+// otherwise what is wrong.
+std::string bspline_problem(const BSplineSurface& s);
+
+}  // namespace scallop

@@ -1,0 +1,107 @@
+#include "nodes/io/write_step.h"
+
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_Sewing.hxx>
+#include <BRep_Builder.hxx>
+#include <BRep_Tool.hxx>
+#include <GeomAdaptor_Surface.hxx>
+#include <Geom_BSplineSurface.hxx>
+#include <Interface_Static.hxx>
+#include <STEPControl_Reader.hxx>
+#include <STEPControl_Writer.hxx>
+#include <ShapeAnalysis_FreeBounds.hxx>
+#include <Standard_Failure.hxx>
+#include <TColStd_Array1OfInteger.hxx>
+#include <TColStd_Array1OfReal.hxx>
+#include <TColgp_Array2OfPnt.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Compound.hxx>
+
+#include <stdexcept>
+#include <vector>
+
+namespace scallop {
+
+namespace {
+
+// OpenCASCADE keeps distinct knots with multiplicities, not the flat vector.
+void distinct_knots(const std::vector<double>& flat, std::vector<double>& knots, std::vector<int>& mults) {
+  for (double k : flat) {
+    if (!knots.empty() && k == knots.back())
+      ++mults.back();
+    else
+      knots.push_back(k), mults.push_back(1);
+  }
+}
+
+Handle(Geom_BSplineSurface) to_occt(const BSplineSurface& s) {
+  std::vector<double> ku, kv;
+  std::vector<int> mu, mv;
+  distinct_knots(s.knots_u, ku, mu);
+  distinct_knots(s.knots_v, kv, mv);
+  TColgp_Array2OfPnt poles(1, int(s.poles_u), 1, int(s.poles_v));
+  for (std::uint32_t j = 0; j < s.poles_v; ++j)
+    for (std::uint32_t i = 0; i < s.poles_u; ++i) {
+      const Eigen::Vector3d& p = s.pole(i, j);
+      poles(int(i) + 1, int(j) + 1) = gp_Pnt(p.x(), p.y(), p.z());
+    }
+  TColStd_Array1OfReal uk(1, int(ku.size())), vk(1, int(kv.size()));
+  TColStd_Array1OfInteger um(1, int(mu.size())), vm(1, int(mv.size()));
+  for (std::size_t k = 0; k < ku.size(); ++k) uk(int(k) + 1) = ku[k], um(int(k) + 1) = mu[k];
+  for (std::size_t k = 0; k < kv.size(); ++k) vk(int(k) + 1) = kv[k], vm(int(k) + 1) = mv[k];
+  return new Geom_BSplineSurface(poles, uk, vk, um, vm, s.degree_u, s.degree_v);
+}
+
+}  // namespace
+
+void write_step(const Surfaces& surfaces, const std::string& path, const WriteStepOptions& options) {
+  BRep_Builder builder;
+  TopoDS_Compound faces;
+  builder.MakeCompound(faces);
+  BRepBuilderAPI_Sewing sewing(options.sewing_tolerance);
+  for (std::size_t p = 0; p < surfaces.patches.size(); ++p) {
+    const std::string problem = bspline_problem(surfaces.patches[p].surface);
+    if (!problem.empty()) throw std::runtime_error("patch " + std::to_string(p) + ": " + problem);
+    try {
+      BRepBuilderAPI_MakeFace face(to_occt(surfaces.patches[p].surface), 1e-7);
+      if (!face.IsDone()) throw std::runtime_error("OpenCASCADE made no face of it");
+      builder.Add(faces, face.Face());
+      sewing.Add(face.Face());
+    } catch (const Standard_Failure& e) {
+      throw std::runtime_error("patch " + std::to_string(p) + ": OpenCASCADE refused its surface: " +
+                               e.GetMessageString());
+    }
+  }
+  TopoDS_Shape shape = faces;
+  if (options.sew && surfaces.patches.size() > 1) {
+    sewing.Perform();
+    shape = sewing.SewedShape();
+  }
+  STEPControl_Writer writer;
+  Interface_Static::SetCVal("write.step.unit", "MM");
+  Interface_Static::SetCVal("write.step.schema", "AP214IS");
+  if (writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone)
+    throw std::runtime_error("OpenCASCADE could not translate the surfaces to STEP");
+  if (writer.Write(path.c_str()) != IFSelect_RetDone) throw std::runtime_error("cannot write '" + path + "'");
+}
+
+StepSummary read_step_summary(const std::string& path) {
+  STEPControl_Reader reader;
+  if (reader.ReadFile(path.c_str()) != IFSelect_RetDone) throw std::runtime_error("cannot read STEP file '" + path + "'");
+  reader.TransferRoots();
+  const TopoDS_Shape shape = reader.OneShape();
+  StepSummary s;
+  for (TopExp_Explorer e(shape, TopAbs_SHELL); e.More(); e.Next()) ++s.shells;
+  for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
+    ++s.faces;
+    const GeomAdaptor_Surface a(BRep_Tool::Surface(TopoDS::Face(e.Current())));
+    s.bspline_faces += a.GetType() == GeomAbs_BSplineSurface;
+  }
+  ShapeAnalysis_FreeBounds bounds(shape);
+  for (TopExp_Explorer e(bounds.GetClosedWires(), TopAbs_EDGE); e.More(); e.Next()) ++s.free_edges;
+  for (TopExp_Explorer e(bounds.GetOpenWires(), TopAbs_EDGE); e.More(); e.Next()) ++s.free_edges;
+  return s;
+}
+
+}  // namespace scallop
