@@ -12,6 +12,7 @@
 #include "nodes/geom/union_find.h"
 #include "nodes/mesh/external_process.h"
 #include "nodes/mesh/face_geometry.h"
+#include "nodes/mesh/fill_triangle_holes.h"
 #include "nodes/mesh/keep_faces.h"
 #include "nodes/mesh/mesh_topology.h"
 #include "nodes/mesh/sharp_edges.h"
@@ -294,6 +295,21 @@ Mesh run_quadriflow(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshRepo
 }
 
 
+// The three-edge holes QuadriFlow tore (its triangles left out: more boundary loops than the
+// input's), closed by fill_triangle_holes.
+void fill_torn_triangles(const Mesh& input, Mesh& quads, QuadRemeshReport& report) {
+  const std::size_t loops_in = boundary_loops(input, mesh_edges(input)).size();
+  std::vector<std::vector<std::uint32_t>> loops = boundary_loops(quads, mesh_edges(quads));
+  if (loops.size() <= loops_in) return;
+  std::erase_if(loops, [](const auto& loop) { return loop.size() != 3; });
+  const TriangleHoleFill fill = fill_triangle_holes(quads, loops);
+  report.holes_filled = fill.holes;
+  report.quads_split = fill.quads_split;
+  if (fill.left > 0)
+    report.warning += std::string(report.warning.empty() ? "" : "; ") + std::to_string(fill.left) +
+                      " triangles left where QuadriFlow tore holes: no other to pair with";
+}
+
 }  // namespace
 
 fs::path find_blender(const std::string& blender_option) {
@@ -474,8 +490,13 @@ Mesh quad_remesh(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshReport&
   Mesh quads = clean_quadriflow_output(run_quadriflow(mesh, o, report, say), report);
   if (quads.num_faces() == 0) throw std::runtime_error("QuadriFlow gave no face; try another seed or target_faces");
   report.components_reversed = match_orientation(quads, mesh);
-  if (const std::string problem = orientable_manifold_problem(quads); !problem.empty())
-    throw std::runtime_error("QuadriFlow's quads are not usable: " + problem + "; try another seed or target_faces");
+  auto check = [&] {
+    if (const std::string problem = orientable_manifold_problem(quads); !problem.empty())
+      throw std::runtime_error("QuadriFlow's quads are not usable: " + problem + "; try another seed or target_faces");
+  };
+  check();
+  fill_torn_triangles(mesh, quads, report);
+  check();
   if (const std::string holes = holes_torn(mesh, quads); !holes.empty()) throw std::runtime_error(holes);
   quads.feature_edges = sharp_edges(quads, mesh_edges(quads), o.angle_deg).edges;
 

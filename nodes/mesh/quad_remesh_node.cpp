@@ -28,7 +28,8 @@ NodeDecl make_quad_remesh_node() {
               "the input's feature edges, at most a quarter of the mean edge long, whose midpoint lies within "
               "feature_tolerance mean edges of an output sharp edge), feature_tolerance_mm, "
               "feature_length_below_60 (QuadriFlow keeps only edges sharper than 60 degrees), "
-              "doublets_zipped (QuadriFlow's triangles, written as quads of no area, joined away), "
+              "doublets_zipped (QuadriFlow's triangles, written as quads of no area, joined away), holes_filled "
+              "(three-edge holes where it left a triangle out, closed keeping all quads), quads_split (by that), "
               "repeated_corners_removed, faces_dropped, components_reversed, seconds, quadriflow_seconds, "
               "blender_version, blender, seed, topology}");
   d.options<QuadRemeshOptions>()
@@ -73,6 +74,8 @@ NodeDecl make_quad_remesh_node() {
                    {"feature_tolerance_mm", r.feature_tolerance_mm},
                    {"feature_length_below_60", r.feature_length_below_60},
                    {"doublets_zipped", r.doublets_zipped},
+                   {"holes_filled", r.holes_filled},
+                   {"quads_split", r.quads_split},
                    {"repeated_corners_removed", r.repeated_corners_removed},
                    {"faces_dropped", r.faces_dropped},
                    {"components_reversed", r.components_reversed},

@@ -119,7 +119,7 @@ TEST(QuadRemesh, TheSameSeedGivesTheSameQuadsAndAnEdgeLengthSetsTheCount) {
   EXPECT_EQ(qa.feature_edges, qb.feature_edges);
 }
 
-TEST(QuadRemesh, QuadriFlowsDoubletsAreZippedAwayAndItsHolesRefused) {
+TEST(QuadRemesh, QuadriFlowsDoubletsAreZippedAwayAndOtherHolesRefused) {
   // The unit cube in 2 x 2 quads a side, slit along the top's middle line b - a - c (y = 0.5):
   // the two top faces at y > 0.5 take a copy a' of the centre a, and the slit is filled with the
   // quad (a, c, a', b) of no area, as QuadriFlow writes a triangle of its quads.
@@ -146,7 +146,7 @@ TEST(QuadRemesh, QuadriFlowsDoubletsAreZippedAwayAndItsHolesRefused) {
   EXPECT_EQ(zipped.vertices, cube.vertices);
   EXPECT_EQ(zipped.face_vertices, cube.face_vertices);
   EXPECT_EQ(zipped.face_start, cube.face_start);
-  // Had QuadriFlow left the slit's triangle out instead, the hole would be refused.
+  // Had QuadriFlow left the slit open instead, a hole of 4 edges, it would be refused.
   Mesh torn = slit;
   torn.face_start.pop_back();
   torn.face_vertices.resize(torn.face_start.back());
