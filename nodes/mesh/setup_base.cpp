@@ -135,6 +135,13 @@ std::vector<BaseCluster> rate_clusters(const FaceGeometry& g, const SetupBaseOpt
   return clusters;
 }
 
+std::size_t open_edges(const Mesh& mesh) {
+  const MeshEdges e = mesh_edges(mesh);
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < e.size(); ++i) n += e.is_boundary(i);
+  return n;
+}
+
 void check(const Mesh& mesh, const SetupBaseOptions& o) {
   if (mesh.num_faces() == 0) throw std::invalid_argument("the mesh has no faces");
   if (o.clusters < 1) throw std::invalid_argument("clusters must be at least 1");
@@ -174,6 +181,14 @@ SetupBaseResult setup_base(const Mesh& mesh, const SetupBaseOptions& o) {
       b.flat_area = p.area;
       if (p.area > largest.area) largest = p;
       if (r.chosen < 0 && p.area >= o.min_area * total) r.chosen = static_cast<int>(c), base = std::move(p);
+    }
+    if (r.chosen < 0 && open_edges(mesh) > 0) {
+      // A scan of one side: it rests on what it does not show, so there is no base to remove.
+      r.direction = Eigen::Vector3d::Zero();
+      r.how = "an open mesh (" + std::to_string(open_edges(mesh)) +
+              " boundary edges) without a flat base: taken whole, nothing removed";
+      r.mesh = mesh;
+      return r;
     }
     if (r.chosen < 0) {
       Eigen::Vector3d facing = Eigen::Vector3d::Zero();

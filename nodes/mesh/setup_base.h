@@ -36,8 +36,9 @@
 // diagonal); the connectivity, not the tolerance, keeps a step at another height out.
 // Clusters are tried in order of their objective; the first whose flat
 // part holds at least min_area of the mesh's area is the base (a curved cluster such as a dome
-// has no flat part). When none has, the part has no base: setup_base throws, asking for the
-// direction. With options.direction given, that direction is the base's and its flat part is
+// has no flat part). When none has, the part has no base: an open mesh (a scan of one side,
+// resting on what it does not show) is taken whole, direction zero and nothing removed; a closed
+// one makes setup_base throw, asking for the direction. With options.direction given, that direction is the base's and its flat part is
 // removed, whatever its size (none: nothing is removed, base_faces is empty).
 #pragma once
 
@@ -77,7 +78,8 @@ struct BaseCluster {
 // mesh          the part without its base: the faces not removed, in their order; the vertices
 //               still used, renumbered in their order (normals carried); face_label and
 //               feature_edges carried (feature edges that are no longer an edge of a face dropped)
-// direction     the base's outward unit normal: the given one, or the area-weighted mean normal
+// direction     the base's outward unit normal (zero: an open mesh without a base, taken whole):
+//               the given one, or the area-weighted mean normal
 //               of the removed faces
 // base_faces    indices (into the input) of the removed faces, increasing
 // base_area     their area, mm^2; area: the whole mesh's

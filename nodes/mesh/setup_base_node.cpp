@@ -73,7 +73,9 @@ NodeDecl make_setup_base_node() {
     } catch (const std::exception& e) {
       throw NodeError(std::string("mesh.setup_base: ") + e.what());
     }
-    if (r.base_faces.empty())
+    if (r.direction.squaredNorm() == 0)
+      ctx.warn(r.how);
+    else if (r.base_faces.empty())
       ctx.warn("no face faces the given direction " + ctx.text("direction") +
                " on the part's extreme plane: nothing removed");
     nlohmann::json clusters = nlohmann::json::array();

@@ -9,6 +9,8 @@
 
 #include "engine/node.h"
 #include "nodes/geom/kmeans.h"
+#include "nodes/mesh/face_geometry.h"
+#include "nodes/mesh/keep_faces.h"
 #include "nodes/mesh/mesh_topology.h"
 #include "nodes/types/document.h"
 #include "tests/nodes/mesh/mesh_test_util.h"
@@ -175,6 +177,25 @@ TEST(SetupBase, ASphereHasNoBaseAndSaysToGiveTheDirection) {
             "mesh.setup_base: no flat face large enough for a setup base: the largest flat part on the part's "
             "extreme plane, facing (-0.853, 0.468, 0.23), holds 0.324 % of the area, less than min_area 2 %; give "
             "the base's outward normal with the parameter direction");
+}
+
+// An open dome (a scan of one side) rests on what it does not show: taken whole, no base.
+TEST(SetupBase, AnOpenDomeWithoutAFlatBaseIsTakenWhole) {
+  const Mesh sphere = test::icosphere(3, 10);
+  const FaceGeometry g = face_geometry(sphere);
+  std::vector<bool> upper(sphere.num_faces());
+  for (std::size_t f = 0; f < sphere.num_faces(); ++f) upper[f] = g.centroid[f].z() > 0;
+  const Mesh dome = keep_faces(sphere, upper);
+  const SetupBaseResult r = setup_base(dome, SetupBaseOptions{});
+  EXPECT_EQ(r.direction, V::Zero());
+  EXPECT_TRUE(r.base_faces.empty());
+  EXPECT_EQ(r.mesh.num_faces(), dome.num_faces());
+  const MeshEdges e = mesh_edges(dome);
+  std::size_t open = 0;
+  for (std::size_t i = 0; i < e.size(); ++i) open += e.is_boundary(i);
+  EXPECT_GT(open, 0u);
+  EXPECT_EQ(r.how, "an open mesh (" + std::to_string(open) +
+                       " boundary edges) without a flat base: taken whole, nothing removed");
 }
 
 // An L extruded along y (0 .. 2): its profile in x, z runs (0,0) (1,0) (1,1) (3,1) (3,2) (0,2): a
