@@ -10,4 +10,6 @@ cmake --build build-asan -j "$(nproc)"
 # detect_stack_use_after_return is left off: it made the tests 1.7 times slower.
 export ASAN_OPTIONS=detect_leaks=1:halt_on_error=1:strict_string_checks=1
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+# OpenCASCADE's own one-time allocations are not leaks of ours (scripts/lsan-suppressions.txt).
+export LSAN_OPTIONS=suppressions=$PWD/scripts/lsan-suppressions.txt
 cd build-asan && ctest --output-on-failure -j "$(nproc)" --timeout 900
