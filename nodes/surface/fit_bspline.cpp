@@ -11,6 +11,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "nodes/mesh/mesh_distance.h"
 
@@ -87,6 +88,16 @@ void add_kron(std::vector<Eigen::Triplet<double>>& t, const Eigen::MatrixXd& out
     }
 }
 
+// The four borders of a rows by cols grid, as fit_grid_bspline takes them: row 0, column cols-1,
+// row rows-1 (along j), column 0 (along i); at(i, j) gives the grid's element.
+template <class At>
+auto grid_borders(std::uint32_t rows, std::uint32_t cols, At at) {
+  std::array<std::vector<std::decay_t<decltype(at(0u, 0u))>>, 4> side;
+  for (std::uint32_t j = 0; j < cols; ++j) side[0].push_back(at(0, j)), side[2].push_back(at(rows - 1, j));
+  for (std::uint32_t i = 0; i < rows; ++i) side[1].push_back(at(i, cols - 1)), side[3].push_back(at(i, 0));
+  return side;
+}
+
 }  // namespace
 
 std::vector<Eigen::Vector3d> fit_border_curve(const std::vector<Eigen::Vector3d>& points, const FitBSplineOptions& o,
@@ -138,12 +149,8 @@ GridFit fit_grid_bspline(const std::vector<Eigen::Vector3d>& points, std::uint32
   const int nu = int(cols), nv = int(rows);
   auto at = [&](int i, int j) -> const Eigen::Vector3d& { return points[std::size_t(i) * cols + j]; };
   std::vector<std::vector<Eigen::Vector3d>> borders = given_borders;
-  if (borders.empty()) {
-    std::array<std::vector<Eigen::Vector3d>, 4> side;
-    for (int j = 0; j < nu; ++j) side[0].push_back(at(0, j)), side[2].push_back(at(nv - 1, j));
-    for (int i = 0; i < nv; ++i) side[1].push_back(at(i, nu - 1)), side[3].push_back(at(i, 0));
-    for (auto& s : side) borders.push_back(fit_border_curve(s, o));
-  }
+  if (borders.empty())
+    for (const auto& side : grid_borders(rows, cols, at)) borders.push_back(fit_border_curve(side, o));
   if (borders.size() != 4 || int(borders[0].size()) != nu || int(borders[2].size()) != nu ||
       int(borders[1].size()) != nv || int(borders[3].size()) != nv)
     throw std::invalid_argument("fit_grid_bspline: border curves do not match the grid");
@@ -277,9 +284,7 @@ Surfaces fit_surfaces(const Segments& seg, const FitBSplineOptions& o, FitStats*
     for (auto v : sp.grid)
       if (!mesh.vertices[v].allFinite())
         throw std::invalid_argument("patch " + std::to_string(p) + ": vertex " + std::to_string(v) + " is not finite");
-    std::array<Chain, 4> side;
-    for (std::uint32_t j = 0; j < sp.cols; ++j) side[0].push_back(sp.at(0, j)), side[2].push_back(sp.at(sp.rows - 1, j));
-    for (std::uint32_t i = 0; i < sp.rows; ++i) side[1].push_back(sp.at(i, sp.cols - 1)), side[3].push_back(sp.at(i, 0));
+    const auto side = grid_borders(sp.rows, sp.cols, [&](std::uint32_t i, std::uint32_t j) { return sp.at(i, j); });
     for (int k = 0; k < 4; ++k) {
       Chain c = side[k];
       Chain r(c.rbegin(), c.rend());
