@@ -7,6 +7,9 @@
 #include <GeomAdaptor_Surface.hxx>
 #include <Geom_BSplineSurface.hxx>
 #include <Interface_Static.hxx>
+#include <Message.hxx>
+#include <Message_Messenger.hxx>
+#include <Message_Printer.hxx>
 #include <STEPControl_Reader.hxx>
 #include <STEPControl_Writer.hxx>
 #include <ShapeAnalysis_FreeBounds.hxx>
@@ -18,12 +21,23 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
 
+#include <mutex>
 #include <stdexcept>
 #include <vector>
 
 namespace scallop {
 
 namespace {
+
+// OpenCASCADE's STEP translator prints its transfer statistics to stdout, between scallop's own
+// progress lines; only its failures are kept (they are reported through our errors anyway).
+void quiet_opencascade() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    const Message_SequenceOfPrinters& printers = Message::DefaultMessenger()->Printers();
+    for (Message_SequenceOfPrinters::Iterator p(printers); p.More(); p.Next()) p.Value()->SetTraceLevel(Message_Fail);
+  });
+}
 
 // OpenCASCADE keeps distinct knots with multiplicities, not the flat vector.
 void distinct_knots(const std::vector<double>& flat, std::vector<double>& knots, std::vector<int>& mults) {
@@ -78,6 +92,7 @@ void write_step(const Surfaces& surfaces, const std::string& path, const WriteSt
     sewing.Perform();
     shape = sewing.SewedShape();
   }
+  quiet_opencascade();
   STEPControl_Writer writer;
   Interface_Static::SetCVal("write.step.unit", "MM");
   Interface_Static::SetCVal("write.step.schema", "AP214IS");
@@ -87,6 +102,7 @@ void write_step(const Surfaces& surfaces, const std::string& path, const WriteSt
 }
 
 StepSummary read_step_summary(const std::string& path) {
+  quiet_opencascade();
   STEPControl_Reader reader;
   if (reader.ReadFile(path.c_str()) != IFSelect_RetDone) throw std::runtime_error("cannot read STEP file '" + path + "'");
   reader.TransferRoots();
