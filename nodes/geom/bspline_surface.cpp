@@ -4,10 +4,13 @@
 #include <TColStd_Array1OfReal.hxx>
 #include <math_Matrix.hxx>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace scallop {
 
@@ -104,5 +107,35 @@ std::string bspline_problem(const BSplineSurface& s) {
     if (!p.allFinite()) return "a pole is not finite";
   return "";
 }
+
+BSplinePatch::BSplinePatch(BSplineSurface surface, const Eigen::Vector3d& up, double uncertainty)
+    : surface_(std::move(surface)), up_(up.normalized()), uncertainty_(uncertainty) {
+  if (const std::string problem = bspline_problem(surface_); !problem.empty())
+    throw std::invalid_argument("BSplinePatch: " + problem);
+  if (!up_.allFinite()) throw std::invalid_argument("BSplinePatch: the up direction is zero or not finite");
+  domain_.kind = UVDomain::Kind::Rectangle;
+  domain_.width = domain_.height = 1;
+  double span = 1;
+  for (const auto* knots : {&surface_.knots_u, &surface_.knots_v})
+    for (std::size_t k = 0; k + 1 < knots->size(); ++k)
+      if ((*knots)[k + 1] > (*knots)[k]) span = std::min(span, (*knots)[k + 1] - (*knots)[k]);
+  spacing_ = span / 4;
+}
+
+SurfaceDerivatives BSplinePatch::derivatives(const Eigen::Vector2d& uv) const {
+  const Eigen::Vector2d c = domain_.clamp(uv);
+  const SurfaceJet j = evaluate(surface_, c.x(), c.y());
+  SurfaceDerivatives d;
+  d.sample.position = j.point;
+  const Eigen::Vector3d n = j.du.cross(j.dv);
+  const double scale = j.du.norm() * j.dv.norm();
+  d.sample.normal = n.norm() > 1e-12 * scale && scale > 0 ? Eigen::Vector3d(n.normalized()) : up_;
+  if (d.sample.normal.dot(up_) < 0) d.sample.normal = -d.sample.normal;
+  d.sample.uncertainty = uncertainty_;
+  d.ru = j.du, d.rv = j.dv, d.ruu = j.duu, d.ruv = j.duv, d.rvv = j.dvv;
+  return d;
+}
+
+SurfaceSample BSplinePatch::operator()(const Eigen::Vector2d& uv) const { return derivatives(uv).sample; }
 
 }  // namespace scallop

@@ -4,7 +4,10 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <string>
 #include <vector>
+
+#include "nodes/geom/parametric_surface.h"
 
 namespace scallop {
 
@@ -50,6 +53,29 @@ struct SurfaceJet {
 };
 SurfaceJet evaluate(const BSplineSurface& s, double u, double v);
 Eigen::Vector3d surface_point(const BSplineSurface& s, double u, double v);
+
+// A B-spline surface as the planners see it (ParametricSurface): the unit square, exact
+// derivatives, the normal ru x rv turned to the side of `up` (the patch's machining direction:
+// away from the material), and a constant uncertainty (mm; how far the part may lie from the
+// surface, 0 when it is taken as exact). Where ru x rv vanishes (a border collapsed to a point)
+// the normal is up. Holds its own copy of the surface.
+class BSplinePatch final : public ParametricSurface {
+ public:
+  BSplinePatch(BSplineSurface surface, const Eigen::Vector3d& up, double uncertainty = 0);
+  SurfaceSample operator()(const Eigen::Vector2d& uv) const override;
+  SurfaceDerivatives derivatives(const Eigen::Vector2d& uv) const override;
+  const UVDomain& domain() const override { return domain_; }
+  // A quarter of the smaller knot span, in parameter units.
+  double uv_spacing() const override { return spacing_; }
+  const BSplineSurface& surface() const { return surface_; }
+
+ private:
+  BSplineSurface surface_;
+  Eigen::Vector3d up_;
+  double uncertainty_;
+  UVDomain domain_;
+  double spacing_;
+};
 
 // Empty when s is well formed (degrees, knot counts and order, pole count, finite poles),
 // otherwise what is wrong.

@@ -192,7 +192,7 @@ bool too_uncertain(const IsoparametricOptions& o, const Margins& m) {
 class Planner {
  public:
   // model  the cloud's height field (post.simulate's model), or null
-  Planner(const UVInterpolator& f, const BallLifter& lifter, const HeightFieldModel* model, Coords co,
+  Planner(const ParametricSurface& f, const BallLifter& lifter, const HeightFieldModel* model, Coords co,
           const IsoparametricOptions& o, const Holes& holes)
       : f_(f), lifter_(lifter), model_(model), holes_(holes), co_(co), o_(o), r_(o.tool_radius),
         h_(o.scallop_height * o.safety_factor),
@@ -234,34 +234,33 @@ class Planner {
     return x.position + (r_ + margin(x).stock) * x.normal;
   }
 
-  // r and its first and second derivatives in (s, t) by central differences through the
-  // interpolant (paper section 3.1). The stencil centre is moved inside the domain by one step
-  // where the point lies on an edge, so no stencil point is clamped.
+  // r and its first and second derivatives in (s, t). On a rectangle (s, t) = (u, v): the
+  // surface's own (central differences through the interpolant, paper section 3.1, for a
+  // cloud). On a disk, central differences in (s, t) = (R - rho, theta), the stencil centre
+  // moved off the centre by one step (the polar map is smooth there).
   Derivs derivs(double s, double t) const {
-    const double hs = hfd_;
-    double ht = hfd_;
-    double sc = s, tc = t;
-    if (co_.polar) {
-      ht = std::min(0.25, hfd_ / std::max(co_.R - s, 1e-12));
-      sc = std::max(s, hs);  // rho = R - s may cross the centre: the polar map is smooth there
-    } else {
-      sc = std::clamp(s, hs, co_.S - hs);
-      tc = std::clamp(t, ht, co_.T - ht);
-    }
-    auto P = [&](double ds, double dt) { return at(sc + ds, tc + dt).position; };
-    const Eigen::Vector3d p0 = P(0, 0), ps = P(hs, 0), ms = P(-hs, 0), pt = P(0, ht),
-                          mt = P(0, -ht);
     Derivs d;
-    const SurfaceSample x = at(s, t);
+    SurfaceSample x;
+    if (!co_.polar) {
+      const SurfaceDerivatives r = f_.derivatives(co_.uv(s, t));
+      x = r.sample;
+      d.rs = r.ru, d.rt = r.rv, d.rss = r.ruu, d.rst = r.ruv, d.rtt = r.rvv;
+    } else {
+      const double hs = hfd_, ht = std::min(0.25, hfd_ / std::max(co_.R - s, 1e-12));
+      const double sc = std::max(s, hs), tc = t;
+      auto P = [&](double ds, double dt) { return at(sc + ds, tc + dt).position; };
+      const Eigen::Vector3d p0 = P(0, 0), ps = P(hs, 0), ms = P(-hs, 0), pt = P(0, ht), mt = P(0, -ht);
+      x = at(s, t);
+      d.rs = (ps - ms) / (2 * hs);
+      d.rt = (pt - mt) / (2 * ht);
+      d.rss = (ps + ms - 2 * p0) / (hs * hs);
+      d.rtt = (pt + mt - 2 * p0) / (ht * ht);
+      d.rst = (P(hs, ht) - P(hs, -ht) - P(-hs, ht) + P(-hs, -ht)) / (4 * hs * ht);
+    }
     d.p = x.position;
     d.n = x.normal;
     d.uncertainty = x.uncertainty;
     d.fit_gap = fit_gap(x);
-    d.rs = (ps - ms) / (2 * hs);
-    d.rt = (pt - mt) / (2 * ht);
-    d.rss = (ps + ms - 2 * p0) / (hs * hs);
-    d.rtt = (pt + mt - 2 * p0) / (ht * ht);
-    d.rst = (P(hs, ht) - P(hs, -ht) - P(-hs, ht) + P(-hs, -ht)) / (4 * hs * ht);
     return d;
   }
 
@@ -690,7 +689,7 @@ class Planner {
   double nominal_interval() const { return ls0_; }
 
  private:
-  const UVInterpolator& f_;
+  const ParametricSurface& f_;
   const BallLifter& lifter_;
   const HeightFieldModel* model_;
   const Holes& holes_;

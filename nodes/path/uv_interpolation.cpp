@@ -22,13 +22,6 @@ constexpr int kMaxK = 64;
 
 }  // namespace
 
-Eigen::Vector2d UVDomain::clamp(const Eigen::Vector2d& uv) const {
-  if (kind == Kind::Rectangle)
-    return {std::clamp(uv.x(), 0.0, width), std::clamp(uv.y(), 0.0, height)};
-  const double n = uv.norm();
-  return n > radius ? Eigen::Vector2d(uv * (radius / n)) : uv;
-}
-
 struct UVInterpolator::Impl {
   const std::vector<Eigen::Vector3d>& P;
   const std::vector<Eigen::Vector3d>& N;

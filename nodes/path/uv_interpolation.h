@@ -18,27 +18,11 @@
 #include <string>
 #include <vector>
 
+#include "nodes/geom/parametric_surface.h"
+
 namespace scallop {
 
-// The parameter domain of a UV map: [0, width] x [0, height], or the disk of `radius` centred
-// at the origin.
-struct UVDomain {
-  enum class Kind { Rectangle, Disk };
-  Kind kind = Kind::Rectangle;
-  double width = 0, height = 0;  // Rectangle
-  double radius = 0;             // Disk
-
-  // The nearest point of the domain (the point itself when inside).
-  Eigen::Vector2d clamp(const Eigen::Vector2d& uv) const;
-};
-
-struct SurfaceSample {
-  Eigen::Vector3d position;  // mm
-  Eigen::Vector3d normal;    // unit
-  double uncertainty = 0;    // mm: a soft maximum of the fitted points' uncertainty (0: none)
-};
-
-class UVInterpolator {
+class UVInterpolator final : public ParametricSurface {
  public:
   // P   #P by 3 positions (mm)
   // N   #P by 3 unit normals (oriented consistently, e.g. up)
@@ -61,12 +45,12 @@ class UVInterpolator {
 
   // Position and unit normal at uv; a uv outside the domain is first clamped onto it.
   // Const and thread-safe.
-  SurfaceSample operator()(const Eigen::Vector2d& uv) const;
+  SurfaceSample operator()(const Eigen::Vector2d& uv) const override;
 
-  const UVDomain& domain() const { return domain_; }
+  const UVDomain& domain() const override { return domain_; }
   // Median distance, in uv, from a point to its nearest other point: the sampling scale of the
   // map (finite-difference steps are taken from it).
-  double uv_spacing() const { return uv_spacing_; }
+  double uv_spacing() const override { return uv_spacing_; }
 
  private:
   struct Impl;

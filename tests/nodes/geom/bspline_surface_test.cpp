@@ -3,7 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+
+#include "nodes/path/step_size.h"
 
 namespace scallop {
 namespace {
@@ -79,6 +82,72 @@ TEST(BSplineSurface, ProblemsAreNamed) {
   EXPECT_EQ(bspline_problem(s), "knots in v not clamped to [0, 1]");
   s.knots_u = {0, 0, 0, 0, 1, 1, 0.5, 1};
   EXPECT_EQ(bspline_problem(s), "knots in u not increasing at 6");
+}
+
+
+// r(u, v) = (10 u, 20 v, 5 u^2) exactly: degree 2 in u (Bezier poles of u^2: 0, 0, 1), 1 in v.
+BSplineSurface parabolic_cylinder() {
+  BSplineSurface s;
+  s.degree_u = 2, s.degree_v = 1;
+  s.knots_u = {0, 0, 0, 1, 1, 1};
+  s.knots_v = {0, 0, 1, 1};
+  s.poles_u = 3, s.poles_v = 2;
+  for (double y : {0.0, 20.0})
+    for (int i = 0; i < 3; ++i) s.poles.push_back({5.0 * i, y, i == 2 ? 5.0 : 0.0});
+  return s;
+}
+
+TEST(BSplinePatch, DerivativesNormalAndCurvatureOfAParabolicCylinder) {
+  const BSplinePatch up(parabolic_cylinder(), {0, 0, 1});
+  for (double u : {0.0, 0.3, 1.0})
+    for (double v : {0.0, 0.5}) {
+      const SurfaceDerivatives d = up.derivatives({u, v});
+      EXPECT_LT((d.sample.position - Eigen::Vector3d(10 * u, 20 * v, 5 * u * u)).norm(), 1e-12);
+      EXPECT_LT((d.ru - Eigen::Vector3d(10, 0, 10 * u)).norm(), 1e-12);
+      EXPECT_LT((d.rv - Eigen::Vector3d(0, 20, 0)).norm(), 1e-12);
+      EXPECT_LT((d.ruu - Eigen::Vector3d(0, 0, 10)).norm(), 1e-12);
+      EXPECT_LT(d.ruv.norm() + d.rvv.norm(), 1e-12);
+      // n = (-z_x, 0, 1) / |.| with z = x^2 / 20: z_x = x / 10 = u.
+      EXPECT_LT((d.sample.normal - Eigen::Vector3d(-u, 0, 1).normalized()).norm(), 1e-12);
+      // A bowl seen from the tool: kappa = -z'' / (1 + z'^2)^(3/2) with z'' = 1/10.
+      const Eigen::Vector2d k = principal_curvatures(fundamental_forms(d.ru, d.rv, d.ruu, d.ruv, d.rvv, d.sample.normal));
+      EXPECT_NEAR(k[0], -0.1 / std::pow(1 + u * u, 1.5), 1e-12);
+      EXPECT_NEAR(k[1], 0.0, 1e-12);
+    }
+  // Seen from below, the normal turns over and the bowl is a dome.
+  const BSplinePatch down(parabolic_cylinder(), {0, 0, -1});
+  EXPECT_LT((down({0, 0.5}).normal - Eigen::Vector3d(0, 0, -1)).norm(), 1e-12);
+}
+
+TEST(BSplinePatch, TheDefaultFiniteDifferencesAgreeWithTheExactDerivatives) {
+  // The base class's central differences, through operator() only.
+  struct PointsOnly final : ParametricSurface {
+    const BSplinePatch& p;
+    explicit PointsOnly(const BSplinePatch& patch) : p(patch) {}
+    SurfaceSample operator()(const Eigen::Vector2d& uv) const override { return p(uv); }
+    const UVDomain& domain() const override { return p.domain(); }
+    double uv_spacing() const override { return 1e-3; }
+  };
+  const BSplinePatch patch(parabolic_cylinder(), {0, 0, 1});
+  const PointsOnly numeric(patch);
+  for (double u : {0.0, 0.4, 1.0}) {
+    // On the domain's edges the stencil's centre moves inside by its step, 2 uv_spacing.
+    const double centre = std::clamp(u, 2e-3, 1 - 2e-3);
+    const SurfaceDerivatives a = patch.derivatives({centre, 0.5}), b = numeric.derivatives({u, 0.5});
+    EXPECT_LT((a.ru - b.ru).norm(), 1e-6);
+    EXPECT_LT((a.rv - b.rv).norm(), 1e-6);
+    EXPECT_LT((a.ruu - b.ruu).norm(), 1e-4);
+    EXPECT_LT((a.ruv - b.ruv).norm() + (a.rvv - b.rvv).norm(), 1e-4);
+    EXPECT_EQ(patch({u, 0.5}).position, b.sample.position);
+  }
+  EXPECT_EQ(patch.domain().width, 1.0);
+  EXPECT_DOUBLE_EQ(patch.uv_spacing(), 0.25);
+}
+
+TEST(BSplinePatch, RefusesABadSurface) {
+  BSplineSurface s = parabolic_cylinder();
+  s.poles.pop_back();
+  EXPECT_THROW(BSplinePatch(s, {0, 0, 1}), std::invalid_argument);
 }
 
 }  // namespace
