@@ -1,0 +1,123 @@
+#include "nodes/surface/setups.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+
+namespace scallop {
+namespace {
+
+constexpr int kSamples = 17;  // normals per side of a patch's (u, v) square
+constexpr int kSphere = 2000;  // candidate axes spread over the sphere
+
+std::string axis_name(const Eigen::Vector3d& a) {
+  static const char* names[] = {"x", "y", "z"};
+  for (int k = 0; k < 3; ++k)
+    if (std::abs(std::abs(a[k]) - 1) < 1e-9) return std::string(a[k] > 0 ? "+" : "-") + names[k];
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "(%.3f, %.3f, %.3f)", a.x(), a.y(), a.z());
+  return buf;
+}
+
+}  // namespace
+
+Eigen::Matrix3d rotation_to_z(const Eigen::Vector3d& a) {
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
+  if (a.dot(z) < -1 + 1e-12) return Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  return Eigen::Quaterniond::FromTwoVectors(a, z).toRotationMatrix();
+}
+
+std::vector<Setup> plan_setups(const Surfaces& surfaces, const std::vector<Eigen::Vector3d>& points,
+                               const SetupOptions& o) {
+  const std::size_t np = surfaces.patches.size();
+  if (np == 0) throw std::invalid_argument("there are no patches to set up");
+  if (!(o.min_normal_dot > 0 && o.min_normal_dot <= 1))
+    throw std::invalid_argument("min_normal_dot must lie in (0, 1]");
+
+  // Each patch's sampled normals.
+  std::vector<std::vector<Eigen::Vector3d>> normals(np);
+  std::vector<Eigen::Vector3d> candidates;
+  for (std::size_t p = 0; p < np; ++p) {
+    const SurfacePatch& sp = surfaces.patches[p];
+    if (!(sp.direction.allFinite() && std::abs(sp.direction.norm() - 1) < 1e-6))
+      throw std::invalid_argument("patch " + std::to_string(p) + ": its direction is not a unit vector");
+    const BSplinePatch patch(sp.surface, sp.direction);  // throws on a malformed surface
+    for (int i = 0; i < kSamples; ++i)
+      for (int j = 0; j < kSamples; ++j)
+        normals[p].push_back(patch({double(j) / (kSamples - 1), double(i) / (kSamples - 1)}).normal);
+    candidates.push_back(sp.direction);
+  }
+  if (surfaces.base_direction.norm() > 0.5) candidates.push_back(-surfaces.base_direction.normalized());
+  for (int k = 0; k < 3; ++k) candidates.push_back(Eigen::Vector3d::Unit(k)), candidates.push_back(-Eigen::Vector3d::Unit(k));
+  // Directions spread evenly over the sphere (a Fibonacci lattice).
+  for (int k = 0; o.any_axis && k < kSphere; ++k) {
+    const double z = 1 - (2 * k + 1.0) / kSphere, rho = std::sqrt(1 - z * z), phi = k * M_PI * (3 - std::sqrt(5.0));
+    candidates.push_back(Eigen::Vector3d(rho * std::cos(phi), rho * std::sin(phi), z));
+  }
+
+  // can[c][p]: candidate c cuts patch p; low[c][p] its smallest n . a there.
+  const std::size_t nc = candidates.size();
+  std::vector<std::vector<double>> low(nc, std::vector<double>(np));
+  std::vector<std::vector<char>> can(nc, std::vector<char>(np));
+  std::vector<double> best(np, -2);  // each patch's largest smallest n . a over the candidates
+  for (std::size_t c = 0; c < nc; ++c)
+    for (std::size_t p = 0; p < np; ++p) {
+      double m = std::numeric_limits<double>::infinity();
+      for (const auto& n : normals[p]) m = std::min(m, n.dot(candidates[c]));
+      low[c][p] = m;
+      best[p] = std::max(best[p], m);
+    }
+  for (std::size_t c = 0; c < nc; ++c)
+    for (std::size_t p = 0; p < np; ++p)
+      can[c][p] = low[c][p] >= std::min(o.min_normal_dot, std::max(0.5 * best[p], 1e-3)) || c == p;
+
+  std::vector<char> covered(np, 0);
+  std::vector<std::size_t> chosen;
+  for (std::size_t left = np; left > 0;) {
+    std::size_t best = nc, best_count = 0;
+    double best_low = -2;
+    for (std::size_t c = 0; c < nc; ++c) {
+      std::size_t count = 0;
+      double worst = 2;
+      for (std::size_t p = 0; p < np; ++p)
+        if (!covered[p] && can[c][p]) ++count, worst = std::min(worst, low[c][p]);
+      if (count > best_count || (count == best_count && count > 0 && worst > best_low + 1e-9))
+        best = c, best_count = count, best_low = worst;
+    }
+    chosen.push_back(best);  // a patch's own direction always cuts it: best exists
+    for (std::size_t p = 0; p < np; ++p)
+      if (!covered[p] && can[best][p]) covered[p] = 1, --left;
+  }
+
+  std::vector<Setup> setups(chosen.size());
+  for (std::size_t s = 0; s < chosen.size(); ++s) {
+    Setup& st = setups[s];
+    st.axis = candidates[chosen[s]];
+    st.rotation = rotation_to_z(st.axis);
+    st.translation.setZero();
+    if (!points.empty()) {
+      Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+      for (const auto& p : points) {
+        const Eigen::Vector3d q = st.rotation * p;
+        lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+      }
+      st.translation = Eigen::Vector3d(-(lo.x() + hi.x()) / 2, -(lo.y() + hi.y()) / 2, -lo.z());
+    }
+  }
+  for (std::size_t p = 0; p < np; ++p) {
+    std::size_t home = chosen.size();
+    for (std::size_t s = 0; s < chosen.size(); ++s)
+      if (can[chosen[s]][p] && (home == chosen.size() || low[chosen[s]][p] > low[chosen[home]][p])) home = s;
+    setups[home].patches.push_back(static_cast<std::uint32_t>(p));
+    setups[home].min_normal_dot = std::min(setups[home].min_normal_dot, low[chosen[home]][p]);
+  }
+  // A setup every patch of which fits better elsewhere: dropped, the rest renumbered.
+  std::erase_if(setups, [](const Setup& s) { return s.patches.empty(); });
+  for (std::size_t s = 0; s < setups.size(); ++s) setups[s].name = std::to_string(s + 1) + ": " + axis_name(setups[s].axis);
+  return setups;
+}
+
+}  // namespace scallop

@@ -1,0 +1,62 @@
+// Clampings of a part: its patches grouped by machining direction into as few setups as the
+// directions allow (issue 14; papers/point-clouds-to-workpieces.md machines each SHF along its
+// own direction and groups the SHFs that share one).
+//
+// A patch can be cut in a setup of tool axis a (unit, part frame, from the part towards the
+// spindle) when every normal of its surface (sampled on a 17 x 17 grid of its (u, v) square,
+// turned to its direction) makes n . a >= t_p with it, or when a is the patch's own direction (a
+// patch is a height field along it, however steep). t_p = min_normal_dot, lowered for a patch
+// that no axis meets that well to half of its best (the largest smallest n . a over all
+// candidates, at least 0.001): a steep strip along a rounded edge still joins a setup that meets
+// it half as well as the best one could. Candidate axes: the patches' own directions, the axis
+// straight away from the base when it is known (the part standing on it, cut from above) and the
+// six coordinate axes: clampings square to the part's frame or to a patch, which a vise and an
+// angle plate give; with any_axis also 2000 directions spread over the sphere (a Fibonacci
+// lattice), for a fixture that tilts the part at compound angles (a box then needs 2 setups,
+// not 5). The
+// setups are chosen greedily (set cover): the candidate that can cut the most patches not yet
+// covered, ties to the one whose smallest n . a over them is larger, then to the earlier
+// candidate; repeated until every patch is covered. Each patch then goes to the chosen setup
+// where its smallest n . a is largest. Greedy set cover is within a factor ln(patches) of the
+// fewest setups. Measured (graphs/mesh-to-surfaces.json, defaults): the fandisk's 65 patches in
+// 14 setups (13 with any_axis), the block's 101 in 13 (11): thin strips along rounded edges,
+// nearly vertical to every axis but their own, drive the count.
+//
+// part_to_machine: a rotation R with R a = +z (the shortest rotation; a half turn about x when a =
+// -z), and t such that the part's bounding box in the machine frame is centred on x = y = 0 and
+// its lowest point is at z = 0 (the table). A part point p is at R p + t.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "nodes/types/surfaces.h"
+
+namespace scallop {
+
+struct SetupOptions {
+  double min_normal_dot = 0.2;  // steepest surface a setup cuts besides its own patches: about 78 degrees
+  bool any_axis = false;        // also 2000 axes spread over the sphere (clampings at compound angles)
+};
+
+struct Setup {
+  std::string name;                       // "1: +z", "2: -x", "3: (0.707, 0.000, 0.707)": order, axis
+  Eigen::Vector3d axis;                   // unit tool axis, part frame
+  Eigen::Matrix3d rotation;               // R
+  Eigen::Vector3d translation;            // t
+  std::vector<std::uint32_t> patches;     // indices into Surfaces::patches, increasing
+  double min_normal_dot = 1;              // smallest n . axis over those patches
+};
+
+// points  the part's points (mesh vertices), for the translation; may be empty (t = 0).
+// Throws std::invalid_argument when there is no patch, an option is out of range, or a patch's
+// surface or direction is not usable (naming the patch).
+std::vector<Setup> plan_setups(const Surfaces& surfaces, const std::vector<Eigen::Vector3d>& points,
+                               const SetupOptions& options = {});
+
+// The smallest rotation taking unit vector a to +z (a half turn about x for a = -z).
+Eigen::Matrix3d rotation_to_z(const Eigen::Vector3d& a);
+
+}  // namespace scallop

@@ -1,0 +1,59 @@
+#include <stdexcept>
+#include <string>
+
+#include "engine/node.h"
+#include "nodes/surface/setups.h"
+#include "nodes/types/document.h"
+#include "nodes/types/mesh.h"
+#include "nodes/types/surfaces.h"
+
+namespace scallop::surface_nodes {
+
+NodeDecl make_setups_node() {
+  NodeDecl d;
+  d.type = "surface.setups";
+  d.version = 1;
+  d.description =
+      "groups the patches into clampings by machining direction, as few as the directions allow (greedy set cover), "
+      "each with the rigid transform from the part's frame to the machine's (tool axis +z)";
+  d.input("surfaces", "Surfaces", "the patches (surface.fit_bspline)")
+      .input("mesh", "Mesh", "the part, for placing it in each setup (centred on x = y = 0, lowest point z = 0)", false)
+      .output("report", "Report",
+              "{setups: [{name, axis (part frame, towards the spindle), part_to_machine (3 x 4 [R|t], as "
+              "scallop-setups/1), patches, min_normal_dot}], patches (count), min_normal_dot (the option)}");
+  d.options<SetupOptions>().number("min_normal_dot", &SetupOptions::min_normal_dot, 1e-6, 1, "",
+                                   "a setup cuts a patch when n . axis is at least this over it (0.2: walls up to "
+                                   "about 78 degrees), or when the axis is the patch's own direction")
+      .flag("any_axis", &SetupOptions::any_axis,
+            "also axes at compound angles (2000 over the sphere): fewer setups, for a fixture that tilts the part; "
+            "otherwise the patches' own directions, the coordinate axes and the one away from the base");
+  d.run = [](NodeContext& ctx) {
+    auto surfaces = ctx.input<Surfaces>("surfaces");
+    std::vector<Eigen::Vector3d> points;
+    if (ctx.has_input("mesh")) points = ctx.input<Mesh>("mesh")->vertices;
+    const SetupOptions o = ctx.options<SetupOptions>();
+    std::vector<Setup> setups;
+    try {
+      setups = plan_setups(*surfaces, points, o);
+    } catch (const std::invalid_argument& e) {
+      throw NodeError(std::string("surface.setups: ") + e.what());
+    }
+    nlohmann::json list = nlohmann::json::array();
+    for (const Setup& s : setups) {
+      nlohmann::json m = nlohmann::json::array();
+      for (int r = 0; r < 3; ++r)
+        m.push_back({s.rotation(r, 0), s.rotation(r, 1), s.rotation(r, 2), s.translation[r]});
+      list.push_back({{"name", s.name},
+                      {"axis", {s.axis.x(), s.axis.y(), s.axis.z()}},
+                      {"part_to_machine", m},
+                      {"patches", s.patches},
+                      {"min_normal_dot", s.min_normal_dot}});
+    }
+    Report report;
+    report.data = {{"setups", list}, {"patches", surfaces->patches.size()}, {"min_normal_dot", o.min_normal_dot}};
+    ctx.set("report", std::move(report));
+  };
+  return d;
+}
+
+}  // namespace scallop::surface_nodes

@@ -1,0 +1,151 @@
+#include "nodes/surface/setups.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/LU>
+#include <cmath>
+
+#include "nodes/types/document.h"
+#include "nodes/types/mesh.h"
+#include "tests/test_support.h"
+
+namespace scallop {
+namespace surface_nodes {
+NodeDecl make_setups_node();
+}  // namespace surface_nodes
+
+namespace {
+
+using V = Eigen::Vector3d;
+
+// The flat patch with corners p00 (u = v = 0), p10 (u = 1), p01 (v = 1), p11, machined along
+// `direction`.
+SurfacePatch flat(V p00, V p10, V p01, V p11, V direction) {
+  SurfacePatch p;
+  p.surface.degree_u = p.surface.degree_v = 1;
+  p.surface.knots_u = p.surface.knots_v = {0, 0, 1, 1};
+  p.surface.poles_u = p.surface.poles_v = 2;
+  p.surface.poles = {p00, p10, p01, p11};
+  p.direction = direction.normalized();
+  return p;
+}
+
+// The box [0, 40] x [0, 30] x [0, 12] without its bottom: top, then -x, +x, -y, +y.
+Surfaces open_box() {
+  Surfaces s;
+  const double X = 40, Y = 30, Z = 12;
+  s.patches.push_back(flat({0, 0, Z}, {X, 0, Z}, {0, Y, Z}, {X, Y, Z}, {0, 0, 1}));
+  s.patches.push_back(flat({0, 0, 0}, {0, Y, 0}, {0, 0, Z}, {0, Y, Z}, {-1, 0, 0}));
+  s.patches.push_back(flat({X, 0, 0}, {X, Y, 0}, {X, 0, Z}, {X, Y, Z}, {1, 0, 0}));
+  s.patches.push_back(flat({0, 0, 0}, {X, 0, 0}, {0, 0, Z}, {X, 0, Z}, {0, -1, 0}));
+  s.patches.push_back(flat({0, Y, 0}, {X, Y, 0}, {0, Y, Z}, {X, Y, Z}, {0, 1, 0}));
+  s.base_direction = {0, 0, -1};
+  return s;
+}
+
+std::vector<V> box_corners() {
+  std::vector<V> c;
+  for (int i = 0; i < 8; ++i) c.push_back(V(i & 1 ? 40 : 0, i & 2 ? 30 : 0, i & 4 ? 12 : 0));
+  return c;
+}
+
+TEST(Setups, ABoxOnItsBaseNeedsFiveClampingsOneFacePerSetup) {
+  const auto setups = plan_setups(open_box(), box_corners());
+  ASSERT_EQ(setups.size(), 5u);
+  const char* names[] = {"1: +z", "2: -x", "3: +x", "4: -y", "5: +y"};
+  for (std::size_t s = 0; s < 5; ++s) {
+    EXPECT_EQ(setups[s].name, names[s]);
+    EXPECT_EQ(setups[s].patches, std::vector<std::uint32_t>{static_cast<std::uint32_t>(s)});
+    EXPECT_NEAR(setups[s].min_normal_dot, 1.0, 1e-12);
+    const Eigen::Matrix3d& R = setups[s].rotation;
+    EXPECT_LT((R.transpose() * R - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+    EXPECT_NEAR(R.determinant(), 1.0, 1e-12);
+    EXPECT_LT((R * setups[s].axis - V::UnitZ()).norm(), 1e-12);
+  }
+  // The top setup: the part as it stands, centred on x = y = 0, its bottom on the table.
+  EXPECT_LT((setups[0].rotation - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+  EXPECT_LT((setups[0].translation - V(-20, -15, 0)).norm(), 1e-12);
+  // The -x setup: the face x = 0 faces the spindle and lies highest, the part's x = 40 on the table.
+  const auto& mx = setups[1];
+  EXPECT_NEAR((mx.rotation * V(0, 5, 5) + mx.translation).z(), 40.0, 1e-12);
+  EXPECT_NEAR((mx.rotation * V(40, 5, 5) + mx.translation).z(), 0.0, 1e-12);
+}
+
+TEST(Setups, AtCompoundAnglesTwoClampingsCutTheBox) {
+  // Two opposite corners of the box up: each axis meets the top and two sides, 1/sqrt(3) at best.
+  const auto setups = plan_setups(open_box(), box_corners(), {.any_axis = true});
+  ASSERT_EQ(setups.size(), 2u);
+  EXPECT_EQ(setups[0].patches.size() + setups[1].patches.size(), 5u);
+  EXPECT_GT(std::min(setups[0].min_normal_dot, setups[1].min_normal_dot), 0.2);
+}
+
+TEST(Setups, ATiltedFaceGoesWithTheTopWhenTheToolReachesIt) {
+  // A flat top and a face tilted 30 degrees beside it: one clamping cuts both.
+  Surfaces s;
+  const double c = std::cos(M_PI / 6), sn = std::sin(M_PI / 6);
+  s.patches.push_back(flat({0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {10, 10, 0}, {0, 0, 1}));
+  s.patches.push_back(flat({10, 0, 0}, {10 + 10 * c, 0, -10 * sn}, {10, 10, 0}, {10 + 10 * c, 10, -10 * sn}, {sn, 0, c}));
+  const auto setups = plan_setups(s, {});
+  ASSERT_EQ(setups.size(), 1u);
+  EXPECT_EQ(setups[0].name, "1: +z");
+  EXPECT_EQ(setups[0].patches, (std::vector<std::uint32_t>{0, 1}));
+  EXPECT_NEAR(setups[0].min_normal_dot, c, 1e-12);
+  EXPECT_EQ(setups[0].translation, V::Zero());
+}
+
+TEST(Setups, AWallSteeperThanTheLimitGetsItsOwnClamping) {
+  // A wall at 85 degrees: n . z = cos 85 = 0.087, below the default 0.2, above 0.05.
+  Surfaces s;
+  const double t = 85 * M_PI / 180;
+  const V n(std::sin(t), 0, std::cos(t));
+  s.patches.push_back(flat({0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {10, 10, 0}, {0, 0, 1}));
+  s.patches.push_back(flat({10, 0, 0}, {10 + 10 * std::cos(t), 0, -10 * std::sin(t)}, {10, 10, 0},
+                           {10 + 10 * std::cos(t), 10, -10 * std::sin(t)}, n));
+  const auto two = plan_setups(s, {});
+  ASSERT_EQ(two.size(), 2u);
+  EXPECT_EQ(two[1].name, "2: (0.996, 0.000, 0.087)");
+  EXPECT_EQ(two[1].patches, std::vector<std::uint32_t>{1});
+  const auto one = plan_setups(s, {}, {.min_normal_dot = 0.05});
+  ASSERT_EQ(one.size(), 1u);
+  EXPECT_NEAR(one[0].min_normal_dot, std::cos(t), 1e-12);
+}
+
+TEST(Setups, ARotationTakesEveryAxisToZ) {
+  for (const V& a : {V(0, 0, 1), V(0, 0, -1), V(1, 0, 0), V(0.6, 0, -0.8), V(1, 2, 3).normalized()}) {
+    const Eigen::Matrix3d R = rotation_to_z(a);
+    EXPECT_LT((R * a - V::UnitZ()).norm(), 1e-12);
+    EXPECT_NEAR(R.determinant(), 1.0, 1e-12);
+  }
+}
+
+TEST(Setups, BadInputIsNamed) {
+  EXPECT_EQ(test::error_of<std::invalid_argument>([] { plan_setups(Surfaces{}, {}); }),
+            "there are no patches to set up");
+  Surfaces s = open_box();
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { plan_setups(s, {}, {.min_normal_dot = 0}); }),
+            "min_normal_dot must lie in (0, 1]");
+  s.patches[3].direction = V(0, 0, 0);
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { plan_setups(s, {}); }),
+            "patch 3: its direction is not a unit vector");
+}
+
+TEST(Setups, TheNodeReportsPartToMachineAsTheSetupsFileHasIt) {
+  Mesh part;
+  part.vertices = box_corners();
+  auto out = test::run_node(surface_nodes::make_setups_node(), nlohmann::json::object(),
+                            {{"surfaces", std::make_shared<Surfaces>(open_box())}, {"mesh", std::make_shared<Mesh>(part)}});
+  const auto& r = std::dynamic_pointer_cast<const Report>(out.at("report"))->data;
+  ASSERT_EQ(r["setups"].size(), 5u);
+  EXPECT_EQ(r["setups"][0]["name"], "1: +z");
+  EXPECT_EQ(r["setups"][0]["part_to_machine"],
+            nlohmann::json::parse("[[1, 0, 0, -20], [0, 1, 0, -15], [0, 0, 1, 0]]"));
+  EXPECT_EQ(r["setups"][4]["patches"], nlohmann::json::parse("[4]"));
+  EXPECT_EQ(test::error_of<NodeError>([] {
+              test::run_node(surface_nodes::make_setups_node(), nlohmann::json::object(),
+                             {{"surfaces", std::make_shared<Surfaces>()}});
+            }),
+            "surface.setups: there are no patches to set up");
+}
+
+}  // namespace
+}  // namespace scallop
