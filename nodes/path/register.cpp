@@ -7,11 +7,12 @@ namespace scallop {
 namespace path_nodes {
 NodeDecl make_isoparametric_node();
 NodeDecl make_gouge_guard_node();
+NodeDecl make_contour_grid_node();
 }  // namespace path_nodes
 
 void register_path(Registry& registry) {
   using namespace path_nodes;
-  registry.add_domain("path", {make_isoparametric_node(), make_gouge_guard_node()});
+  registry.add_domain("path", {make_isoparametric_node(), make_gouge_guard_node(), make_contour_grid_node()});
 }
 
 }  // namespace scallop

@@ -7,6 +7,7 @@
 
 #include "nodes/types/document.h"
 #include "nodes/types/mesh.h"
+#include "tests/nodes/surface/surface_test_util.h"
 #include "tests/test_support.h"
 
 namespace scallop {
@@ -18,27 +19,17 @@ namespace {
 
 using V = Eigen::Vector3d;
 
-// The flat patch with corners p00 (u = v = 0), p10 (u = 1), p01 (v = 1), p11, machined along
-// `direction`.
-SurfacePatch flat(V p00, V p10, V p01, V p11, V direction) {
-  SurfacePatch p;
-  p.surface.degree_u = p.surface.degree_v = 1;
-  p.surface.knots_u = p.surface.knots_v = {0, 0, 1, 1};
-  p.surface.poles_u = p.surface.poles_v = 2;
-  p.surface.poles = {p00, p10, p01, p11};
-  p.direction = direction.normalized();
-  return p;
-}
+using test::flat_patch;
 
 // The box [0, 40] x [0, 30] x [0, 12] without its bottom: top, then -x, +x, -y, +y.
 Surfaces open_box() {
   Surfaces s;
   const double X = 40, Y = 30, Z = 12;
-  s.patches.push_back(flat({0, 0, Z}, {X, 0, Z}, {0, Y, Z}, {X, Y, Z}, {0, 0, 1}));
-  s.patches.push_back(flat({0, 0, 0}, {0, Y, 0}, {0, 0, Z}, {0, Y, Z}, {-1, 0, 0}));
-  s.patches.push_back(flat({X, 0, 0}, {X, Y, 0}, {X, 0, Z}, {X, Y, Z}, {1, 0, 0}));
-  s.patches.push_back(flat({0, 0, 0}, {X, 0, 0}, {0, 0, Z}, {X, 0, Z}, {0, -1, 0}));
-  s.patches.push_back(flat({0, Y, 0}, {X, Y, 0}, {0, Y, Z}, {X, Y, Z}, {0, 1, 0}));
+  s.patches.push_back(flat_patch({0, 0, Z}, {X, 0, Z}, {0, Y, Z}, {X, Y, Z}, {0, 0, 1}));
+  s.patches.push_back(flat_patch({0, 0, 0}, {0, Y, 0}, {0, 0, Z}, {0, Y, Z}, {-1, 0, 0}));
+  s.patches.push_back(flat_patch({X, 0, 0}, {X, Y, 0}, {X, 0, Z}, {X, Y, Z}, {1, 0, 0}));
+  s.patches.push_back(flat_patch({0, 0, 0}, {X, 0, 0}, {0, 0, Z}, {X, 0, Z}, {0, -1, 0}));
+  s.patches.push_back(flat_patch({0, Y, 0}, {X, Y, 0}, {0, Y, Z}, {X, Y, Z}, {0, 1, 0}));
   s.base_direction = {0, 0, -1};
   return s;
 }
@@ -83,8 +74,8 @@ TEST(Setups, ATiltedFaceGoesWithTheTopWhenTheToolReachesIt) {
   // A flat top and a face tilted 30 degrees beside it: one clamping cuts both.
   Surfaces s;
   const double c = std::cos(M_PI / 6), sn = std::sin(M_PI / 6);
-  s.patches.push_back(flat({0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {10, 10, 0}, {0, 0, 1}));
-  s.patches.push_back(flat({10, 0, 0}, {10 + 10 * c, 0, -10 * sn}, {10, 10, 0}, {10 + 10 * c, 10, -10 * sn}, {sn, 0, c}));
+  s.patches.push_back(flat_patch({0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {10, 10, 0}, {0, 0, 1}));
+  s.patches.push_back(flat_patch({10, 0, 0}, {10 + 10 * c, 0, -10 * sn}, {10, 10, 0}, {10 + 10 * c, 10, -10 * sn}, {sn, 0, c}));
   const auto setups = plan_setups(s, {});
   ASSERT_EQ(setups.size(), 1u);
   EXPECT_EQ(setups[0].name, "1: +z");
@@ -98,8 +89,8 @@ TEST(Setups, AWallSteeperThanTheLimitGetsItsOwnClamping) {
   Surfaces s;
   const double t = 85 * M_PI / 180;
   const V n(std::sin(t), 0, std::cos(t));
-  s.patches.push_back(flat({0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {10, 10, 0}, {0, 0, 1}));
-  s.patches.push_back(flat({10, 0, 0}, {10 + 10 * std::cos(t), 0, -10 * std::sin(t)}, {10, 10, 0},
+  s.patches.push_back(flat_patch({0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {10, 10, 0}, {0, 0, 1}));
+  s.patches.push_back(flat_patch({10, 0, 0}, {10 + 10 * std::cos(t), 0, -10 * std::sin(t)}, {10, 10, 0},
                            {10 + 10 * std::cos(t), 10, -10 * std::sin(t)}, n));
   const auto two = plan_setups(s, {});
   ASSERT_EQ(two.size(), 2u);

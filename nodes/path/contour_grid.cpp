@@ -1,0 +1,303 @@
+#include "nodes/path/contour_grid.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "nodes/path/step_size.h"
+
+namespace scallop {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// [u0, u1] x [v0, v1]; u0 == u1 or v0 == v1: a segment (or a point).
+struct Rect {
+  double u0, u1, v0, v1;
+};
+
+struct Contour {
+  std::vector<Eigen::Vector2d> uv;
+  std::vector<Eigen::Vector3d> p, n, c;  // contact, unit normal, ball centre
+};
+
+// Side s of a rectangle, walked counter-clockwise in (u, v): 0 bottom (v = v0), 1 right (u = u1),
+// 2 top (v = v1), 3 left (u = u0). A side along u steps across in v, and the other way round.
+std::array<Eigen::Vector2d, 2> side_ends(const Rect& r, int s) {
+  switch (s) {
+    case 0: return {Eigen::Vector2d(r.u0, r.v0), Eigen::Vector2d(r.u1, r.v0)};
+    case 1: return {Eigen::Vector2d(r.u1, r.v0), Eigen::Vector2d(r.u1, r.v1)};
+    case 2: return {Eigen::Vector2d(r.u1, r.v1), Eigen::Vector2d(r.u0, r.v1)};
+    default: return {Eigen::Vector2d(r.u0, r.v1), Eigen::Vector2d(r.u0, r.v0)};
+  }
+}
+bool along_u(int s) { return s % 2 == 0; }
+
+class ContourPlanner {
+ public:
+  ContourPlanner(const ParametricSurface& f, const ContourGridOptions& o) : f_(f), o_(o), r_(o.tool_radius) {}
+
+  double chord_max = 0;
+  std::size_t unreachable = 0;  // side samples where the ball cannot reach the bottom of a concave section
+
+  Contour contour(const Rect& r) {
+    Contour c;
+    for (int s = 0; s < 4; ++s) {
+      const auto [a, b] = side_ends(r, s);
+      trace(a, b, c);
+    }
+    add(c, c.uv.front());  // closed
+    return c;
+  }
+
+  // The step across side s into the rectangle (parameter units), the smallest over its samples.
+  double side_step(const Rect& r, int s) {
+    const auto [a, b] = side_ends(r, s);
+    double step = kInf;
+    for (int j = 0; j < o_.side_samples; ++j) {
+      const Eigen::Vector2d uv = a + (b - a) * (double(j) / (o_.side_samples - 1));
+      const SurfaceDerivatives d = f_.derivatives(uv);
+      const FundamentalForms ff = fundamental_forms(d.ru, d.rv, d.ruu, d.ruv, d.rvv, d.sample.normal);
+      const double theta = std::acos(std::clamp(ff.F / std::sqrt(ff.E * ff.G), -1.0, 1.0));
+      // Across the pass, on the surface: perpendicular to r_u (a side along u) or to r_v.
+      const double kappa = along_u(s) ? normal_curvature(ff, -ff.F / ff.E, 1) : normal_curvature(ff, 1, -ff.F / ff.G);
+      double interval = side_interval(o_.scallop_height, r_, kappa);
+      if (!std::isfinite(interval)) {
+        ++unreachable;
+        interval = side_interval(o_.scallop_height, r_, 0);  // the check between contours decides
+      }
+      step = std::min(step, side_step_corrected(interval, std::sqrt(along_u(s) ? ff.G : ff.E), theta));
+    }
+    return step;
+  }
+
+  // The largest scallop between contours ca (rectangle a) and cb (rectangle b, inside a) over the
+  // strip between their sides s: sampled, then the worst places refined.
+  double strip_scallop(const Rect& a, const Rect& b, int s, const Contour& ca, const Contour& cb) const {
+    const std::array<double, 4> widths{b.v0 - a.v0, a.u1 - b.u1, a.v1 - b.v1, b.u0 - a.u0};
+    const double width = widths[s], length = along_u(s) ? a.u1 - a.u0 : a.v1 - a.v0;
+    const int along = std::clamp(static_cast<int>(std::ceil(8 * length / std::max(width, 1e-12))) + 1,
+                                 2 * o_.side_samples, 20000),
+              across = 9;
+    // (t along, f across) in [0, 1]^2 -> (u, v)
+    auto at = [&](double t, double f) -> Eigen::Vector2d {
+      t = std::clamp(t, 0.0, 1.0), f = std::clamp(f, 0.0, 1.0);
+      if (s == 0) return {a.u0 + t * (a.u1 - a.u0), a.v0 + f * (b.v0 - a.v0)};
+      if (s == 1) return {a.u1 + f * (b.u1 - a.u1), a.v0 + t * (a.v1 - a.v0)};
+      if (s == 2) return {a.u0 + t * (a.u1 - a.u0), a.v1 + f * (b.v1 - a.v1)};
+      return {a.u0 + f * (b.u0 - a.u0), a.v0 + t * (a.v1 - a.v0)};
+    };
+    auto scallop = [&](double t, double f) {
+      const SurfaceSample x = f_(at(t, f));
+      return std::min(scallop_at(x, ca), scallop_at(x, cb));
+    };
+    // The worst sample overall and within a strip's width of either end (where the inner contour
+    // turns a corner, the scallop peaks at a point where three distance fields meet, and falls
+    // off linearly around it: a sample a little off misses it, 0.0215 measured for h = 0.02).
+    const double corner = std::min(0.5, 1.5 * width / std::max(length, 1e-12));
+    struct Best {
+      double h = -1, t = 0, f = 0;
+    };
+    std::array<Best, 3> best;  // overall, start corner, end corner
+    for (int g = 0; g < along; ++g) {
+      const double t = double(g) / (along - 1);
+      for (int k = 1; k <= across; ++k) {
+        const double f = double(k) / (across + 1);  // 0.1 .. 0.9
+        const double h = scallop(t, f);
+        for (int z = 0; z < 3; ++z)
+          if ((z == 0 || (z == 1 && t <= corner) || (z == 2 && t >= 1 - corner)) && h > best[z].h) best[z] = {h, t, f};
+      }
+    }
+    double worst = 0;
+    for (Best x : best) {
+      if (x.h < 0) continue;
+      // Pattern search on a 3 x 3 stencil, halving it 12 times.
+      double dt = 1.0 / (along - 1), df = 1.0 / (across + 1);
+      for (int it = 0; it < 12; ++it, dt /= 2, df /= 2)
+        for (bool moved = true; moved;) {
+          moved = false;
+          for (int i = -1; i <= 1; ++i)
+            for (int j = -1; j <= 1; ++j) {
+              const double t = std::clamp(x.t + i * dt, 0.0, 1.0), f = std::clamp(x.f + j * df, 0.0, 1.0);
+              const double h = scallop(t, f);
+              if (h > x.h + 1e-12) x = {h, t, f}, moved = true;
+            }
+        }
+      worst = std::max(worst, x.h);
+    }
+    return worst;
+  }
+
+ private:
+  const ParametricSurface& f_;
+  const ContourGridOptions& o_;
+  double r_;
+
+  void add(Contour& c, const Eigen::Vector2d& uv) {
+    if (!c.uv.empty() && c.uv.back() == uv) return;
+    const SurfaceSample x = f_(uv);
+    c.uv.push_back(uv);
+    c.p.push_back(x.position);
+    c.n.push_back(x.normal);
+    c.c.push_back(x.position + r_ * x.normal);
+  }
+
+  Eigen::Vector3d centre(const Eigen::Vector2d& uv) const {
+    const SurfaceSample x = f_(uv);
+    return x.position + r_ * x.normal;
+  }
+
+  // Points of the straight (u, v) segment a -> b, a included, b not (the next side starts there).
+  void trace(const Eigen::Vector2d& a, const Eigen::Vector2d& b, Contour& c) {
+    const Eigen::Vector2d delta = b - a;
+    add(c, a);
+    if (delta.norm() == 0) return;
+    for (double tau = 0; tau < 1;) {
+      const SurfaceDerivatives d = f_.derivatives(a + tau * delta);
+      const Eigen::Vector3d rt = d.ru * delta.x() + d.rv * delta.y();
+      const Eigen::Vector3d rtt = d.ruu * delta.x() * delta.x() + 2 * d.ruv * delta.x() * delta.y() + d.rvv * delta.y() * delta.y();
+      const double speed = rt.norm();
+      double dtau = 1.0 / 64;
+      if (speed > 0) {
+        const double curvature = rt.cross(rtt).norm() / (speed * speed * speed);
+        dtau = std::min(forward_interval(o_.chord_error, curvature), o_.max_segment) / speed;
+      }
+      dtau = std::min(dtau, 1 - tau);
+      // The ball-centre chord against the ball-centre curve.
+      const Eigen::Vector3d c0 = centre(a + tau * delta);
+      for (int tries = 0; tries < 40; ++tries) {
+        const Eigen::Vector3d c1 = centre(a + (tau + dtau) * delta);
+        double dev = 0;
+        for (double q : {0.25, 0.5, 0.75}) {
+          const Eigen::Vector3d m = centre(a + (tau + q * dtau) * delta), seg = c1 - c0;
+          const double s = seg.squaredNorm() > 0 ? std::clamp((m - c0).dot(seg) / seg.squaredNorm(), 0.0, 1.0) : 0.0;
+          dev = std::max(dev, (m - (c0 + s * seg)).norm());
+        }
+        if (dev <= o_.chord_error || tries == 39) {
+          chord_max = std::max(chord_max, dev);
+          break;
+        }
+        dtau /= 2;
+      }
+      tau = std::min(1.0, tau + dtau);
+      if (tau < 1) add(c, a + tau * delta);
+    }
+  }
+
+  // Scallop at x left by the balls swept along contour c (+infinity when they miss its normal).
+  double scallop_at(const SurfaceSample& x, const Contour& c) const {
+    double best = kInf;
+    for (std::size_t k = 0; k + 1 < c.c.size(); ++k) {
+      const Eigen::Vector3d& a = c.c[k];
+      const Eigen::Vector3d& b = c.c[k + 1];
+      // The ray cannot enter a capsule closer than its distance from the segment, less r.
+      const double reach = ((a + b) / 2 - x.position).norm() - (b - a).norm() / 2 - r_;
+      if (reach >= best) continue;
+      best = std::min(best, ray_capsule_entry(x.position, x.normal, a, b, r_));
+    }
+    return best;
+  }
+};
+
+ToolpathPass to_pass(const Contour& c) {
+  ToolpathPass p;
+  p.contact = c.p;
+  p.normal = c.n;
+  p.uv = c.uv;
+  return p;
+}
+
+}  // namespace
+
+ContourGridResult plan_contour_grid(const ParametricSurface& surface, const ContourGridOptions& o) {
+  if (!(o.tool_radius > 0)) throw std::invalid_argument("tool_radius must be positive");
+  if (!(o.scallop_height > 0 && o.scallop_height < o.tool_radius))
+    throw std::invalid_argument("scallop_height must lie between 0 and tool_radius");
+  if (!(o.chord_error > 0)) throw std::invalid_argument("chord_error must be positive");
+  if (!(o.max_segment > 0)) throw std::invalid_argument("max_segment must be positive");
+  if (o.side_samples < 2) throw std::invalid_argument("side_samples must be at least 2");
+  const UVDomain& domain = surface.domain();
+  if (domain.kind != UVDomain::Kind::Rectangle || !(domain.width > 0 && domain.height > 0))
+    throw std::invalid_argument("contour grids need a rectangle domain of positive size");
+
+  ContourPlanner planner(surface, o);
+  ContourGridResult result;
+  Rect a{0, domain.width, 0, domain.height};
+  Contour ca = planner.contour(a);
+  result.passes.push_back(to_pass(ca));
+  nlohmann::json lines = {{"u_from_0", {0.0}}, {"u_from_1", {domain.width}}, {"v_from_0", {0.0}}, {"v_from_1", {domain.height}}};
+  double scallop_max = 0;
+  std::array<double, 2> step_min{kInf, kInf}, step_max{0, 0};  // across u (sides 1, 3), across v (0, 2)
+  std::size_t shrinks = 0, points = ca.uv.size();
+  std::string warning;
+  while (a.u1 > a.u0 && a.v1 > a.v0) {
+    if (result.passes.size() >= o.max_contours)
+      throw std::invalid_argument("more than max_contours (" + std::to_string(o.max_contours) +
+                                  ") contours: the steps vanish near (u, v) = (" + std::to_string(a.u0) + ", " +
+                                  std::to_string(a.v0) + ")");
+    std::array<double, 4> step;
+    for (int s = 0; s < 4; ++s) step[s] = planner.side_step(a, s);
+    Rect b{};
+    Contour cb;
+    std::array<double, 4> worst{};
+    for (int tries = 0;; ++tries) {
+      b = {a.u0 + step[3], a.u1 - step[1], a.v0 + step[0], a.v1 - step[2]};
+      // Sides that would cross meet at their middle, inside a.
+      if (b.u0 >= b.u1) b.u0 = b.u1 = std::clamp((b.u0 + b.u1) / 2, a.u0, a.u1);
+      if (b.v0 >= b.v1) b.v0 = b.v1 = std::clamp((b.v0 + b.v1) / 2, a.v0, a.v1);
+      cb = planner.contour(b);
+      bool ok = true;
+      for (int s = 0; s < 4; ++s) {
+        worst[s] = planner.strip_scallop(a, b, s, ca, cb);
+        if (worst[s] > o.scallop_height) {
+          ok = false;
+          step[s] *= std::max(0.1, 0.995 * std::sqrt(o.scallop_height / worst[s]));  // scallop ~ step^2
+          ++shrinks;
+        }
+      }
+      if (ok) break;
+      if (tries == 60) {
+        warning = "the scallop between contours " + std::to_string(result.passes.size() - 1) + " and " +
+                  std::to_string(result.passes.size()) + " stayed above h after 60 shrinks";
+        break;
+      }
+    }
+    for (int s = 0; s < 4; ++s) scallop_max = std::max(scallop_max, worst[s]);
+    const std::array<double, 4> taken{b.v0 - a.v0, a.u1 - b.u1, a.v1 - b.v1, b.u0 - a.u0};
+    for (int s = 0; s < 4; ++s)
+      if (taken[s] > 0) {
+        const int across_v = along_u(s) ? 1 : 0;
+        step_min[across_v] = std::min(step_min[across_v], taken[s]);
+        step_max[across_v] = std::max(step_max[across_v], taken[s]);
+      }
+    lines["u_from_0"].push_back(b.u0);
+    lines["u_from_1"].push_back(b.u1);
+    lines["v_from_0"].push_back(b.v0);
+    lines["v_from_1"].push_back(b.v1);
+    points += cb.uv.size();
+    result.passes.push_back(to_pass(cb));
+    a = b;
+    ca = std::move(cb);
+    if (o.progress)
+      o.progress(1 - (a.u1 - a.u0) * (a.v1 - a.v0) / (domain.width * domain.height),
+                 "contour " + std::to_string(result.passes.size()));
+  }
+  result.report = {{"contours", result.passes.size()},
+                   {"points", points},
+                   {"grid_lines", lines},
+                   {"u_step_min", std::isfinite(step_min[0]) ? step_min[0] : 0.0},
+                   {"u_step_max", step_max[0]},
+                   {"v_step_min", std::isfinite(step_min[1]) ? step_min[1] : 0.0},
+                   {"v_step_max", step_max[1]},
+                   {"side_steps_shrunk", shrinks},
+                   {"scallop_max", scallop_max},
+                   {"chord_max", planner.chord_max},
+                   {"unreachable_samples", planner.unreachable}};
+  if (!warning.empty()) result.report["warning"] = warning;
+  return result;
+}
+
+}  // namespace scallop

@@ -1,0 +1,92 @@
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <stdexcept>
+#include <string>
+
+#include "engine/node.h"
+#include "nodes/geom/bspline_surface.h"
+#include "nodes/path/contour_grid.h"
+#include "nodes/types/document.h"
+#include "nodes/types/surfaces.h"
+#include "nodes/types/toolpath.h"
+
+namespace scallop::path_nodes {
+
+NodeDecl make_contour_grid_node() {
+  NodeDecl d;
+  d.type = "path.contour_grid";
+  d.version = 1;
+  d.description =
+      "contour-parallel passes on every B-spline patch (the second paper's Algorithm 1): nested rectangles of the "
+      "patch's (u, v) square, each side stepped in from the scallop limit and the scallop between every two "
+      "contours evaluated on the surface";
+  d.input("surfaces", "Surfaces", "the patches (surface.fit_bspline), each machined along its own direction")
+      .output("toolpath", "Toolpath",
+              "the contours of every patch in the part's frame (patch by patch, outermost first, each closed), "
+              "normals turned to the patch's direction")
+      .output("report", "Report",
+              "{patches: [{patch, contours, points, u_step_min/max, v_step_min/max (parameter units), "
+              "side_steps_shrunk, scallop_max and chord_max (found by the checks, mm), unreachable_samples, "
+              "grid_lines}], contours, points, scallop_max, chord_max}");
+  d.options<ContourGridOptions>()
+      .number("tool_radius", &ContourGridOptions::tool_radius, 1e-3, 1e3, "mm", "ball-end cutter radius r")
+      .number("scallop_height", &ContourGridOptions::scallop_height, 1e-6, 1e2, "mm", "largest scallop height h")
+      .number("chord_error", &ContourGridOptions::chord_error, 1e-6, 1e2, "mm", "largest chord deviation e")
+      .number("max_segment", &ContourGridOptions::max_segment, 1e-3, 1e3, "mm", "longest forward step")
+      .integer("side_samples", &ContourGridOptions::side_samples, 2, 10000, "",
+               "points per side where the side step is computed (Algorithm 1's k)")
+      .integer("max_contours", &ContourGridOptions::max_contours, 1, 1000000, "",
+               "more contours than this on one patch: refused, with where");
+  d.run = [](NodeContext& ctx) {
+    auto surfaces = ctx.input<Surfaces>("surfaces");
+    const ContourGridOptions o = ctx.options<ContourGridOptions>();
+    if (!(o.scallop_height < o.tool_radius))
+      throw NodeError("path.contour_grid: scallop_height must be smaller than tool_radius");
+    const std::size_t np = surfaces->patches.size();
+    if (np == 0) throw NodeError("path.contour_grid: there are no patches");
+    std::vector<ContourGridResult> results(np);
+    std::vector<std::string> errors(np);
+    std::atomic<std::size_t> done{0};
+    tbb::parallel_for(std::size_t(0), np, [&](std::size_t p) {
+      try {
+        const SurfacePatch& sp = surfaces->patches[p];
+        const BSplinePatch patch(sp.surface, sp.direction);
+        results[p] = plan_contour_grid(patch, o);
+      } catch (const std::invalid_argument& e) {
+        errors[p] = e.what();
+      }
+      ctx.progress(double(++done) / double(np), "contours of patch " + std::to_string(p));
+    });
+    for (std::size_t p = 0; p < np; ++p)
+      if (!errors[p].empty()) throw NodeError("path.contour_grid: patch " + std::to_string(p) + ": " + errors[p]);
+
+    Toolpath tp;
+    tp.tool_radius = o.tool_radius;
+    tp.scallop_height = o.scallop_height;
+    tp.chord_error = o.chord_error;
+    tp.pattern = "contour_grid";
+    nlohmann::json patches = nlohmann::json::array();
+    std::size_t contours = 0, points = 0;
+    double scallop_max = 0, chord_max = 0;
+    for (std::size_t p = 0; p < np; ++p) {
+      nlohmann::json r = results[p].report;
+      r["patch"] = p;
+      contours += r["contours"].get<std::size_t>();
+      points += r["points"].get<std::size_t>();
+      scallop_max = std::max(scallop_max, r["scallop_max"].get<double>());
+      chord_max = std::max(chord_max, r["chord_max"].get<double>());
+      if (r.contains("warning")) ctx.warn("patch " + std::to_string(p) + ": " + r["warning"].get<std::string>());
+      patches.push_back(std::move(r));
+      for (auto& pass : results[p].passes) tp.passes.push_back(std::move(pass));
+    }
+    Report report;
+    report.data = {{"patches", std::move(patches)}, {"contours", contours},       {"points", points},
+                   {"scallop_max", scallop_max},      {"chord_max", chord_max}};
+    ctx.set("report", std::move(report));
+    ctx.set("toolpath", std::move(tp));
+  };
+  return d;
+}
+
+}  // namespace scallop::path_nodes

@@ -1,0 +1,194 @@
+// Contour grids on exact surfaces written here (a plane, a convex ridge and a concave trough of
+// radius 20 mm): the scallop measured over the whole patch by sphere tracing against the ball-
+// centre polylines (not the planner's own ray-capsule test), the chord deviation against the
+// exact ball-centre curve.
+#include "nodes/path/contour_grid.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "nodes/path/step_size.h"
+#include "nodes/types/document.h"
+#include "nodes/types/surfaces.h"
+#include "nodes/types/toolpath.h"
+#include "tests/nodes/surface/surface_test_util.h"
+#include "tests/test_support.h"
+
+namespace scallop {
+namespace path_nodes {
+NodeDecl make_contour_grid_node();
+}  // namespace path_nodes
+
+namespace {
+
+using V = Eigen::Vector3d;
+
+// u and v in mm along the surface. shape 0: the plane z = 0 over [0, 40] x [0, 30]; +1: a ridge
+// (a cylinder of radius R about the y axis seen from outside), -1: a trough (seen from inside),
+// u the arc length across 80 degrees, v along the axis over 30 mm.
+struct Exact final : ParametricSurface {
+  int shape;
+  double R = 20;
+  UVDomain d;
+  explicit Exact(int s) : shape(s) {
+    d.kind = UVDomain::Kind::Rectangle;
+    d.width = s == 0 ? 40 : R * 80 * M_PI / 180;
+    d.height = 30;
+  }
+  SurfaceSample operator()(const Eigen::Vector2d& uv_in) const override {
+    const Eigen::Vector2d uv = d.clamp(uv_in);
+    SurfaceSample x;
+    if (shape == 0) {
+      x.position = V(uv.x(), uv.y(), 0);
+      x.normal = V::UnitZ();
+      return x;
+    }
+    const double a = (uv.x() - d.width / 2) / R;
+    if (shape > 0) {
+      x.position = V(R * std::sin(a), uv.y(), R * std::cos(a));
+      x.normal = V(std::sin(a), 0, std::cos(a));
+    } else {
+      x.position = V(R * std::sin(a), uv.y(), -R * std::cos(a));
+      x.normal = V(-std::sin(a), 0, std::cos(a));
+    }
+    return x;
+  }
+  const UVDomain& domain() const override { return d; }
+  double uv_spacing() const override { return 0.01; }
+};
+
+double segment_distance(const V& q, const V& a, const V& b) {
+  const V ab = b - a;
+  const double t = ab.squaredNorm() > 0 ? std::clamp((q - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+  return (q - (a + t * ab)).norm();
+}
+
+// The largest scallop over an n x n grid of the whole domain (its rim included): the smallest t
+// >= 0 with p + t n within r of a ball-centre polyline, by sphere tracing.
+double measured_scallop(const Exact& s, const ContourGridResult& g, double r, int n) {
+  std::vector<std::array<V, 2>> segs;
+  for (const auto& p : g.passes)
+    for (std::size_t k = 0; k + 1 < p.contact.size(); ++k)
+      segs.push_back({p.contact[k] + r * p.normal[k], p.contact[k + 1] + r * p.normal[k + 1]});
+  double worst = 0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const SurfaceSample x = s({s.d.width * i / (n - 1), s.d.height * j / (n - 1)});
+      double t = 0;
+      for (int it = 0; it < 200; ++it) {
+        double d = 1e9;
+        for (const auto& sg : segs) d = std::min(d, segment_distance(x.position + t * x.normal, sg[0], sg[1]));
+        if (d - r <= 1e-9) break;
+        t += d - r;
+        if (t > 1) break;
+      }
+      worst = std::max(worst, t);
+    }
+  return worst;
+}
+
+// The largest distance from a segment's ball-centre chord to the exact centre at its middle.
+double measured_chord(const Exact& s, const ContourGridResult& g, double r) {
+  double worst = 0;
+  for (const auto& p : g.passes)
+    for (std::size_t k = 0; k + 1 < p.uv.size(); ++k) {
+      const SurfaceSample m = s((p.uv[k] + p.uv[k + 1]) / 2);
+      worst = std::max(worst, segment_distance(m.position + r * m.normal, p.contact[k] + r * p.normal[k],
+                                               p.contact[k + 1] + r * p.normal[k + 1]));
+    }
+  return worst;
+}
+
+ContourGridOptions options() {
+  ContourGridOptions o;
+  o.tool_radius = 3;
+  o.scallop_height = 0.02;
+  o.chord_error = 0.005;
+  return o;
+}
+
+TEST(ContourGrid, APlaneGetsNestedRectanglesSpacedForTheirCorners) {
+  const Exact plane(0);
+  const ContourGridResult g = plan_contour_grid(plane, options());
+  // Between two straight passes w apart the cusp is r - sqrt(r^2 - w^2/4): h = 0.02 at
+  // w = 2 sqrt(2 r h - h^2) = 0.6917. Where the inner rectangle turns a corner, the point
+  // farthest from the balls lies on the diagonal, at d = w sqrt(2) / (1 + sqrt(2)) = 0.586 w from
+  // the two outer sides and the inner corner alike: h there needs d = sqrt(2 r h - h^2), so
+  // w = 0.5904 (Algorithm 1, step 7: the corner shrinks the steps).
+  const double d = std::sqrt(2 * 3 * 0.02 - 0.02 * 0.02), w = d * (1 + std::sqrt(2.0)) / std::sqrt(2.0);
+  const auto& lines = g.report["grid_lines"];
+  for (const char* key : {"u_from_0", "v_from_0"}) {
+    const double first = lines[key][1].get<double>() - lines[key][0].get<double>();
+    EXPECT_LE(first, w + 1e-9) << key;
+    EXPECT_GE(first, 0.98 * w) << key;
+  }
+  // 15 mm from the long sides to the middle.
+  EXPECT_LE(g.passes.size(), std::size_t(std::ceil(15 / (0.98 * w))) + 1);
+  EXPECT_GE(g.passes.size(), std::size_t(15 / w));
+  EXPECT_LE(g.report["scallop_max"].get<double>(), 0.02);
+  EXPECT_LE(measured_scallop(plane, g, 3, 61), 0.02 * 1.01);
+  for (const auto& p : g.passes) EXPECT_EQ(p.uv.front(), p.uv.back());  // closed
+  EXPECT_EQ(g.passes[0].uv[0], Eigen::Vector2d(0, 0));                 // the border first
+}
+
+TEST(ContourGrid, ARidgeAndATroughStayWithinHTheTroughWithWiderSteps) {
+  std::map<int, double> first_u_step;
+  for (int shape : {+1, -1}) {
+    SCOPED_TRACE(shape);
+    const Exact s(shape);
+    const ContourGridResult g = plan_contour_grid(s, options());
+    EXPECT_LE(g.report["scallop_max"].get<double>(), 0.02);
+    EXPECT_LE(measured_scallop(s, g, 3, 61), 0.02 * 1.01);
+    EXPECT_LE(measured_chord(s, g, 3), 0.005 * 1.01);
+    const auto& u = g.report["grid_lines"]["u_from_0"];
+    first_u_step[shape] = u[1].get<double>() - u[0].get<double>();
+  }
+  // Across the curvature Lin and Koren's interval is sqrt(8 h r R / (R +- r)): narrower over the
+  // ridge, wider in the trough (the corners shrink both alike).
+  EXPECT_LT(first_u_step[+1], first_u_step[-1]);
+}
+
+TEST(ContourGrid, BadInputIsNamed) {
+  const Exact plane(0);
+  auto error = [&](ContourGridOptions o) {
+    return test::error_of<std::invalid_argument>([&] { plan_contour_grid(plane, o); });
+  };
+  ContourGridOptions o = options();
+  o.tool_radius = 0;
+  EXPECT_EQ(error(o), "tool_radius must be positive");
+  o = options();
+  o.scallop_height = 3;
+  EXPECT_EQ(error(o), "scallop_height must lie between 0 and tool_radius");
+  o = options();
+  o.max_contours = 3;
+  EXPECT_EQ(error(o).substr(0, 35), "more than max_contours (3) contours");
+}
+
+
+TEST(ContourGrid, TheNodePlansEveryPatchAlongItsOwnDirection) {
+  // A 20 x 10 top (z = 5, up) and a 20 x 5 wall (y = 0, facing -y), bilinear patches.
+  auto s = std::make_shared<Surfaces>();
+  s->patches.push_back(test::flat_patch({0, 0, 5}, {20, 0, 5}, {0, 10, 5}, {20, 10, 5}, {0, 0, 1}));
+  s->patches.push_back(test::flat_patch({0, 0, 0}, {20, 0, 0}, {0, 0, 5}, {20, 0, 5}, {0, -1, 0}));
+  auto out = test::run_node(path_nodes::make_contour_grid_node(),
+                            {{"tool_radius", 2}, {"scallop_height", 0.01}, {"chord_error", 0.005}}, {{"surfaces", s}});
+  const auto& tp = *std::dynamic_pointer_cast<const Toolpath>(out.at("toolpath"));
+  const auto& r = std::dynamic_pointer_cast<const Report>(out.at("report"))->data;
+  ASSERT_EQ(r["patches"].size(), 2u);
+  EXPECT_EQ(tp.passes.size(), r["contours"].get<std::size_t>());
+  EXPECT_EQ(tp.pattern, "contour_grid");
+  EXPECT_LE(r["scallop_max"].get<double>(), 0.01);
+  const std::size_t top = r["patches"][0]["contours"].get<std::size_t>();
+  for (std::size_t k = 0; k < tp.passes.size(); ++k)
+    for (const V& n : tp.passes[k].normal) EXPECT_LT((n - (k < top ? V(0, 0, 1) : V(0, -1, 0))).norm(), 1e-12);
+  EXPECT_EQ(test::error_of<NodeError>([] {
+              test::run_node(path_nodes::make_contour_grid_node(), nlohmann::json::object(),
+                             {{"surfaces", std::make_shared<Surfaces>()}});
+            }),
+            "path.contour_grid: there are no patches");
+}
+
+}  // namespace
+}  // namespace scallop
