@@ -10,19 +10,45 @@
 #include <limits>
 
 namespace scallop {
+namespace {
 
-std::vector<double> distances_to_mesh(const std::vector<Eigen::Vector3d>& points, const Mesh& m) {
-  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-  using Triangles = std::vector<Kernel::Triangle_3>;
-  using Primitive = CGAL::AABB_triangle_primitive<Kernel, Triangles::const_iterator>;
-  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
-  auto point = [](const Eigen::Vector3d& p) { return Kernel::Point_3(p.x(), p.y(), p.z()); };
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Triangles = std::vector<Kernel::Triangle_3>;
+using Primitive = CGAL::AABB_triangle_primitive<Kernel, Triangles::const_iterator>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+
+Kernel::Point_3 point(const Eigen::Vector3d& p) { return Kernel::Point_3(p.x(), p.y(), p.z()); }
+
+// Each polygon fanned from its first corner.
+Triangles triangles(const Mesh& m) {
   Triangles tris;
   tris.reserve(m.num_faces());
   for (std::size_t f = 0; f < m.num_faces(); ++f)
     for (std::size_t k = 1; k + 1 < m.face_size(f); ++k)
       tris.emplace_back(point(m.vertices[m.face(f)[0]]), point(m.vertices[m.face(f)[k]]),
                         point(m.vertices[m.face(f)[k + 1]]));
+  return tris;
+}
+
+}  // namespace
+
+std::vector<bool> rays_hit_mesh(const std::vector<Eigen::Vector3d>& origins, const std::vector<Eigen::Vector3d>& directions,
+                                const Mesh& m) {
+  std::vector<bool> hit(origins.size(), false);
+  const Triangles tris = triangles(m);
+  if (tris.empty()) return hit;
+  Tree tree(tris.begin(), tris.end());
+  std::vector<char> h(origins.size(), 0);  // vector<bool> is not safe to write in parallel
+  tbb::parallel_for(std::size_t{0}, origins.size(), [&](std::size_t i) {
+    const Eigen::Vector3d& d = directions[i];
+    h[i] = tree.do_intersect(Kernel::Ray_3(point(origins[i]), Kernel::Direction_3(d.x(), d.y(), d.z())));
+  });
+  for (std::size_t i = 0; i < h.size(); ++i) hit[i] = h[i];
+  return hit;
+}
+
+std::vector<double> distances_to_mesh(const std::vector<Eigen::Vector3d>& points, const Mesh& m) {
+  const Triangles tris = triangles(m);
   std::vector<double> d(points.size(), std::numeric_limits<double>::infinity());
   if (tris.empty()) return d;
   Tree tree(tris.begin(), tris.end());

@@ -16,7 +16,10 @@
 // not 5). The
 // setups are chosen greedily (set cover): the candidate that can cut the most patches not yet
 // covered, ties to the one whose smallest n . a over them is larger, then to the earlier
-// candidate; repeated until every patch is covered. Each patch then goes to the chosen setup
+// candidate; repeated until every patch is covered. An axis reaches a patch only when the rays
+// along it from the patch's samples (started 0.01 of the part's diagonal along the axis, past the
+// gap between the fitted surface and the mesh) leave without meeting the part: an overhang hides
+// it (the ball's width is the gouge guard's matter). Each patch then goes to the chosen setup
 // where its smallest n . a is largest. Greedy set cover is within a factor ln(patches) of the
 // fewest setups. Measured (graphs/mesh-to-surfaces.json, defaults): the fandisk's 65 patches in
 // 14 setups (13 with any_axis), the block's 101 in 13 (11): thin strips along rounded edges,
@@ -32,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include "nodes/types/mesh.h"
 #include "nodes/types/surfaces.h"
 
 namespace scallop {
@@ -48,13 +52,14 @@ struct Setup {
   Eigen::Vector3d translation;            // t
   std::vector<std::uint32_t> patches;     // indices into Surfaces::patches, increasing
   double min_normal_dot = 1;              // smallest n . axis over those patches
+  std::size_t hidden_samples = 0;         // samples of those patches the axis cannot reach (see above)
 };
 
-// points  the part's points (mesh vertices), for the translation; may be empty (t = 0).
+// part  the whole part (its mesh): where it hides a patch from an axis, and where it stands in
+//       each setup; may be empty (no hiding, t = 0).
 // Throws std::invalid_argument when there is no patch, an option is out of range, or a patch's
 // surface or direction is not usable (naming the patch).
-std::vector<Setup> plan_setups(const Surfaces& surfaces, const std::vector<Eigen::Vector3d>& points,
-                               const SetupOptions& options = {});
+std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const SetupOptions& options = {});
 
 // The smallest rotation taking unit vector a to +z (a half turn about x for a = -z).
 Eigen::Matrix3d rotation_to_z(const Eigen::Vector3d& a);

@@ -1,3 +1,4 @@
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -12,15 +13,18 @@ namespace scallop::surface_nodes {
 NodeDecl make_setups_node() {
   NodeDecl d;
   d.type = "surface.setups";
-  d.version = 1;
+  d.version = 2;  // 2: the part hides patches from axes
   d.description =
       "groups the patches into clampings by machining direction, as few as the directions allow (greedy set cover), "
       "each with the rigid transform from the part's frame to the machine's (tool axis +z)";
   d.input("surfaces", "Surfaces", "the patches (surface.fit_bspline)")
-      .input("mesh", "Mesh", "the part, for placing it in each setup (centred on x = y = 0, lowest point z = 0)", false)
+      .input("mesh", "Mesh",
+             "the whole part: an axis reaches a patch only where the part does not hide it, and the part is placed "
+             "in each setup (centred on x = y = 0, lowest point z = 0)",
+             false)
       .output("report", "Report",
               "{setups: [{name, axis (part frame, towards the spindle), part_to_machine (3 x 4 [R|t], as "
-              "scallop-setups/1), patches, min_normal_dot}], patches (count), min_normal_dot (the option)}");
+              "scallop-setups/1), patches, min_normal_dot, hidden_samples}], patches (count), min_normal_dot (the option)}");
   d.options<SetupOptions>().number("min_normal_dot", &SetupOptions::min_normal_dot, 1e-6, 1, "",
                                    "a setup cuts a patch when n . axis is at least this over it (0.2: walls up to "
                                    "about 78 degrees), or when the axis is the patch's own direction")
@@ -29,12 +33,12 @@ NodeDecl make_setups_node() {
             "otherwise the patches' own directions, the coordinate axes and the one away from the base");
   d.run = [](NodeContext& ctx) {
     auto surfaces = ctx.input<Surfaces>("surfaces");
-    std::vector<Eigen::Vector3d> points;
-    if (ctx.has_input("mesh")) points = ctx.input<Mesh>("mesh")->vertices;
+    const std::shared_ptr<const Mesh> part =
+        ctx.has_input("mesh") ? ctx.input<Mesh>("mesh") : std::make_shared<const Mesh>();
     const SetupOptions o = ctx.options<SetupOptions>();
     std::vector<Setup> setups;
     try {
-      setups = plan_setups(*surfaces, points, o);
+      setups = plan_setups(*surfaces, *part, o);
     } catch (const std::invalid_argument& e) {
       throw NodeError(std::string("surface.setups: ") + e.what());
     }
@@ -47,7 +51,8 @@ NodeDecl make_setups_node() {
                       {"axis", {s.axis.x(), s.axis.y(), s.axis.z()}},
                       {"part_to_machine", m},
                       {"patches", s.patches},
-                      {"min_normal_dot", s.min_normal_dot}});
+                      {"min_normal_dot", s.min_normal_dot},
+                      {"hidden_samples", s.hidden_samples}});
     }
     Report report;
     report.data = {{"setups", list}, {"patches", surfaces->patches.size()}, {"min_normal_dot", o.min_normal_dot}};

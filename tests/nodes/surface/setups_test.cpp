@@ -34,10 +34,11 @@ Surfaces open_box() {
   return s;
 }
 
-std::vector<V> box_corners() {
-  std::vector<V> c;
-  for (int i = 0; i < 8; ++i) c.push_back(V(i & 1 ? 40 : 0, i & 2 ? 30 : 0, i & 4 ? 12 : 0));
-  return c;
+// The box's corners only (no faces): where it stands, nothing hidden.
+Mesh box_corners() {
+  Mesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.push_back(V(i & 1 ? 40 : 0, i & 2 ? 30 : 0, i & 4 ? 12 : 0));
+  return m;
 }
 
 TEST(Setups, ABoxOnItsBaseNeedsFiveClampingsOneFacePerSetup) {
@@ -76,12 +77,34 @@ TEST(Setups, ATiltedFaceGoesWithTheTopWhenTheToolReachesIt) {
   const double c = std::cos(M_PI / 6), sn = std::sin(M_PI / 6);
   s.patches.push_back(flat_patch({0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {10, 10, 0}, {0, 0, 1}));
   s.patches.push_back(flat_patch({10, 0, 0}, {10 + 10 * c, 0, -10 * sn}, {10, 10, 0}, {10 + 10 * c, 10, -10 * sn}, {sn, 0, c}));
-  const auto setups = plan_setups(s, {});
+  const auto setups = plan_setups(s, Mesh{});
   ASSERT_EQ(setups.size(), 1u);
   EXPECT_EQ(setups[0].name, "1: +z");
   EXPECT_EQ(setups[0].patches, (std::vector<std::uint32_t>{0, 1}));
   EXPECT_NEAR(setups[0].min_normal_dot, c, 1e-12);
   EXPECT_EQ(setups[0].translation, V::Zero());
+}
+
+TEST(Setups, AFaceUnderAnOverhangNeedsAClampingThatSeesIt) {
+  // The flat top and the face tilted 30 degrees of the test above, and a roof at z = 30 over
+  // the tilted face (x from 10.5 to 19): +z no longer reaches it; along its own direction the
+  // rays pass the roof's edge (at z = 30 they are beyond x = 27).
+  Surfaces s;
+  const double c = std::cos(M_PI / 6), sn = std::sin(M_PI / 6);
+  s.patches.push_back(flat_patch({0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {10, 10, 0}, {0, 0, 1}));
+  s.patches.push_back(
+      flat_patch({10, 0, 0}, {10 + 10 * c, 0, -10 * sn}, {10, 10, 0}, {10 + 10 * c, 10, -10 * sn}, {sn, 0, c}));
+  Mesh roof;
+  roof.vertices = {{10.5, -1, 30}, {19, -1, 30}, {19, 11, 30}, {10.5, 11, 30}};
+  roof.add_face({0, 3, 2, 1});
+  const auto open = plan_setups(s, Mesh{});
+  EXPECT_EQ(open.size(), 1u);
+  const auto covered = plan_setups(s, roof);
+  ASSERT_EQ(covered.size(), 2u);
+  EXPECT_EQ(covered[0].name, "1: +z");
+  EXPECT_EQ(covered[0].patches, std::vector<std::uint32_t>{0});
+  EXPECT_EQ(covered[1].patches, std::vector<std::uint32_t>{1});
+  EXPECT_EQ(covered[1].hidden_samples, 0u);
 }
 
 TEST(Setups, AWallSteeperThanTheLimitGetsItsOwnClamping) {
@@ -92,11 +115,11 @@ TEST(Setups, AWallSteeperThanTheLimitGetsItsOwnClamping) {
   s.patches.push_back(flat_patch({0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {10, 10, 0}, {0, 0, 1}));
   s.patches.push_back(flat_patch({10, 0, 0}, {10 + 10 * std::cos(t), 0, -10 * std::sin(t)}, {10, 10, 0},
                            {10 + 10 * std::cos(t), 10, -10 * std::sin(t)}, n));
-  const auto two = plan_setups(s, {});
+  const auto two = plan_setups(s, Mesh{});
   ASSERT_EQ(two.size(), 2u);
   EXPECT_EQ(two[1].name, "2: (0.996, 0.000, 0.087)");
   EXPECT_EQ(two[1].patches, std::vector<std::uint32_t>{1});
-  const auto one = plan_setups(s, {}, {.min_normal_dot = 0.05});
+  const auto one = plan_setups(s, Mesh{}, {.min_normal_dot = 0.05});
   ASSERT_EQ(one.size(), 1u);
   EXPECT_NEAR(one[0].min_normal_dot, std::cos(t), 1e-12);
 }
@@ -110,19 +133,18 @@ TEST(Setups, ARotationTakesEveryAxisToZ) {
 }
 
 TEST(Setups, BadInputIsNamed) {
-  EXPECT_EQ(test::error_of<std::invalid_argument>([] { plan_setups(Surfaces{}, {}); }),
+  EXPECT_EQ(test::error_of<std::invalid_argument>([] { plan_setups(Surfaces{}, Mesh{}); }),
             "there are no patches to set up");
   Surfaces s = open_box();
-  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { plan_setups(s, {}, {.min_normal_dot = 0}); }),
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { plan_setups(s, Mesh{}, {.min_normal_dot = 0}); }),
             "min_normal_dot must lie in (0, 1]");
   s.patches[3].direction = V(0, 0, 0);
-  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { plan_setups(s, {}); }),
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { plan_setups(s, Mesh{}); }),
             "patch 3: its direction is not a unit vector");
 }
 
 TEST(Setups, TheNodeReportsPartToMachineAsTheSetupsFileHasIt) {
-  Mesh part;
-  part.vertices = box_corners();
+  const Mesh part = box_corners();
   auto out = test::run_node(surface_nodes::make_setups_node(), nlohmann::json::object(),
                             {{"surfaces", std::make_shared<Surfaces>(open_box())}, {"mesh", std::make_shared<Mesh>(part)}});
   const auto& r = std::dynamic_pointer_cast<const Report>(out.at("report"))->data;

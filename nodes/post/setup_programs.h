@@ -1,0 +1,59 @@
+// One machine program per clamping (issue 14): the passes of each setup's patches taken into that
+// setup's machine frame (tool axis +z), linked and written as G-code, with the setups file that
+// ../shared/tools/verify_part.py and a machinist read (format scallop-setups/1).
+//
+// A part point p is at R p + t in setup s's frame ([R|t] = its part_to_machine), a normal n at
+// R n. Links are checked, and the clearance plane set, against the whole part's points in that
+// frame (link.h), not only the patches cut: a rapid never crosses another face of the part.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "nodes/post/gcode.h"
+#include "nodes/post/link.h"
+#include "nodes/types/toolpath.h"
+
+namespace scallop {
+
+// A clamping as surface.setups reports it.
+struct SetupSpec {
+  std::string name;
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  std::vector<std::size_t> patches;
+};
+
+struct SetupProgram {
+  std::string name;
+  std::string file;        // "setup_<k>.ngc", k from 1
+  std::string gcode;       // the program text
+  std::size_t passes = 0;  // contours cut
+  std::size_t moves = 0;
+  double clearance_z = 0;  // mm, machine frame
+};
+
+// setups        from surface.setups' report: {setups: [{name, part_to_machine, patches}]}
+// Throws std::invalid_argument for a malformed report (naming the setup), a part_to_machine that
+// is not a rotation (|R^T R - I| > 1e-6 or det R != +1, as verify_part.py refuses it) or a patch
+// index out of range.
+std::vector<SetupSpec> setups_from_report(const nlohmann::json& report, std::size_t patches);
+
+// path          the passes of every patch, patch by patch (path.contour_grid)
+// passes_per_patch  how many of them each patch has, in order (their sum: path.passes.size())
+// part          the whole part's points in its own frame (the mesh's vertices)
+// Returns one program per setup that cuts anything. Throws std::invalid_argument when the counts
+// do not add up; link_passes' and write_gcode's errors pass through.
+std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector<std::size_t>& passes_per_patch,
+                                         const std::vector<SetupSpec>& setups,
+                                         const std::vector<Eigen::Vector3d>& part, const LinkOptions& link,
+                                         const GCodeOptions& gcode);
+
+// The setups file: {"format": "scallop-setups/1", "units": "mm", "setups": [{name, gcode,
+// part_to_machine}]}.
+nlohmann::json setups_file(const std::vector<SetupProgram>& programs, const std::vector<SetupSpec>& setups);
+
+}  // namespace scallop

@@ -1,0 +1,92 @@
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+#include "engine/node.h"
+#include "engine/output_path.h"
+#include "nodes/io/write_support.h"
+#include "nodes/post/setup_programs.h"
+#include "nodes/types/document.h"
+#include "nodes/types/mesh.h"
+#include "nodes/types/toolpath.h"
+
+namespace scallop::post_nodes {
+
+namespace {
+struct SetupProgramsOptions {
+  std::string dialect = "linuxcnc";
+  double feed = 1000, plunge_feed = 300, spindle_rpm = 10000;
+  double safety = 5;
+};
+}  // namespace
+
+NodeDecl make_setup_programs_node() {
+  NodeDecl d;
+  d.type = "post.setup_programs";
+  d.version = 1;
+  d.description =
+      "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), linked "
+      "against the whole part, and the setups file (scallop-setups/1) naming them";
+  d.cache_on_disk = false;  // it writes files
+  d.input("toolpath", "Toolpath", "the passes of every patch, patch by patch (path.contour_grid)")
+      .input("contours", "Report", "path.contour_grid's report: how many passes each patch has")
+      .input("setups", "Report", "surface.setups' report: the clampings, their part_to_machine and patches")
+      .input("mesh", "Mesh", "the whole part: links avoid it and the clearance plane clears it in every setup")
+      .output("file", "File", "the setups file")
+      .output("report", "Report", "{setups: [{name, gcode, passes, moves, clearance_z (mm, machine frame)}]}")
+      .param_output_path("path", "the setups file to write, relative to the output folder (-o); the programs "
+                                 "(setup_1.ngc, ...) go beside it");
+  d.options<SetupProgramsOptions>()
+      .choice("dialect", &SetupProgramsOptions::dialect, {"linuxcnc", "grbl", "fanuc"}, "controller dialect")
+      .number("feed", &SetupProgramsOptions::feed, 1e-3, 1e6, "mm/min", "feed rate of cutting moves")
+      .number("plunge_feed", &SetupProgramsOptions::plunge_feed, 1e-3, 1e6, "mm/min", "feed rate of plunges")
+      .number("spindle_rpm", &SetupProgramsOptions::spindle_rpm, 0, 1e6, "rpm", "spindle speed; 0: no spindle words")
+      .number("safety", &SetupProgramsOptions::safety, 0, 1e3, "mm",
+              "clearance plane height above the part's highest point in each setup");
+  d.run = [](NodeContext& ctx) {
+    auto path = ctx.input<Toolpath>("toolpath");
+    const auto& contours = ctx.input<Report>("contours")->data;
+    const auto& setups_report = ctx.input<Report>("setups")->data;
+    auto mesh = ctx.input<Mesh>("mesh");
+    const SetupProgramsOptions o = ctx.options<SetupProgramsOptions>();
+    const std::string param = ctx.text("path");
+    if (param.empty()) throw NodeError("parameter 'path' is empty: give the setups file to write");
+    std::vector<std::size_t> counts;
+    for (const auto& p : contours.value("patches", nlohmann::json::array())) counts.push_back(p.value("contours", 0));
+    LinkOptions link;
+    link.safety = o.safety;
+    GCodeOptions g;
+    g.dialect = o.dialect, g.feed = o.feed, g.plunge_feed = o.plunge_feed, g.spindle_rpm = o.spindle_rpm;
+    std::vector<SetupSpec> setups;
+    std::vector<SetupProgram> programs;
+    try {
+      setups = setups_from_report(setups_report, counts.size());
+      programs = setup_programs(*path, counts, setups, mesh->vertices, link, g);
+    } catch (const std::exception& e) {
+      throw NodeError(std::string("post.setup_programs: ") + e.what());
+    }
+    const nlohmann::json file = setups_file(programs, setups);
+    ctx.set("file", io::write_output_file(ctx, param, [&](const std::string& written) {
+              const std::filesystem::path folder = std::filesystem::path(written).parent_path();
+              for (const SetupProgram& p : programs) {
+                std::ofstream out(folder / p.file, std::ios::binary);
+                out << p.gcode;
+                if (!out) throw std::runtime_error("cannot write '" + (folder / p.file).string() + "'");
+              }
+              std::ofstream out(written, std::ios::binary);
+              out << file.dump(1) << "\n";
+              if (!out) throw std::runtime_error("cannot write '" + written + "'");
+            }));
+    nlohmann::json list = nlohmann::json::array();
+    for (const SetupProgram& p : programs)
+      list.push_back({{"name", p.name}, {"gcode", p.file}, {"passes", p.passes}, {"moves", p.moves},
+                      {"clearance_z", p.clearance_z}});
+    Report report;
+    report.data = {{"setups", list}};
+    ctx.set("report", std::move(report));
+  };
+  return d;
+}
+
+}  // namespace scallop::post_nodes

@@ -1,0 +1,110 @@
+#include "nodes/post/setup_programs.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "nodes/geom/bspline_surface.h"
+#include "nodes/path/contour_grid.h"
+#include "nodes/surface/setups.h"
+#include "tests/nodes/surface/surface_test_util.h"
+#include "tests/test_support.h"
+
+namespace scallop {
+namespace {
+
+using V = Eigen::Vector3d;
+
+// A 20 x 10 x 5 block standing on z = 0: its top and its front wall (y = 0) as patches, planned
+// with contour grids, set up by plan_setups against the block's mesh.
+struct Block {
+  Surfaces surfaces;
+  Mesh part;
+  Toolpath path;
+  std::vector<std::size_t> counts;
+  std::vector<SetupSpec> setups;
+
+  Block() {
+    surfaces.patches.push_back(test::flat_patch({0, 0, 5}, {20, 0, 5}, {0, 10, 5}, {20, 10, 5}, {0, 0, 1}));
+    surfaces.patches.push_back(test::flat_patch({0, 0, 0}, {20, 0, 0}, {0, 0, 5}, {20, 0, 5}, {0, -1, 0}));
+    for (int i = 0; i < 8; ++i) part.vertices.push_back(V(i & 1 ? 20 : 0, i & 2 ? 10 : 0, i & 4 ? 5 : 0));
+    for (auto f : {std::array<std::uint32_t, 4>{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2},
+                   {1, 3, 7, 5}})
+      part.add_face_range(f);
+    ContourGridOptions o;
+    o.tool_radius = 2, o.scallop_height = 0.05, o.chord_error = 0.01;
+    path.tool_radius = 2, path.scallop_height = 0.05, path.chord_error = 0.01, path.pattern = "contour_grid";
+    for (const auto& sp : surfaces.patches) {
+      const ContourGridResult g = plan_contour_grid(BSplinePatch(sp.surface, sp.direction), o);
+      counts.push_back(g.passes.size());
+      path.passes.insert(path.passes.end(), g.passes.begin(), g.passes.end());
+    }
+    for (const Setup& s : plan_setups(surfaces, part)) {
+      SetupSpec spec;
+      spec.name = s.name, spec.rotation = s.rotation, spec.translation = s.translation;
+      spec.patches.assign(s.patches.begin(), s.patches.end());
+      setups.push_back(spec);
+    }
+  }
+};
+
+// The tool-tip points of a program's G0/G1 moves.
+std::vector<V> tips(const std::string& gcode) {
+  std::vector<V> out;
+  V at(0, 0, 0);
+  std::istringstream in(gcode);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("G0 ", 0) != 0 && line.rfind("G1 ", 0) != 0) continue;  // not G17, G21, ...
+    if (line.find_first_of("XYZ") == std::string::npos) continue;
+    for (char axis : {'X', 'Y', 'Z'}) {
+      const auto k = line.find(axis);
+      if (k != std::string::npos) at[axis - 'X'] = std::stod(line.substr(k + 1));
+    }
+    out.push_back(at);
+  }
+  return out;
+}
+
+TEST(SetupPrograms, EachClampingCutsItsPatchFromAboveInItsOwnFrame) {
+  const Block b;
+  ASSERT_EQ(b.setups.size(), 2u);
+  const auto programs = setup_programs(b.path, b.counts, b.setups, b.part.vertices, {}, {});
+  ASSERT_EQ(programs.size(), 2u);
+  EXPECT_EQ(programs[0].file, "setup_1.ngc");
+  EXPECT_EQ(programs[0].passes, b.counts[0]);
+  EXPECT_EQ(programs[1].passes, b.counts[1]);
+  for (std::size_t s = 0; s < 2; ++s) {
+    // In its machine frame the block's cut face is its top (z = its height there), and every
+    // cutting tip lies on it: the ball touches the face from above.
+    double top = -1e9;
+    for (const V& p : b.part.vertices) top = std::max(top, (b.setups[s].rotation * p + b.setups[s].translation).z());
+    EXPECT_NEAR(programs[s].clearance_z, top + 5, 1e-9);  // LinkOptions::safety
+    std::size_t on_face = 0;
+    double lowest = 1e9;
+    for (const V& t : tips(programs[s].gcode)) on_face += std::abs(t.z() - top) < 1e-4, lowest = std::min(lowest, t.z());
+    EXPECT_GE(on_face, 4 * programs[s].passes);  // each contour's four corners at least
+    EXPECT_GT(lowest, top - 1e-4);                // nothing below the cut face
+  }
+  const nlohmann::json file = setups_file(programs, b.setups);
+  EXPECT_EQ(file["format"], "scallop-setups/1");
+  EXPECT_EQ(file["setups"][1]["gcode"], "setup_2.ngc");
+  EXPECT_EQ(file["setups"][1]["part_to_machine"].size(), 3u);
+}
+
+TEST(SetupPrograms, BadInputIsNamed) {
+  const Block b;
+  EXPECT_EQ(test::error_of<std::invalid_argument>(
+                [&] { setup_programs(b.path, {1, 2}, b.setups, b.part.vertices, {}, {}); }),
+            "the patches' pass counts do not add up to the toolpath's " + std::to_string(b.path.passes.size()) +
+                " passes");
+  const auto report = nlohmann::json::parse(
+      R"({"setups": [{"name": "1: +z", "part_to_machine": [[2, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]], "patches": [0]}]})");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { setups_from_report(report, 2); }),
+            "setup '1: +z': part_to_machine's R is not a rotation");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { setups_from_report(nlohmann::json::object(), 2); }),
+            "the setups report has no setups");
+}
+
+}  // namespace
+}  // namespace scallop
