@@ -47,14 +47,40 @@ std::vector<bool> rays_hit_mesh(const std::vector<Eigen::Vector3d>& origins, con
   return hit;
 }
 
+struct MeshDistance::Impl {
+  Triangles tris;
+  Tree tree;
+};
+
+MeshDistance::MeshDistance(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
+  impl_->tris = triangles(mesh);
+  if (impl_->tris.empty()) return;
+  impl_->tree.insert(impl_->tris.begin(), impl_->tris.end());
+  impl_->tree.build();
+  impl_->tree.accelerate_distance_queries();
+}
+
+MeshDistance::~MeshDistance() = default;
+
+double MeshDistance::operator()(const Eigen::Vector3d& p) const {
+  if (impl_->tris.empty()) return std::numeric_limits<double>::infinity();
+  return std::sqrt(impl_->tree.squared_distance(point(p)));
+}
+
+double MeshDistance::ray_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& d) const {
+  if (impl_->tris.empty()) return std::numeric_limits<double>::infinity();
+  const Kernel::Ray_3 ray(point(p), Kernel::Direction_3(d.x(), d.y(), d.z()));
+  const auto hit = impl_->tree.first_intersection(ray);
+  if (!hit) return std::numeric_limits<double>::infinity();
+  if (const Kernel::Point_3* q = boost::get<Kernel::Point_3>(&hit->first))
+    return std::sqrt(CGAL::squared_distance(*q, ray.source()));
+  return 0;  // the ray runs along a face from p
+}
+
 std::vector<double> distances_to_mesh(const std::vector<Eigen::Vector3d>& points, const Mesh& m) {
-  const Triangles tris = triangles(m);
-  std::vector<double> d(points.size(), std::numeric_limits<double>::infinity());
-  if (tris.empty()) return d;
-  Tree tree(tris.begin(), tris.end());
-  tree.accelerate_distance_queries();
-  tbb::parallel_for(std::size_t{0}, points.size(),
-                    [&](std::size_t i) { d[i] = std::sqrt(tree.squared_distance(point(points[i]))); });
+  const MeshDistance distance(m);
+  std::vector<double> d(points.size());
+  tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) { d[i] = distance(points[i]); });
   return d;
 }
 

@@ -4,11 +4,30 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <memory>
 #include <vector>
 
 #include "nodes/types/mesh.h"
 
 namespace scallop {
+
+// Distances to one mesh's faces, asked many times (the AABB tree built once). Thread-safe.
+class MeshDistance {
+ public:
+  explicit MeshDistance(const Mesh& mesh);  // any polygons, each fanned from its first corner
+  ~MeshDistance();
+  MeshDistance(const MeshDistance&) = delete;
+  MeshDistance& operator=(const MeshDistance&) = delete;
+  // Unsigned distance from p to the nearest point of the faces; +infinity without faces.
+  double operator()(const Eigen::Vector3d& p) const;
+  // How far along the ray from p in direction d (unit) the first face lies; +infinity when the
+  // ray meets none.
+  double ray_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& d) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // points  #P by 3; mesh  any polygons (each fanned into triangles from its first corner).
 // Returns #P unsigned distances to the nearest point of the mesh's faces, computed in parallel;

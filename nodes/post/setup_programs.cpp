@@ -1,10 +1,77 @@
 #include "nodes/post/setup_programs.h"
 
 #include <Eigen/LU>
+#include <cmath>
+#include <functional>
 #include <numeric>
 #include <stdexcept>
 
+#include "nodes/mesh/mesh_distance.h"
+
 namespace scallop {
+namespace {
+
+// The ball centre c lifted along +z until the part is at least r - tolerance from it and nothing
+// of the part lies straight above it (the tool comes down from +z: it cannot reach under an
+// overhang); returns the lift.
+double lift_clear(Eigen::Vector3d& c, const MeshDistance& part, double r, double tolerance) {
+  double lift = 0;
+  for (int it = 0; it < 400; ++it) {
+    const double d = part(c);
+    double step = 0;
+    if (d < r - tolerance)
+      step = r - d + 1e-6;  // the surface is no nearer than d: at least this far to clear
+    else if (const double above = part.ray_distance(c, Eigen::Vector3d::UnitZ()); std::isfinite(above))
+      step = above + r;  // over the face above, then again
+    else
+      break;
+    c.z() += step;
+    lift += step;
+  }
+  return lift;
+}
+
+// Every ball centre of `path` (machine frame) kept off the whole part, and the middles of its
+// moves: a middle that reaches in gets a lifted point of its own, its halves checked again (up to
+// 4 times).
+void keep_off_part(Toolpath& path, const MeshDistance& part, double tolerance, SetupProgram& stats) {
+  const double r = path.tool_radius;
+  auto lift_point = [&](Eigen::Vector3d& contact, const Eigen::Vector3d& n) {
+    Eigen::Vector3d c = contact + r * n;
+    const double lift = lift_clear(c, part, r, tolerance);
+    if (lift > 0) {
+      contact = c - r * n;
+      ++stats.lifted;
+      stats.lift_max = std::max(stats.lift_max, lift);
+    }
+  };
+  for (ToolpathPass& pass : path.passes) {
+    for (std::size_t k = 0; k < pass.contact.size(); ++k) lift_point(pass.contact[k], pass.normal[k]);
+    ToolpathPass out;
+    std::function<void(const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&,
+                       int)>
+        middle = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& na, const Eigen::Vector3d& b,
+                     const Eigen::Vector3d& nb, int depth) {
+          const Eigen::Vector3d n = (na + nb).normalized();
+          Eigen::Vector3d c = (a + r * na + b + r * nb) / 2;
+          if (depth == 0 || !n.allFinite() || part(c) >= r - tolerance) return;
+          Eigen::Vector3d m = c - r * n;
+          lift_point(m, n);
+          middle(a, na, m, n, depth - 1);
+          out.contact.push_back(m), out.normal.push_back(n);
+          if (!pass.uv.empty()) out.uv.push_back(out.uv.back());
+          middle(m, n, b, nb, depth - 1);
+        };
+    for (std::size_t k = 0; k < pass.contact.size(); ++k) {
+      if (k > 0) middle(pass.contact[k - 1], pass.normal[k - 1], pass.contact[k], pass.normal[k], 4);
+      out.contact.push_back(pass.contact[k]), out.normal.push_back(pass.normal[k]);
+      if (!pass.uv.empty()) out.uv.push_back(pass.uv[k]);
+    }
+    pass = std::move(out);
+  }
+}
+
+}  // namespace
 
 std::vector<SetupSpec> setups_from_report(const nlohmann::json& report, std::size_t patches) {
   if (!report.contains("setups") || !report["setups"].is_array() || report["setups"].empty())
@@ -38,9 +105,8 @@ std::vector<SetupSpec> setups_from_report(const nlohmann::json& report, std::siz
 }
 
 std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector<std::size_t>& passes_per_patch,
-                                         const std::vector<SetupSpec>& setups,
-                                         const std::vector<Eigen::Vector3d>& part, const LinkOptions& link,
-                                         const GCodeOptions& gcode) {
+                                         const std::vector<SetupSpec>& setups, const Mesh& part,
+                                         const LinkOptions& link, const GCodeOptions& gcode) {
   if (std::accumulate(passes_per_patch.begin(), passes_per_patch.end(), std::size_t(0)) != path.passes.size())
     throw std::invalid_argument("the patches' pass counts do not add up to the toolpath's " +
                                 std::to_string(path.passes.size()) + " passes");
@@ -65,10 +131,12 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
       }
     }
     if (local.passes.empty()) continue;
-    std::vector<Eigen::Vector3d> surface(part.size());
-    for (std::size_t i = 0; i < part.size(); ++i) surface[i] = s.rotation * part[i] + s.translation;
-    const LinkedPath linked = link_passes(local, surface, link);
+    Mesh placed = part;
+    for (auto& v : placed.vertices) v = s.rotation * v + s.translation;
     SetupProgram prog;
+    if (placed.num_faces() > 0)
+      keep_off_part(local, MeshDistance(placed), std::max(0.25 * path.chord_error, 1e-3), prog);
+    const LinkedPath linked = link_passes(local, placed.vertices, link);
     prog.name = s.name;
     prog.file = "setup_" + std::to_string(out.size() + 1) + ".ngc";
     GCodeOptions g = gcode;

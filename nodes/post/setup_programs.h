@@ -3,8 +3,13 @@
 // ../shared/tools/verify_part.py and a machinist read (format scallop-setups/1).
 //
 // A part point p is at R p + t in setup s's frame ([R|t] = its part_to_machine), a normal n at
-// R n. Links are checked, and the clearance plane set, against the whole part's points in that
-// frame (link.h), not only the patches cut: a rapid never crosses another face of the part.
+// R n. The balls are kept off the whole part, not only off the patch they cut: where the part
+// (its mesh, in that frame) comes closer than r - max(e/4, 0.001) to a ball centre, or to the
+// middle of a move (then a point is inserted there, its halves checked again, 4 times at most),
+// the ball is lifted along +z until it clears it, and over any face of the part straight above
+// it (the tool comes down along +z and cannot reach under an overhang); the lifts are counted
+// (stock left). Links are
+// checked, and the clearance plane set, against the whole part's points (link.h).
 #pragma once
 
 #include <Eigen/Core>
@@ -15,6 +20,7 @@
 
 #include "nodes/post/gcode.h"
 #include "nodes/post/link.h"
+#include "nodes/types/mesh.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
@@ -34,6 +40,8 @@ struct SetupProgram {
   std::size_t passes = 0;  // contours cut
   std::size_t moves = 0;
   double clearance_z = 0;  // mm, machine frame
+  std::size_t lifted = 0;  // ball positions (and inserted move middles) lifted off the part
+  double lift_max = 0;     // mm, the largest lift
 };
 
 // setups        from surface.setups' report: {setups: [{name, part_to_machine, patches}]}
@@ -44,13 +52,12 @@ std::vector<SetupSpec> setups_from_report(const nlohmann::json& report, std::siz
 
 // path          the passes of every patch, patch by patch (path.contour_grid)
 // passes_per_patch  how many of them each patch has, in order (their sum: path.passes.size())
-// part          the whole part's points in its own frame (the mesh's vertices)
+// part          the whole part in its own frame (its mesh; without faces no ball is lifted)
 // Returns one program per setup that cuts anything. Throws std::invalid_argument when the counts
 // do not add up; link_passes' and write_gcode's errors pass through.
 std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector<std::size_t>& passes_per_patch,
-                                         const std::vector<SetupSpec>& setups,
-                                         const std::vector<Eigen::Vector3d>& part, const LinkOptions& link,
-                                         const GCodeOptions& gcode);
+                                         const std::vector<SetupSpec>& setups, const Mesh& part,
+                                         const LinkOptions& link, const GCodeOptions& gcode);
 
 // The setups file: {"format": "scallop-setups/1", "units": "mm", "setups": [{name, gcode,
 // part_to_machine}]}.

@@ -34,7 +34,8 @@ NodeDecl make_setup_programs_node() {
       .input("setups", "Report", "surface.setups' report: the clampings, their part_to_machine and patches")
       .input("mesh", "Mesh", "the whole part: links avoid it and the clearance plane clears it in every setup")
       .output("file", "File", "the setups file")
-      .output("report", "Report", "{setups: [{name, gcode, passes, moves, clearance_z (mm, machine frame)}]}")
+      .output("report", "Report", "{setups: [{name, gcode, passes, moves, clearance_z (mm, machine frame), lifted (ball positions kept off "
+              "the part), lift_max (mm)}]}")
       .param_output_path("path", "the setups file to write, relative to the output folder (-o); the programs "
                                  "(setup_1.ngc, ...) go beside it");
   d.options<SetupProgramsOptions>()
@@ -62,7 +63,7 @@ NodeDecl make_setup_programs_node() {
     std::vector<SetupProgram> programs;
     try {
       setups = setups_from_report(setups_report, counts.size());
-      programs = setup_programs(*path, counts, setups, mesh->vertices, link, g);
+      programs = setup_programs(*path, counts, setups, *mesh, link, g);
     } catch (const std::exception& e) {
       throw NodeError(std::string("post.setup_programs: ") + e.what());
     }
@@ -81,7 +82,7 @@ NodeDecl make_setup_programs_node() {
     nlohmann::json list = nlohmann::json::array();
     for (const SetupProgram& p : programs)
       list.push_back({{"name", p.name}, {"gcode", p.file}, {"passes", p.passes}, {"moves", p.moves},
-                      {"clearance_z", p.clearance_z}});
+                      {"clearance_z", p.clearance_z}, {"lifted", p.lifted}, {"lift_max", p.lift_max}});
     Report report;
     report.data = {{"setups", list}};
     ctx.set("report", std::move(report));

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "nodes/geom/bspline_surface.h"
+#include "nodes/mesh/mesh_distance.h"
 #include "nodes/path/contour_grid.h"
 #include "nodes/surface/setups.h"
 #include "tests/nodes/surface/surface_test_util.h"
@@ -69,7 +70,7 @@ std::vector<V> tips(const std::string& gcode) {
 TEST(SetupPrograms, EachClampingCutsItsPatchFromAboveInItsOwnFrame) {
   const Block b;
   ASSERT_EQ(b.setups.size(), 2u);
-  const auto programs = setup_programs(b.path, b.counts, b.setups, b.part.vertices, {}, {});
+  const auto programs = setup_programs(b.path, b.counts, b.setups, b.part, {}, {});
   ASSERT_EQ(programs.size(), 2u);
   EXPECT_EQ(programs[0].file, "setup_1.ngc");
   EXPECT_EQ(programs[0].passes, b.counts[0]);
@@ -92,10 +93,51 @@ TEST(SetupPrograms, EachClampingCutsItsPatchFromAboveInItsOwnFrame) {
   EXPECT_EQ(file["setups"][1]["part_to_machine"].size(), 3u);
 }
 
+// The closed box [lo, hi] as six quads, outward.
+Mesh box(const V& lo, const V& hi) {
+  Mesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.push_back(V(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z()));
+  for (auto f : {std::array<std::uint32_t, 4>{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2},
+                 {1, 3, 7, 5}})
+    m.add_face_range(f);
+  return m;
+}
+
+TEST(SetupPrograms, ABallAgainstAWallIsLiftedOverIt) {
+  // A 10 x 10 floor (z = 0) against a wall 5 mm high at x = 10: the contour along the floor's
+  // edge x = 10 would put the ball (r = 2) into the wall; kept off, it rides on the wall's top
+  // edge: its centre at z = 5 + 2 there, a lift of 5.
+  Mesh part = box({0, 0, -5}, {10, 10, 0});
+  const Mesh wall = box({10, 0, -5}, {15, 10, 5});
+  const auto base = static_cast<std::uint32_t>(part.vertices.size());
+  part.vertices.insert(part.vertices.end(), wall.vertices.begin(), wall.vertices.end());
+  for (std::size_t f = 0; f < wall.num_faces(); ++f) {
+    std::vector<std::uint32_t> c;
+    for (std::size_t k = 0; k < wall.face_size(f); ++k) c.push_back(wall.face(f)[k] + base);
+    part.add_face_range(c);
+  }
+  ContourGridOptions o;
+  o.tool_radius = 2, o.scallop_height = 0.05, o.chord_error = 0.01;
+  const SurfacePatch floor = test::flat_patch({0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {10, 10, 0}, {0, 0, 1});
+  const ContourGridResult g = plan_contour_grid(BSplinePatch(floor.surface, floor.direction), o);
+  Toolpath path;
+  path.tool_radius = 2, path.scallop_height = 0.05, path.chord_error = 0.01;
+  path.passes = g.passes;
+  SetupSpec top;
+  top.name = "1: +z", top.patches = {0};
+  const auto programs = setup_programs(path, {g.passes.size()}, {top}, part, {}, {});
+  ASSERT_EQ(programs.size(), 1u);
+  EXPECT_GT(programs[0].lifted, 0u);
+  EXPECT_NEAR(programs[0].lift_max, 5.0, 0.01);
+  // No ball centre comes nearer than r - e/4 to the wall.
+  const MeshDistance distance(part);
+  for (const V& t : tips(programs[0].gcode)) EXPECT_GE(distance(t + V(0, 0, 2)), 2 - 0.0025 - 1e-4);
+}
+
 TEST(SetupPrograms, BadInputIsNamed) {
   const Block b;
   EXPECT_EQ(test::error_of<std::invalid_argument>(
-                [&] { setup_programs(b.path, {1, 2}, b.setups, b.part.vertices, {}, {}); }),
+                [&] { setup_programs(b.path, {1, 2}, b.setups, b.part, {}, {}); }),
             "the patches' pass counts do not add up to the toolpath's " + std::to_string(b.path.passes.size()) +
                 " passes");
   const auto report = nlohmann::json::parse(
