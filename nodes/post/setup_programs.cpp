@@ -48,24 +48,52 @@ void keep_off_part(Toolpath& path, const MeshDistance& part, double tolerance, S
   for (ToolpathPass& pass : path.passes) {
     for (std::size_t k = 0; k < pass.contact.size(); ++k) lift_point(pass.contact[k], pass.normal[k]);
     ToolpathPass out;
+    // A ball centre the tool cannot be at: too near the part, or under it (inside the solid or
+    // under an overhang: the unsigned distance alone misses a centre deep inside).
+    auto blocked = [&](const Eigen::Vector3d& c) {
+      return part(c) < r - tolerance || std::isfinite(part.ray_distance(c, Eigen::Vector3d::UnitZ()));
+    };
     std::function<void(const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&,
                        int)>
         middle = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& na, const Eigen::Vector3d& b,
                      const Eigen::Vector3d& nb, int depth) {
-          const Eigen::Vector3d n = (na + nb).normalized();
-          Eigen::Vector3d c = (a + r * na + b + r * nb) / 2;
-          if (depth == 0 || !n.allFinite() || part(c) >= r - tolerance) return;
-          Eigen::Vector3d m = c - r * n;
-          lift_point(m, n);
-          middle(a, na, m, n, depth - 1);
-          out.contact.push_back(m), out.normal.push_back(n);
-          if (!pass.uv.empty()) out.uv.push_back(out.uv.back());
-          middle(m, n, b, nb, depth - 1);
+          if (depth == 0) return;
+          const Eigen::Vector3d ca = a + r * na, cb = b + r * nb;
+          for (double q : {0.5, 0.25, 0.75, 0.125, 0.375, 0.625, 0.875}) {
+            const Eigen::Vector3d n = ((1 - q) * na + q * nb).normalized();
+            if (!n.allFinite() || !blocked((1 - q) * ca + q * cb)) continue;
+            Eigen::Vector3d m = (1 - q) * ca + q * cb - r * n;
+            lift_point(m, n);
+            middle(a, na, m, n, depth - 1);
+            out.contact.push_back(m), out.normal.push_back(n);
+            if (!pass.uv.empty()) out.uv.push_back(out.uv.back());
+            middle(m, n, b, nb, depth - 1);
+            return;
+          }
         };
     for (std::size_t k = 0; k < pass.contact.size(); ++k) {
-      if (k > 0) middle(pass.contact[k - 1], pass.normal[k - 1], pass.contact[k], pass.normal[k], 4);
+      if (k > 0) middle(pass.contact[k - 1], pass.normal[k - 1], pass.contact[k], pass.normal[k], 6);
       out.contact.push_back(pass.contact[k]), out.normal.push_back(pass.normal[k]);
       if (!pass.uv.empty()) out.uv.push_back(pass.uv[k]);
+    }
+    // Where a move still reaches in (a narrow neck above a free pocket: its ends clear, its
+    // middle not), its lower end is raised to its upper end's height, until no move does.
+    for (int sweep = 0; sweep < 50; ++sweep) {
+      bool raised = false;
+      for (std::size_t k = 1; k < out.contact.size(); ++k) {
+        const Eigen::Vector3d ca = out.contact[k - 1] + r * out.normal[k - 1], cb = out.contact[k] + r * out.normal[k];
+        bool reaches = false;
+        for (int q = 1; q < 8 && !reaches; ++q) reaches = blocked(ca + (cb - ca) * (q / 8.0));
+        if (!reaches) continue;
+        const std::size_t low = ca.z() < cb.z() ? k - 1 : k;
+        const double rise = std::abs(cb.z() - ca.z()) + 1e-6;
+        out.contact[low].z() += rise;
+        lift_point(out.contact[low], out.normal[low]);
+        ++stats.lifted;
+        stats.lift_max = std::max(stats.lift_max, rise);
+        raised = true;
+      }
+      if (!raised) break;
     }
     pass = std::move(out);
   }

@@ -4,11 +4,13 @@
 //
 // A part point p is at R p + t in setup s's frame ([R|t] = its part_to_machine), a normal n at
 // R n. The balls are kept off the whole part, not only off the patch they cut: where the part
-// (its mesh, in that frame) comes closer than r - max(e/4, 0.001) to a ball centre, or to the
-// middle of a move (then a point is inserted there, its halves checked again, 4 times at most),
-// the ball is lifted along +z until it clears it, and over any face of the part straight above
-// it (the tool comes down along +z and cannot reach under an overhang); the lifts are counted
-// (stock left). Links are
+// (its mesh, in that frame) comes closer than r - max(e/4, 0.001) to a ball centre, or lies
+// straight above it (the tool comes down along +z: it cannot reach under an overhang, and a
+// centre inside the solid is far from its surface), the ball is lifted along +z until clear. A
+// move is checked at eighths of its length; at the first blocked place a lifted point is
+// inserted and both halves are checked again (6 times at most); a move that still reaches in
+// (a narrow neck above a free pocket) has its lower end raised to its upper end's height. The
+// lifts are counted (stock left). Links are
 // checked, and the clearance plane set, against the whole part's points (link.h).
 #pragma once
 
