@@ -96,8 +96,9 @@ Queue poll_queue(const std::string& job, std::map<std::size_t, std::string>& sta
   std::istringstream lines(out);
   std::size_t task;
   std::string s;
-  while (lines >> task >> s) state[task] = s;
-  return Queue::listed;
+  bool any = false;
+  for (; lines >> task >> s; any = true) state[task] = s;
+  return any ? Queue::listed : Queue::gone;
 }
 
 // The record of a part whose task left none (as part_record in main.cpp writes them).
@@ -209,13 +210,14 @@ void wait_for_job(const std::string& job, const std::string& out_dir, const std:
                   bool quiet, Records& records, std::map<std::size_t, std::string>& state) {
   const bool terminal = ::isatty(STDERR_FILENO);
   std::string shown, why;
-  int failures = 0;
+  int failures = 0, gone = 0;  // squeue's failures, and its "no such job", in a row
   for (int interval = 1;; interval = std::min(interval + 1, 10)) {
     read_records(out_dir, names, records);
     // every record back: nothing left to ask the queue (nor a squeue needed on this host)
     const bool all_back = std::all_of(records.begin(), records.end(), [](const auto& r) { return r.has_value(); });
     const Queue q = all_back ? Queue::gone : poll_queue(job, state, why);
     failures = q == Queue::unknown ? failures + 1 : 0;
+    gone = q == Queue::gone ? gone + 1 : 0;
     std::size_t queued = 0, active = 0, done = 0, failed = 0;
     for (const auto& [task, s] : state) active += !kEnded.count(s);
     for (std::size_t i = 0; i < records.size(); ++i) {
@@ -230,7 +232,9 @@ void wait_for_job(const std::string& job, const std::string& out_dir, const std:
     if (!quiet && line != shown) std::fprintf(stderr, terminal ? "\r%s\033[K" : "%s\n", line.c_str());
     if (line != shown) interval = 1;  // something moves: look again soon
     shown = line;
-    if (q == Queue::gone || (q == Queue::listed && active == 0)) break;
+    // a controller that has just restarted may not know a job for a moment: "gone" is believed
+    // the third time in a row
+    if (all_back || gone == 3 || (q == Queue::listed && active == 0)) break;
     if (failures == 30 || q == Queue::absent) {
       std::fprintf(stderr, "%swarning: %s; collecting what the tasks wrote so far (scallop batch --collect %s "
                            "collects again)\n",
