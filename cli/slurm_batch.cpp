@@ -108,10 +108,10 @@ nlohmann::json missing_record(const std::string& job, std::size_t task, const st
                       (state.empty() ? " left no result" : " ended " + state + " without a result");
   const std::string tail = last_line(log);
   error += tail.empty() ? "; its log " + log + " is empty or missing" : "; its log " + log + " ends: " + tail;
-  return {{"ok", false},       {"certificate", "none"}, {"certificate_reasons", nlohmann::json::array()},
-          {"seconds", 0.0},    {"errors", {error}},     {"warnings", nlohmann::json::array()},
-          {"outputs", nlohmann::json::array()},         {"nodes_run", 0},
-          {"cache_hits", 0},   {"cache_misses", 0}, {"bad_input", false},    {"verdicts", nlohmann::json::array()}};
+  const auto none = nlohmann::json::array();
+  return {{"ok", false},      {"certificate", "none"}, {"certificate_reasons", none}, {"seconds", 0.0},
+          {"errors", {error}}, {"warnings", none},      {"outputs", none},             {"nodes_run", 0},
+          {"cache_hits", 0},  {"cache_misses", 0},     {"bad_input", false},          {"verdicts", none}};
 }
 
 }  // namespace
