@@ -12,6 +12,7 @@
 #include <set>
 #include <sstream>
 
+#include "cli/slurm_batch.h"
 #include "engine/runner.h"
 #include "nodes/all_nodes.h"
 #include "nodes/types/document.h"
@@ -114,6 +115,31 @@ std::string certificate_status(const std::vector<Certificate>& cs) {
   return "pass";
 }
 
+// One part's record: its entry in summary.json, and what `run --result` writes for a batch task
+// that ran elsewhere (a Slurm task) to hand back. "bad_input" (for the exit status) and
+// "verdicts" (the certificate lines for stderr) are for the batch itself, not summary.json.
+nlohmann::json part_record(const PartResult& r, const std::string& input, bool quiet) {
+  nlohmann::json reasons = nlohmann::json::array(), warnings = nlohmann::json::array(),
+                 verdicts = nlohmann::json::array();
+  const auto certs = certificates(r);
+  for (const auto& c : certs) {
+    if (!c.pass || !quiet) verdicts.push_back(verdict_line(c));
+    for (const auto& m : c.reasons) reasons.push_back(m);
+  }
+  for (const auto& n : r.run.nodes)
+    for (const auto& w : n.warnings) warnings.push_back("node '" + n.id + "' (" + n.type + "): " + w);
+  // disk-cached nodes taken from the cache, and run (missed); nodes not cached on disk count in neither
+  int hits = 0, misses = 0;
+  for (const auto& n : r.run.nodes) {
+    hits += n.cache == "hit";
+    misses += n.cache == "miss" && (n.status == "ok" || n.status == "failed");
+  }
+  return {{"part", r.part}, {"input", input}, {"ok", r.ok}, {"certificate", certificate_status(certs)},
+          {"certificate_reasons", reasons}, {"seconds", r.seconds}, {"errors", r.errors},
+          {"warnings", warnings}, {"outputs", r.written}, {"nodes_run", r.run.executed()},
+          {"cache_hits", hits}, {"cache_misses", misses}, {"bad_input", r.bad_input}, {"verdicts", verdicts}};
+}
+
 struct Sinks {
   std::unique_ptr<DiskCache> cache;
   std::unique_ptr<JsonLinesSink> json;
@@ -130,8 +156,20 @@ void open_sinks(const CommonOptions& o, Sinks& s, int total_nodes) {
   s.fanout.add(s.terminal.get());
 }
 
+// Writes a part's record for `run --result` whole or not at all (temp file + rename), so that a
+// batch waiting for it on another host never reads half of one.
+void write_record(const std::string& path, const nlohmann::json& record) {
+  if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());
+  const std::string tmp = temp_path_beside(path);
+  std::ofstream out(tmp);
+  out << record.dump(2) << "\n";
+  out.close();
+  if (!out) throw std::runtime_error("cannot write '" + tmp + "'");
+  fs::rename(tmp, path);
+}
+
 int cmd_run(const std::string& graph_path, const std::vector<std::string>& input_args, const std::string& out_dir,
-            const CommonOptions& o) {
+            const std::string& part, const std::string& result_path, const CommonOptions& o) {
   Graph graph;
   if (!load(graph_path, graph)) return kExitInvalid;
   PartRequest req;
@@ -145,11 +183,14 @@ int cmd_run(const std::string& graph_path, const std::vector<std::string>& input
   }
   req.sets = o.sets;
   req.out_dir = out_dir;
+  req.part = part;
   Sinks sinks;
   open_sinks(o, sinks, static_cast<int>(graph.nodes.size()));
   req.cache = sinks.cache.get();
   req.events = &sinks.fanout;
   PartResult r = run_part(graph, builtin_registry(), req);
+  if (!result_path.empty())
+    write_record(result_path, part_record(r, req.inputs.empty() ? "" : req.inputs.begin()->second, o.quiet));
   if (r.run.nodes.empty() && !r.ok) {  // never started: validation or input errors
     for (const auto& m : r.errors) std::cerr << "error: " << m << "\n";
     return kExitInvalid;
@@ -191,64 +232,51 @@ void say_shared_names(const std::vector<std::string>& parts, const std::vector<s
   }
 }
 
-int cmd_batch(const std::string& graph_path, const std::vector<std::string>& parts, int jobs,
-              const std::string& input_name_arg, const std::string& out_dir, const CommonOptions& o) {
-  Graph graph;
-  if (!load(graph_path, graph)) return kExitInvalid;
-  std::string input_name = input_name_arg;
-  if (input_name.empty()) {
-    if (graph.inputs.size() != 1) {
-      std::cerr << "error: the graph has " << graph.inputs.size()
-                << " inputs; say which one the parts bind to with --part-input NAME\n";
-      return kExitInvalid;
-    }
-    input_name = graph.inputs.begin()->first;
+// The graph input the parts of a batch bind to: --part-input, else the graph's only input; ""
+// after saying why not.
+std::string part_input_name(const Graph& graph, const std::string& input_name_arg) {
+  if (!input_name_arg.empty()) return input_name_arg;
+  if (graph.inputs.size() != 1) {
+    std::cerr << "error: the graph has " << graph.inputs.size()
+              << " inputs; say which one the parts bind to with --part-input NAME\n";
+    return "";
   }
-  PartRequest common;
-  common.sets = o.sets;
-  common.out_dir = out_dir;
-  Sinks sinks;
-  open_sinks(o, sinks, static_cast<int>(graph.nodes.size() * parts.size()));
-  common.cache = sinks.cache.get();
-  common.events = &sinks.fanout;
-  say_shared_names(parts, batch_part_names(parts), out_dir);
-  auto results = run_batch(graph, builtin_registry(), input_name, parts, jobs, common);
+  return graph.inputs.begin()->first;
+}
 
+// The table, DIR/summary.json and the exit status of a batch, from each part's record
+// (part_record), whichever executor ran the parts; `extra` joins summary.json's top level.
+int report_batch(const std::string& graph_path, const std::vector<nlohmann::json>& records,
+                 const std::string& out_dir, const nlohmann::json& extra = nlohmann::json::object()) {
   nlohmann::json summary = nlohmann::json::array();
   std::vector<std::string> failed, uncertified;
   bool node_failed = false;  // a part failed for another reason than bad input: exit 1, not 2
   std::vector<std::string> verdicts;  // printed after the table
   std::printf("\n%-32s %-6s %-11s %10s  %s\n", "part", "status", "certificate", "seconds", "outputs / first error");
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    const auto& r = results[i];
-    const auto certs = certificates(r);
-    const std::string cert = certificate_status(certs);
-    std::printf("%-32s %-6s %-11s %10.3f  %s\n", r.part.c_str(), r.ok ? "ok" : "FAILED", cert.c_str(), r.seconds,
-                r.ok ? std::to_string(r.written.size()).c_str() : r.errors.front().c_str());
-    if (!r.ok) failed.push_back(r.part);
-    node_failed |= !r.ok && !r.bad_input;
-    if (cert == "FAIL") uncertified.push_back(r.part);
-    nlohmann::json reasons = nlohmann::json::array(), warnings = nlohmann::json::array();
-    for (const auto& c : certs) {
-      if (!c.pass || !o.quiet) verdicts.push_back("part '" + r.part + "': " + verdict_line(c));
-      for (const auto& m : c.reasons) reasons.push_back(m);
-    }
-    for (const auto& n : r.run.nodes)
-      for (const auto& w : n.warnings) warnings.push_back("node '" + n.id + "' (" + n.type + "): " + w);
-    summary.push_back({{"part", r.part}, {"input", parts[i]}, {"ok", r.ok}, {"certificate", cert},
-                       {"certificate_reasons", reasons}, {"seconds", r.seconds}, {"errors", r.errors},
-                       {"warnings", warnings}, {"outputs", r.written}});
+  for (const auto& record : records) {
+    const std::string part = record["part"], cert = record["certificate"];
+    const bool ok = record["ok"];
+    const std::string first_error = record["errors"].empty() ? "" : record["errors"][0].get<std::string>();
+    std::printf("%-32s %-6s %-11s %10.3f  %s\n", part.c_str(), ok ? "ok" : "FAILED", cert.c_str(),
+                record["seconds"].get<double>(), ok ? std::to_string(record["outputs"].size()).c_str() : first_error.c_str());
+    if (!ok) failed.push_back(part);
+    node_failed |= !ok && !record["bad_input"].get<bool>();
+    if (cert == "FAIL") uncertified.push_back(part);
+    for (const auto& v : record["verdicts"]) verdicts.push_back("part '" + part + "': " + v.get<std::string>());
+    nlohmann::json entry = record;
+    entry.erase("bad_input");
+    entry.erase("verdicts");
+    summary.push_back(entry);
   }
   fs::create_directories(out_dir);
-  std::ofstream(fs::path(out_dir) / "summary.json")
-      << nlohmann::json{{"graph", graph_path},
+  nlohmann::json top = {{"graph", graph_path},
                         {"parts_failed", failed.size()},
                         {"certificates_failed", uncertified.size()},
-                        {"parts", summary}}
-             .dump(2)
-      << "\n";
-  std::printf("%zu of %zu parts ok, %zu certificate(s) failed; summary in %s\n", results.size() - failed.size(),
-              results.size(), uncertified.size(), (fs::path(out_dir) / "summary.json").string().c_str());
+                        {"parts", summary}};
+  top.update(extra);
+  std::ofstream(fs::path(out_dir) / "summary.json") << top.dump(2) << "\n";
+  std::printf("%zu of %zu parts ok, %zu certificate(s) failed; summary in %s\n", records.size() - failed.size(),
+              records.size(), uncertified.size(), (fs::path(out_dir) / "summary.json").string().c_str());
   std::fflush(stdout);
   for (const auto& v : verdicts) std::fprintf(stderr, "%s\n", v.c_str());
   auto names = [](const std::vector<std::string>& v) {
@@ -264,6 +292,90 @@ int cmd_batch(const std::string& graph_path, const std::vector<std::string>& par
     return node_failed ? kExitNodeFailed : kExitInvalid;
   }
   return uncertified.empty() ? kExitDone : kExitCertificateFailed;
+}
+
+int cmd_batch(const std::string& graph_path, const std::vector<std::string>& parts, int jobs,
+              const std::string& input_name_arg, const std::string& out_dir, const CommonOptions& o) {
+  Graph graph;
+  if (!load(graph_path, graph)) return kExitInvalid;
+  const std::string input_name = part_input_name(graph, input_name_arg);
+  if (input_name.empty()) return kExitInvalid;
+  PartRequest common;
+  common.sets = o.sets;
+  common.out_dir = out_dir;
+  Sinks sinks;
+  open_sinks(o, sinks, static_cast<int>(graph.nodes.size() * parts.size()));
+  common.cache = sinks.cache.get();
+  common.events = &sinks.fanout;
+  say_shared_names(parts, batch_part_names(parts), out_dir);
+  auto results = run_batch(graph, builtin_registry(), input_name, parts, jobs, common);
+  std::vector<nlohmann::json> records;
+  for (std::size_t i = 0; i < results.size(); ++i) records.push_back(part_record(results[i], parts[i], o.quiet));
+  return report_batch(graph_path, records, out_dir);
+}
+
+// batch --collect DIR: waits for the Slurm batch written to DIR, then its table and summary.json.
+int cmd_collect(const std::string& out_dir, bool quiet) {
+  const slurm::Collected c = slurm::collect(out_dir, quiet);
+  return report_batch(c.graph, c.records, out_dir, {{"slurm_job_id", c.job_id}});
+}
+
+// batch --executor slurm: the job script written and submitted, then waited for as --collect.
+int cmd_batch_slurm(const std::string& graph_path, const std::vector<std::string>& parts,
+                    const std::string& input_name_arg, const std::string& out_dir, const CommonOptions& o,
+                    const slurm::Options& so, bool no_wait, bool dry_run) {
+  Graph graph;
+  if (!load(graph_path, graph)) return kExitInvalid;
+  slurm::Batch b;
+  b.input_name = part_input_name(graph, input_name_arg);
+  if (b.input_name.empty()) return kExitInvalid;
+  if (!graph.inputs.count(b.input_name)) {
+    std::cerr << "error: --part-input " << b.input_name << ": the graph has no input '" << b.input_name << "'\n";
+    return kExitInvalid;
+  }
+  try {  // a mistake in --set would fail every task: said here, before anything is submitted
+    CompileOptions opt;
+    opt.sets = o.sets;
+    opt.require_inputs = false;
+    compile(graph, builtin_registry(), opt);
+  } catch (const ValidationError& e) {
+    for (const auto& m : e.errors) std::cerr << "error: " << m << "\n";
+    return kExitInvalid;
+  }
+  b.names = batch_part_names(parts);
+  if (std::count(b.names.begin(), b.names.end(), "slurm")) {
+    std::cerr << "error: a part named 'slurm' would write into " << (fs::path(out_dir) / "slurm").string()
+              << "/, where the job's own files go; rename its file\n";
+    return kExitInvalid;
+  }
+  say_shared_names(parts, b.names, out_dir);
+  b.scallop = fs::read_symlink("/proc/self/exe").string();
+  b.cwd = fs::current_path().string();
+  b.graph = graph_path;
+  b.parts = parts;
+  b.out_dir = out_dir;
+  for (const auto& set : o.sets) b.run_args.insert(b.run_args.end(), {"--set", set});
+  if (o.no_cache)
+    b.run_args.push_back("--no-cache");
+  else  // every task the same folder, on the cluster's shared filesystem
+    b.run_args.insert(b.run_args.end(), {"--cache", o.cache_dir.empty() ? DiskCache::default_dir() : o.cache_dir});
+  if (o.explain) b.run_args.push_back("--explain");
+  if (o.quiet) b.run_args.push_back("-q");
+  const std::string script = slurm::write_job(b, so);
+  if (dry_run) {
+    std::cout << slurm::job_script(b, so);
+    std::cerr << "not submitted; the job script is " << script << ": sbatch it, then scallop batch --collect "
+              << out_dir << "\n";
+    return kExitDone;
+  }
+  const std::string job = slurm::submit(out_dir);
+  std::cerr << "submitted Slurm job " << job << ": " << parts.size() << " part(s) as array tasks 0-"
+            << parts.size() - 1 << ", their logs in " << (fs::path(out_dir) / "slurm" / "logs").string() << "/\n";
+  if (no_wait) {
+    std::cerr << "collect the results with: scallop batch --collect " << out_dir << "\n";
+    return kExitDone;
+  }
+  return cmd_collect(out_dir, o.quiet);
 }
 
 int cmd_validate(const std::string& graph_path, const std::vector<std::string>& sets) {
@@ -319,6 +431,26 @@ int cmd_dot(const std::string& graph_path) {
   return 0;
 }
 
+// What is wrong with batch's arguments together ("" when nothing): the graph, parts and -o are
+// required but with --collect, which takes none of them; the Slurm options need --executor slurm.
+std::string batch_arguments_error(const CLI::App& batch, const std::string& executor, const std::string& graph,
+                                  const std::vector<std::string>& parts, const std::string& out,
+                                  const std::string& collect) {
+  if (!collect.empty())
+    return graph.empty() && parts.empty() && out.empty() ? "" : "--collect DIR takes no graph, parts or -o";
+  if (graph.empty() || parts.empty() || out.empty())
+    return "batch needs a graph, at least one part and -o DIR (or --collect DIR)";
+  const char* slurm_only[] = {"--partition", "--time", "--cpus-per-part", "--array-limit", "--no-wait", "--dry-run"};
+  for (const char* name : slurm_only)
+    if (executor != "slurm" && batch.count(name)) return std::string(name) + ": only with --executor slurm";
+  if (executor == "slurm") {
+    if (batch.count("-j")) return "-j: not with --executor slurm, where --array-limit bounds the tasks running at once";
+    if (batch.count("--threads")) return "--threads: not with --executor slurm, where each part runs --cpus-per-part threads";
+    if (batch.count("--events")) return "--events: not with --executor slurm; each task's progress is in DIR/slurm/logs/";
+  }
+  return "";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -332,19 +464,38 @@ int main(int argc, char** argv) {
   run->add_option("graph", run_graph, "graph JSON file")->required();
   run->add_option("--input", run_inputs, "NAME=PATH: a graph input file")->take_all();
   run->add_option("-o,--out", run_out, "output folder (default scallop-out)");
+  std::string run_part_name, run_result;
+  run->add_option("--part", run_part_name, "the part's name in messages (default: the input file's stem)");
+  run->add_option("--result", run_result,
+                  "FILE: write the part's record (status, certificate, errors, outputs: its line of a batch's "
+                  "summary.json) as JSON; a batch's Slurm tasks hand their parts back so");
   add_common(run, run_opts);
 
   CommonOptions batch_opts;
-  std::string batch_graph, batch_out, batch_input;
+  std::string batch_graph, batch_out, batch_input, batch_executor = "local", batch_collect;
   std::vector<std::string> batch_parts;
   int batch_jobs = 2;
+  slurm::Options slurm_opts;
+  bool batch_no_wait = false, batch_dry_run = false;
   auto* batch = app.add_subcommand("batch", "run a graph on many parts, outputs in DIR/<part stem>/ (DIR/<stem>_<extension>/ where stems clash)");
-  batch->add_option("graph", batch_graph, "graph JSON file")->required();
-  batch->add_option("parts", batch_parts, "part files")->required();
+  batch->add_option("graph", batch_graph, "graph JSON file (required but with --collect)");
+  batch->add_option("parts", batch_parts, "part files (required but with --collect)");
   batch->add_option("-j,--jobs", batch_jobs, "parts in flight at once")->check(CLI::Range(1, 256));
   batch->add_option("--part-input", batch_input, "graph input the parts bind to (default: the only one)");
-  batch->add_option("-o,--out", batch_out, "output folder")->required();
+  batch->add_option("-o,--out", batch_out, "output folder (required but with --collect)");
   add_common(batch, batch_opts);
+  batch->add_option("--executor", batch_executor,
+                    "local (default): the parts run here, -j at once; slurm: one Slurm job array, a task per part")
+      ->check(CLI::IsMember({"local", "slurm"}));
+  batch->add_option("--partition", slurm_opts.partition, "slurm: the partition (default: the cluster's)");
+  batch->add_option("--time", slurm_opts.time, "slurm: time limit of each part's task, as sbatch --time takes it (30, 1:00:00)");
+  batch->add_option("--cpus-per-part", slurm_opts.cpus_per_part, "slurm: cores of each part's task, and its run's threads (default 1)")
+      ->check(CLI::Range(1, 1024));
+  batch->add_option("--array-limit", slurm_opts.array_limit, "slurm: at most M tasks running at once (default: as the cluster allows)")
+      ->check(CLI::Range(1, 1000000));
+  batch->add_flag("--no-wait", batch_no_wait, "slurm: submit and return; scallop batch --collect DIR afterwards");
+  batch->add_flag("--dry-run", batch_dry_run, "slurm: write DIR/slurm/job.sh and print it; submit nothing");
+  batch->add_option("--collect", batch_collect, "DIR: wait for the Slurm batch in DIR to end, then its table and DIR/summary.json");
 
   std::string val_graph;
   std::vector<std::string> val_sets;
@@ -370,8 +521,19 @@ int main(int argc, char** argv) {
     thread_limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                          static_cast<std::size_t>(threads));
   try {
-    if (*run) return cmd_run(run_graph, run_inputs, run_out, run_opts);
-    if (*batch) return cmd_batch(batch_graph, batch_parts, batch_jobs, batch_input, batch_out, batch_opts);
+    if (*run) return cmd_run(run_graph, run_inputs, run_out, run_part_name, run_result, run_opts);
+    if (*batch) {
+      if (std::string bad = batch_arguments_error(*batch, batch_executor, batch_graph, batch_parts, batch_out,
+                                                  batch_collect); !bad.empty()) {
+        std::cerr << "error: " << bad << "\n";
+        return kExitInvalid;
+      }
+      if (!batch_collect.empty()) return cmd_collect(batch_collect, batch_opts.quiet);
+      if (batch_executor == "slurm")
+        return cmd_batch_slurm(batch_graph, batch_parts, batch_input, batch_out, batch_opts, slurm_opts,
+                               batch_no_wait, batch_dry_run);
+      return cmd_batch(batch_graph, batch_parts, batch_jobs, batch_input, batch_out, batch_opts);
+    }
     if (*validate) return cmd_validate(val_graph, val_sets);
     if (*nodes) return cmd_nodes(nodes_type, nodes_json, nodes_md);
     if (*dot) return cmd_dot(dot_graph);

@@ -3,12 +3,15 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <cctype>
 #include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 
@@ -18,6 +21,23 @@
 
 namespace scallop {
 namespace fs = std::filesystem;
+
+std::string temp_path_beside(const std::string& target) {
+  static std::atomic<unsigned> counter{0};
+  static const std::string random = [] {  // tells apart two hosts' processes of the same pid
+    std::random_device rd;
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%08x%08x", rd(), rd());
+    return std::string(hex);
+  }();
+  char host[256] = "host";
+  ::gethostname(host, sizeof host - 1);
+  host[sizeof host - 1] = '\0';
+  std::string name = fs::path(target).filename().string() + "." + host + "." + std::to_string(::getpid()) + "." +
+                     std::to_string(counter++) + "." + random + ".tmp";
+  std::replace(name.begin(), name.end(), '/', '_');  // a hostname is a plain name, but be sure
+  return (fs::path(target).parent_path() / name).string();
+}
 
 namespace {
 // Entry layout (format 3): magic, the entry's own key (u64 length + bytes), u64 output count, then
@@ -49,20 +69,20 @@ struct MemoryBuffer : std::streambuf {
   void skip(std::size_t n) { setg(eback(), gptr() + n, egptr()); }
 };
 
-// Writes an entry into a fresh temp file in dir/tmp and renames it to `target` (atomic on POSIX).
-// `write_body` streams the body through `put`; a checksum of the body goes last.
+// Writes an entry into a fresh temp file beside `target` and renames it into place. Many
+// processes on many hosts may write the same key into one shared folder (a batch on a cluster,
+// DESIGN.md "Beyond one machine"): each writes a temp file of its own (temp_path_beside, opened
+// O_EXCL so that it is never another writer's), and rename within one directory replaces the
+// entry whole, so a reader sees the old entry, the new one or none, never a part of one. Two
+// writers of one key write the same bytes (content-addressed), so which rename lands last does
+// not matter. `write_body` streams the body through `put`; a checksum of the body goes last.
 class AtomicWriter {
  public:
-  AtomicWriter(const std::string& dir, const std::string& target) : target_(target) {
-    static std::atomic<unsigned> counter{0};
+  explicit AtomicWriter(const std::string& target) : target_(target) {
     fs::create_directories(fs::path(target).parent_path());
-    fs::create_directories(fs::path(dir) / "tmp");
-    tmp_ = (fs::path(dir) / "tmp" /
-            (fs::path(target).filename().string() + "." + std::to_string(::getpid()) + "." +
-             std::to_string(counter++) + ".tmp"))
-               .string();
-    fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (fd_ < 0) throw std::runtime_error("cannot create cache file '" + tmp_ + "'");
+    tmp_ = temp_path_beside(target);
+    fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
+    if (fd_ < 0) throw std::runtime_error("cannot create cache file '" + tmp_ + "': " + std::strerror(errno));
     state_ = XXH3_createState();
     XXH3_128bits_reset(state_);
   }
@@ -196,7 +216,7 @@ DiskCache::Lookup DiskCache::load(const std::string& key, const ValueTypes& type
 }
 
 void DiskCache::store(const std::string& key, const std::map<std::string, ValuePtr>& outputs) const {
-  AtomicWriter w(dir_, entry_path(key));
+  AtomicWriter w(entry_path(key));
   w.put(kMagic, kMagicLen);
   w.put(encoded_string(key));
   w.put(encoded_u64(outputs.size()));
@@ -224,7 +244,7 @@ std::optional<nlohmann::json> DiskCache::last_manifest(const std::string& identi
 
 void DiskCache::write_manifest(const std::string& identity, const nlohmann::json& manifest) const {
   std::string path = (fs::path(dir_) / "manifests" / (hash_bytes(identity) + ".json")).string();
-  AtomicWriter w(dir_, path);
+  AtomicWriter w(path);
   w.put(manifest.dump());
   w.commit();
 }

@@ -18,6 +18,11 @@
 
 namespace scallop {
 
+// A name for a temp file in `target`'s folder, unique across hosts, processes and calls:
+// <target name>.<hostname>.<pid>.<counter>.<random>.tmp. Two hosts sharing the folder (NFS) may
+// run processes of the same pid; the hostname and the random part keep their temp files apart.
+std::string temp_path_beside(const std::string& target);
+
 class DiskCache {
  public:
   explicit DiskCache(std::string dir);

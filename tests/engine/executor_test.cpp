@@ -160,10 +160,58 @@ TEST(Cache, EntryWhoseWriterWasKilledIsNeverReadBack) {
   EXPECT_EQ(WTERMSIG(status), SIGKILL);
   DiskCache cache(dir.str());
   EXPECT_FALSE(fs::exists(cache.entry_path(key)));
-  EXPECT_FALSE(fs::is_empty(dir.path / "tmp"));  // the half-written temp file is left aside
+  // the half-written temp file is left aside, beside the entry, named after host and process
+  char host[256] = {};
+  ::gethostname(host, sizeof host - 1);
+  std::vector<std::string> left;
+  for (const auto& f : fs::directory_iterator(fs::path(cache.entry_path(key)).parent_path()))
+    left.push_back(f.path().filename().string());
+  ASSERT_EQ(left.size(), 1u);
+  EXPECT_EQ(left[0].rfind(key + ".entry." + host + "." + std::to_string(pid) + ".", 0), 0u) << left[0];
+  EXPECT_EQ(fs::path(left[0]).extension(), ".tmp");
   auto lookup = cache.load(key, reg.values());
   EXPECT_FALSE(lookup.hit);
   EXPECT_EQ(lookup.why, "no entry");
+}
+
+TEST(Cache, ManyWritersOfOneKeyNeverShowAReaderAPartialEntry) {
+  // Tasks of a batch on a cluster write the same key into one shared folder: four processes
+  // store one large entry over and over while this one reads it back.
+  Registry reg = test::make_test_registry();
+  test::TempDir dir;
+  const std::string key = "0123456789abcdef0123456789abcdef";
+  std::map<std::string, ValuePtr> outputs;
+  for (int i = 0; i < 2000; ++i) outputs["out" + std::to_string(i)] = std::make_shared<Number>(i);
+  std::vector<pid_t> writers;
+  for (int w = 0; w < 4; ++w) {
+    pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      DiskCache cache(dir.str());
+      for (int n = 0; n < 50; ++n) cache.store(key, outputs);
+      ::_exit(0);
+    }
+    writers.push_back(pid);
+  }
+  DiskCache cache(dir.str());
+  int hits = 0, reads = 0;
+  for (bool running = true; running; ++reads) {
+    auto lookup = cache.load(key, reg.values());
+    if (lookup.hit) {
+      ++hits;
+      ASSERT_EQ(lookup.outputs.size(), outputs.size());
+      EXPECT_EQ(std::dynamic_pointer_cast<const Number>(lookup.outputs.at("out1999"))->value, 1999.0);
+    } else {
+      ASSERT_EQ(lookup.why, "no entry");  // before the first rename; never "damaged entry (...)"
+    }
+    running = false;
+    for (pid_t pid : writers) running |= ::waitpid(pid, nullptr, WNOHANG) == 0;
+  }
+  for (pid_t pid : writers) ::waitpid(pid, nullptr, 0);
+  EXPECT_GT(hits, 0) << reads << " reads";
+  // every writer's temp file was renamed into place: the entry alone is left
+  EXPECT_EQ(std::distance(fs::directory_iterator(fs::path(cache.entry_path(key)).parent_path()), fs::directory_iterator()), 1);
+  EXPECT_TRUE(cache.load(key, reg.values()).hit);
 }
 
 TEST(Cache, CorruptOrTruncatedEntryIsRejectedAndRecomputed) {
