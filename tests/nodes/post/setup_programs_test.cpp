@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 
@@ -16,6 +18,18 @@ namespace scallop {
 namespace {
 
 using V = Eigen::Vector3d;
+
+// The clampings as post.setup_programs reads them from surface.setups' report.
+std::vector<SetupSpec> specs_of(const std::vector<Setup>& setups) {
+  std::vector<SetupSpec> out;
+  for (const auto& s : setups) {
+    SetupSpec spec;
+    spec.name = s.name, spec.rotation = s.rotation, spec.translation = s.translation;
+    spec.patches.assign(s.patches.begin(), s.patches.end());
+    out.push_back(spec);
+  }
+  return out;
+}
 
 // A 20 x 10 x 5 block standing on z = 0: its top and its front wall (y = 0) as patches, planned
 // with contour grids, set up by plan_setups against the block's mesh.
@@ -41,12 +55,7 @@ struct Block {
       counts.push_back(g.passes.size());
       path.passes.insert(path.passes.end(), g.passes.begin(), g.passes.end());
     }
-    for (const Setup& s : plan_setups(surfaces, part)) {
-      SetupSpec spec;
-      spec.name = s.name, spec.rotation = s.rotation, spec.translation = s.translation;
-      spec.patches.assign(s.patches.begin(), s.patches.end());
-      setups.push_back(spec);
-    }
+    setups = specs_of(plan_setups(surfaces, part));
   }
 };
 
@@ -132,6 +141,73 @@ TEST(SetupPrograms, ABallAgainstAWallIsLiftedOverIt) {
   // No ball centre comes nearer than r - e/4 to the wall.
   const MeshDistance distance(part);
   for (const V& t : tips(programs[0].gcode)) EXPECT_GE(distance(t + V(0, 0, 2)), 2 - 0.0025 - 1e-4);
+}
+
+TEST(SetupPrograms, ABoxInFiveClampingsHasEveryFaceButItsBaseCutWithinH) {
+  // The box [0, 40] x [0, 30] x [0, 12] on its base: top and four sides, a patch each; five
+  // setups, five programs. Their ball centres, read back from the G-code and taken to the part
+  // frame (p = R^T (q - t)), leave at most h on a grid of every face (sphere tracing along the
+  // face's normal against the feed moves of all programs).
+  const double X = 40, Y = 30, Z = 12, r = 2, h = 0.05;
+  Surfaces s;
+  s.patches.push_back(test::flat_patch({0, 0, Z}, {X, 0, Z}, {0, Y, Z}, {X, Y, Z}, {0, 0, 1}));
+  s.patches.push_back(test::flat_patch({0, 0, 0}, {0, Y, 0}, {0, 0, Z}, {0, Y, Z}, {-1, 0, 0}));
+  s.patches.push_back(test::flat_patch({X, 0, 0}, {X, Y, 0}, {X, 0, Z}, {X, Y, Z}, {1, 0, 0}));
+  s.patches.push_back(test::flat_patch({0, 0, 0}, {X, 0, 0}, {0, 0, Z}, {X, 0, Z}, {0, -1, 0}));
+  s.patches.push_back(test::flat_patch({0, Y, 0}, {X, Y, 0}, {0, Y, Z}, {X, Y, Z}, {0, 1, 0}));
+  s.base_direction = {0, 0, -1};
+  const Mesh part = box({0, 0, 0}, {X, Y, Z});
+  ContourGridOptions o;
+  o.tool_radius = r, o.scallop_height = h, o.chord_error = 0.01;
+  Toolpath path;
+  path.tool_radius = r, path.scallop_height = h, path.chord_error = 0.01;
+  std::vector<std::size_t> counts;
+  for (const auto& sp : s.patches) {
+    const ContourGridResult g = plan_contour_grid(BSplinePatch(sp.surface, sp.direction), o);
+    counts.push_back(g.passes.size());
+    path.passes.insert(path.passes.end(), g.passes.begin(), g.passes.end());
+  }
+  const std::vector<SetupSpec> setups = specs_of(plan_setups(s, part));
+  ASSERT_EQ(setups.size(), 5u);
+  const auto programs = setup_programs(path, counts, setups, part, {}, {});
+  ASSERT_EQ(programs.size(), 5u);
+  std::vector<std::array<V, 2>> moves;  // feed moves' ball centres, part frame
+  for (std::size_t k = 0; k < 5; ++k) {
+    std::istringstream in(programs[k].gcode);
+    V at(0, 0, 0), prev(0, 0, 0);
+    bool have = false;
+    for (std::string line; std::getline(in, line);) {
+      const bool feed = line.rfind("G1 ", 0) == 0, rapid = line.rfind("G0 ", 0) == 0;
+      if (!feed && !rapid) continue;
+      for (char axis : {'X', 'Y', 'Z'})
+        if (const auto i = line.find(axis); i != std::string::npos) at[axis - 'X'] = std::stod(line.substr(i + 1));
+      const V centre = setups[k].rotation.transpose() * (at + V(0, 0, r) - setups[k].translation);
+      if (feed && have) moves.push_back({prev, centre});
+      prev = centre, have = true;
+    }
+  }
+  auto segment_distance = [](const V& q, const V& a, const V& b) {
+    const V ab = b - a;
+    const double t = ab.squaredNorm() > 0 ? std::clamp((q - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+    return (q - (a + t * ab)).norm();
+  };
+  double worst = 0;
+  for (const auto& sp : s.patches) {
+    const BSplinePatch face(sp.surface, sp.direction);
+    for (int i = 0; i <= 24; ++i)
+      for (int j = 0; j <= 24; ++j) {
+        const SurfaceSample x = face({i / 24.0, j / 24.0});
+        double t = 0;
+        for (int it = 0; it < 100; ++it) {
+          double d = 1e9;
+          for (const auto& m : moves) d = std::min(d, segment_distance(x.position + t * x.normal, m[0], m[1]));
+          if (d - r <= 1e-6 || t > 1) break;
+          t += d - r;
+        }
+        worst = std::max(worst, t);
+      }
+  }
+  EXPECT_LE(worst, h * 1.01);
 }
 
 TEST(SetupPrograms, BadInputIsNamed) {
