@@ -32,21 +32,6 @@ Triangles triangles(const Mesh& m) {
 
 }  // namespace
 
-std::vector<bool> rays_hit_mesh(const std::vector<Eigen::Vector3d>& origins, const std::vector<Eigen::Vector3d>& directions,
-                                const Mesh& m) {
-  std::vector<bool> hit(origins.size(), false);
-  const Triangles tris = triangles(m);
-  if (tris.empty()) return hit;
-  Tree tree(tris.begin(), tris.end());
-  std::vector<char> h(origins.size(), 0);  // vector<bool> is not safe to write in parallel
-  tbb::parallel_for(std::size_t{0}, origins.size(), [&](std::size_t i) {
-    const Eigen::Vector3d& d = directions[i];
-    h[i] = tree.do_intersect(Kernel::Ray_3(point(origins[i]), Kernel::Direction_3(d.x(), d.y(), d.z())));
-  });
-  for (std::size_t i = 0; i < h.size(); ++i) hit[i] = h[i];
-  return hit;
-}
-
 struct MeshDistance::Impl {
   Triangles tris;
   Tree tree;

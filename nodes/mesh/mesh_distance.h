@@ -34,10 +34,4 @@ class MeshDistance {
 // all +infinity when the mesh has no face.
 std::vector<double> distances_to_mesh(const std::vector<Eigen::Vector3d>& points, const Mesh& mesh);
 
-// origins, directions  #R rays (directions need not be unit). Returns, per ray, whether it meets
-// one of the mesh's faces (a face through its origin counts: start the ray off the surface).
-// Computed in parallel; all false when the mesh has no face.
-std::vector<bool> rays_hit_mesh(const std::vector<Eigen::Vector3d>& origins, const std::vector<Eigen::Vector3d>& directions,
-                                const Mesh& mesh);
-
 }  // namespace scallop

@@ -167,7 +167,7 @@ class ContourPlanner {
       }
       dtau = std::min(dtau, 1 - tau);
       // The ball-centre chord against the ball-centre curve.
-      const Eigen::Vector3d c0 = centre(a + tau * delta);
+      const Eigen::Vector3d c0 = d.sample.position + r_ * d.sample.normal;
       for (int tries = 0; tries < 40; ++tries) {
         const Eigen::Vector3d c1 = centre(a + (tau + dtau) * delta);
         double dev = 0;

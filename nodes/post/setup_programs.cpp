@@ -1,6 +1,5 @@
 #include "nodes/post/setup_programs.h"
 
-#include <Eigen/LU>
 #include <cmath>
 #include <functional>
 #include <numeric>
@@ -101,39 +100,8 @@ void keep_off_part(Toolpath& path, const MeshDistance& part, double tolerance, S
 
 }  // namespace
 
-std::vector<SetupSpec> setups_from_report(const nlohmann::json& report, std::size_t patches) {
-  if (!report.contains("setups") || !report["setups"].is_array() || report["setups"].empty())
-    throw std::invalid_argument("the setups report has no setups");
-  std::vector<SetupSpec> out;
-  for (const auto& s : report["setups"]) {
-    SetupSpec spec;
-    spec.name = s.value("name", "setup " + std::to_string(out.size() + 1));
-    const auto& m = s.value("part_to_machine", nlohmann::json());
-    if (!m.is_array() || m.size() != 3)
-      throw std::invalid_argument("setup '" + spec.name + "': part_to_machine is not 3 rows [R|t]");
-    for (int r = 0; r < 3; ++r) {
-      if (!m[r].is_array() || m[r].size() != 4)
-        throw std::invalid_argument("setup '" + spec.name + "': part_to_machine is not 3 rows [R|t]");
-      for (int c = 0; c < 3; ++c) spec.rotation(r, c) = m[r][c].get<double>();
-      spec.translation[r] = m[r][3].get<double>();
-    }
-    const Eigen::Matrix3d RtR = spec.rotation.transpose() * spec.rotation;
-    if ((RtR - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 || spec.rotation.determinant() < 0)
-      throw std::invalid_argument("setup '" + spec.name + "': part_to_machine's R is not a rotation");
-    for (const auto& p : s.value("patches", nlohmann::json::array())) {
-      const auto k = p.get<std::size_t>();
-      if (k >= patches)
-        throw std::invalid_argument("setup '" + spec.name + "': patch " + std::to_string(k) + " of " +
-                                    std::to_string(patches));
-      spec.patches.push_back(k);
-    }
-    out.push_back(std::move(spec));
-  }
-  return out;
-}
-
 std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector<std::size_t>& passes_per_patch,
-                                         const std::vector<SetupSpec>& setups, const Mesh& part,
+                                         const std::vector<Setup>& setups, const Mesh& part,
                                          const LinkOptions& link, const GCodeOptions& gcode) {
   if (std::accumulate(passes_per_patch.begin(), passes_per_patch.end(), std::size_t(0)) != path.passes.size())
     throw std::invalid_argument("the patches' pass counts do not add up to the toolpath's " +
@@ -142,7 +110,8 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
   for (std::size_t p = 0; p < passes_per_patch.size(); ++p) first[p + 1] = first[p] + passes_per_patch[p];
 
   std::vector<SetupProgram> out;
-  for (const SetupSpec& s : setups) {
+  for (std::size_t index = 0; index < setups.size(); ++index) {
+    const Setup& s = setups[index];
     Toolpath local;
     local.tool_radius = path.tool_radius;
     local.scallop_height = path.scallop_height;
@@ -162,6 +131,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     Mesh placed = part;
     for (auto& v : placed.vertices) v = s.rotation * v + s.translation;
     SetupProgram prog;
+    prog.setup = index;
     if (placed.num_faces() > 0)
       keep_off_part(local, MeshDistance(placed), std::max(0.25 * path.chord_error, 1e-3), prog);
     const LinkedPath linked = link_passes(local, placed.vertices, link);
@@ -178,18 +148,10 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
   return out;
 }
 
-nlohmann::json setups_file(const std::vector<SetupProgram>& programs, const std::vector<SetupSpec>& setups) {
+nlohmann::json setups_file(const std::vector<SetupProgram>& programs, const std::vector<Setup>& setups) {
   nlohmann::json list = nlohmann::json::array();
-  for (const SetupProgram& p : programs) {
-    for (const SetupSpec& s : setups) {
-      if (s.name != p.name) continue;
-      nlohmann::json m = nlohmann::json::array();
-      for (int r = 0; r < 3; ++r)
-        m.push_back({s.rotation(r, 0), s.rotation(r, 1), s.rotation(r, 2), s.translation[r]});
-      list.push_back({{"name", p.name}, {"gcode", p.file}, {"part_to_machine", m}});
-      break;
-    }
-  }
+  for (const SetupProgram& p : programs)
+    list.push_back({{"name", p.name}, {"gcode", p.file}, {"part_to_machine", part_to_machine(setups.at(p.setup))}});
   return {{"format", "scallop-setups/1"}, {"units", "mm"}, {"setups", list}};
 }
 

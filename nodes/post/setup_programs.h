@@ -22,20 +22,14 @@
 
 #include "nodes/post/gcode.h"
 #include "nodes/post/link.h"
+#include "nodes/surface/setups.h"
 #include "nodes/types/mesh.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
 
-// A clamping as surface.setups reports it.
-struct SetupSpec {
-  std::string name;
-  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
-  std::vector<std::size_t> patches;
-};
-
 struct SetupProgram {
+  std::size_t setup = 0;   // index of its setup
   std::string name;
   std::string file;        // "setup_<k>.ngc", k from 1
   std::string gcode;       // the program text
@@ -46,23 +40,18 @@ struct SetupProgram {
   double lift_max = 0;     // mm, the largest lift
 };
 
-// setups        from surface.setups' report: {setups: [{name, part_to_machine, patches}]}
-// Throws std::invalid_argument for a malformed report (naming the setup), a part_to_machine that
-// is not a rotation (|R^T R - I| > 1e-6 or det R != +1, as verify_part.py refuses it) or a patch
-// index out of range.
-std::vector<SetupSpec> setups_from_report(const nlohmann::json& report, std::size_t patches);
-
+// setups        the clampings (plan_setups, or setups_from_report of surface.setups' report)
 // path          the passes of every patch, patch by patch (path.contour_grid)
 // passes_per_patch  how many of them each patch has, in order (their sum: path.passes.size())
 // part          the whole part in its own frame (its mesh; without faces no ball is lifted)
 // Returns one program per setup that cuts anything. Throws std::invalid_argument when the counts
 // do not add up; link_passes' and write_gcode's errors pass through.
 std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector<std::size_t>& passes_per_patch,
-                                         const std::vector<SetupSpec>& setups, const Mesh& part,
+                                         const std::vector<Setup>& setups, const Mesh& part,
                                          const LinkOptions& link, const GCodeOptions& gcode);
 
 // The setups file: {"format": "scallop-setups/1", "units": "mm", "setups": [{name, gcode,
 // part_to_machine}]}.
-nlohmann::json setups_file(const std::vector<SetupProgram>& programs, const std::vector<SetupSpec>& setups);
+nlohmann::json setups_file(const std::vector<SetupProgram>& programs, const std::vector<Setup>& setups);
 
 }  // namespace scallop

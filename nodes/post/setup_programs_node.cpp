@@ -59,7 +59,7 @@ NodeDecl make_setup_programs_node() {
     link.safety = o.safety;
     GCodeOptions g;
     g.dialect = o.dialect, g.feed = o.feed, g.plunge_feed = o.plunge_feed, g.spindle_rpm = o.spindle_rpm;
-    std::vector<SetupSpec> setups;
+    std::vector<Setup> setups;
     std::vector<SetupProgram> programs;
     try {
       setups = setups_from_report(setups_report, counts.size());

@@ -1,6 +1,8 @@
 #include "nodes/surface/setups.h"
 
 #include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -90,20 +92,13 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
     // tenths of that off the mesh (docs/surfaces.md), and a ray starting inside the part would
     // call every patch hidden (measured on the fandisk at 0.002: all 289 samples of 7 patches).
     const double offset = 1e-2 * (hi - lo).norm();
-    std::vector<Eigen::Vector3d> origins, directions;
-    std::vector<std::pair<std::size_t, std::size_t>> owner;  // (candidate, patch) of each ray
-    for (std::size_t c = 0; c < nc; ++c)
-      for (std::size_t p = 0; p < np; ++p) {
-        if (!can[c][p]) continue;
-        for (std::size_t k = 0; k < positions[p].size(); ++k) {
-          origins.push_back(positions[p][k] + offset * candidates[c]);
-          directions.push_back(candidates[c]);
-          owner.emplace_back(c, p);
-        }
-      }
-    const std::vector<bool> hit = rays_hit_mesh(origins, directions, part);
-    for (std::size_t r = 0; r < hit.size(); ++r)
-      if (hit[r]) ++hidden[owner[r].first][owner[r].second];
+    const MeshDistance mesh(part);
+    tbb::parallel_for(std::size_t(0), nc * np, [&](std::size_t cp) {
+      const std::size_t c = cp / np, p = cp % np;
+      if (!can[c][p]) return;
+      for (std::size_t k = 0; k < positions[p].size(); ++k)
+        hidden[c][p] += std::isfinite(mesh.ray_distance(positions[p][k] + offset * candidates[c], candidates[c]));
+    });
     for (std::size_t c = 0; c < nc; ++c)
       for (std::size_t p = 0; p < np; ++p)
         if (c != p && hidden[c][p] > 0) can[c][p] = 0;
@@ -154,6 +149,57 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
   std::erase_if(setups, [](const Setup& s) { return s.patches.empty(); });
   for (std::size_t s = 0; s < setups.size(); ++s) setups[s].name = std::to_string(s + 1) + ": " + axis_name(setups[s].axis);
   return setups;
+}
+
+nlohmann::json part_to_machine(const Setup& s) {
+  nlohmann::json m = nlohmann::json::array();
+  for (int r = 0; r < 3; ++r) m.push_back({s.rotation(r, 0), s.rotation(r, 1), s.rotation(r, 2), s.translation[r]});
+  return m;
+}
+
+nlohmann::json setups_report(const std::vector<Setup>& setups) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const Setup& s : setups)
+    list.push_back({{"name", s.name},
+                    {"axis", {s.axis.x(), s.axis.y(), s.axis.z()}},
+                    {"part_to_machine", part_to_machine(s)},
+                    {"patches", s.patches},
+                    {"min_normal_dot", s.min_normal_dot},
+                    {"hidden_samples", s.hidden_samples}});
+  return list;
+}
+
+std::vector<Setup> setups_from_report(const nlohmann::json& report, std::size_t patches) {
+  if (!report.contains("setups") || !report["setups"].is_array() || report["setups"].empty())
+    throw std::invalid_argument("the setups report has no setups");
+  std::vector<Setup> out;
+  for (const auto& j : report["setups"]) {
+    Setup s;
+    s.name = j.value("name", "setup " + std::to_string(out.size() + 1));
+    const auto& m = j.value("part_to_machine", nlohmann::json());
+    const std::string bad = "setup '" + s.name + "': part_to_machine is not 3 rows [R|t]";
+    if (!m.is_array() || m.size() != 3) throw std::invalid_argument(bad);
+    for (int r = 0; r < 3; ++r) {
+      if (!m[r].is_array() || m[r].size() != 4) throw std::invalid_argument(bad);
+      for (int c = 0; c < 3; ++c) s.rotation(r, c) = m[r][c].get<double>();
+      s.translation[r] = m[r][3].get<double>();
+    }
+    if ((s.rotation.transpose() * s.rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 ||
+        s.rotation.determinant() < 0)
+      throw std::invalid_argument("setup '" + s.name + "': part_to_machine's R is not a rotation");
+    s.axis = s.rotation.transpose() * Eigen::Vector3d::UnitZ();
+    for (const auto& p : j.value("patches", nlohmann::json::array())) {
+      const auto k = p.get<std::uint32_t>();
+      if (k >= patches)
+        throw std::invalid_argument("setup '" + s.name + "': patch " + std::to_string(k) + " of " +
+                                    std::to_string(patches));
+      s.patches.push_back(k);
+    }
+    s.min_normal_dot = j.value("min_normal_dot", 1.0);
+    s.hidden_samples = j.value("hidden_samples", std::size_t(0));
+    out.push_back(std::move(s));
+  }
+  return out;
 }
 
 }  // namespace scallop

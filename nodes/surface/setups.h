@@ -32,6 +32,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -60,6 +61,16 @@ struct Setup {
 // Throws std::invalid_argument when there is no patch, an option is out of range, or a patch's
 // surface or direction is not usable (naming the patch).
 std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const SetupOptions& options = {});
+
+// part_to_machine as scallop-setups/1 writes it: 3 rows [R | t].
+nlohmann::json part_to_machine(const Setup& setup);
+
+// The setups as surface.setups reports them: [{name, axis, part_to_machine, patches,
+// min_normal_dot, hidden_samples}], and back. Reading throws std::invalid_argument for a malformed
+// report (naming the setup), a part_to_machine whose R is not a rotation (|R^T R - I| > 1e-6 or
+// det R < 0, as verify_part.py refuses it) or a patch index not below `patches`.
+nlohmann::json setups_report(const std::vector<Setup>& setups);
+std::vector<Setup> setups_from_report(const nlohmann::json& report, std::size_t patches);
 
 // The smallest rotation taking unit vector a to +z (a half turn about x for a = -z).
 Eigen::Matrix3d rotation_to_z(const Eigen::Vector3d& a);

@@ -42,20 +42,8 @@ NodeDecl make_setups_node() {
     } catch (const std::invalid_argument& e) {
       throw NodeError(std::string("surface.setups: ") + e.what());
     }
-    nlohmann::json list = nlohmann::json::array();
-    for (const Setup& s : setups) {
-      nlohmann::json m = nlohmann::json::array();
-      for (int r = 0; r < 3; ++r)
-        m.push_back({s.rotation(r, 0), s.rotation(r, 1), s.rotation(r, 2), s.translation[r]});
-      list.push_back({{"name", s.name},
-                      {"axis", {s.axis.x(), s.axis.y(), s.axis.z()}},
-                      {"part_to_machine", m},
-                      {"patches", s.patches},
-                      {"min_normal_dot", s.min_normal_dot},
-                      {"hidden_samples", s.hidden_samples}});
-    }
     Report report;
-    report.data = {{"setups", list}, {"patches", surfaces->patches.size()}, {"min_normal_dot", o.min_normal_dot}};
+    report.data = {{"setups", setups_report(setups)}, {"patches", surfaces->patches.size()}, {"min_normal_dot", o.min_normal_dot}};
     ctx.set("report", std::move(report));
   };
   return d;

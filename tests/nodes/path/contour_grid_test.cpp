@@ -13,6 +13,7 @@
 #include "nodes/types/document.h"
 #include "nodes/types/surfaces.h"
 #include "nodes/types/toolpath.h"
+#include "tests/nodes/path/scallop_trace.h"
 #include "tests/nodes/surface/surface_test_util.h"
 #include "tests/test_support.h"
 
@@ -59,16 +60,12 @@ struct Exact final : ParametricSurface {
   double uv_spacing() const override { return 0.01; }
 };
 
-double segment_distance(const V& q, const V& a, const V& b) {
-  const V ab = b - a;
-  const double t = ab.squaredNorm() > 0 ? std::clamp((q - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-  return (q - (a + t * ab)).norm();
-}
+using test::segment_distance;
 
 // The largest scallop over an n x n grid of the whole domain (its rim included): the smallest t
 // >= 0 with p + t n within r of a ball-centre polyline, by sphere tracing.
 double measured_scallop(const Exact& s, const ContourGridResult& g, double r, int n) {
-  std::vector<std::array<V, 2>> segs;
+  std::vector<test::Segment> segs;
   for (const auto& p : g.passes)
     for (std::size_t k = 0; k + 1 < p.contact.size(); ++k)
       segs.push_back({p.contact[k] + r * p.normal[k], p.contact[k + 1] + r * p.normal[k + 1]});
@@ -76,15 +73,7 @@ double measured_scallop(const Exact& s, const ContourGridResult& g, double r, in
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) {
       const SurfaceSample x = s({s.d.width * i / (n - 1), s.d.height * j / (n - 1)});
-      double t = 0;
-      for (int it = 0; it < 200; ++it) {
-        double d = 1e9;
-        for (const auto& sg : segs) d = std::min(d, segment_distance(x.position + t * x.normal, sg[0], sg[1]));
-        if (d - r <= 1e-9) break;
-        t += d - r;
-        if (t > 1) break;
-      }
-      worst = std::max(worst, t);
+      worst = std::max(worst, test::traced_scallop(x.position, x.normal, segs, r));
     }
   return worst;
 }

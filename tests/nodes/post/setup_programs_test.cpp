@@ -11,6 +11,7 @@
 #include "nodes/mesh/mesh_distance.h"
 #include "nodes/path/contour_grid.h"
 #include "nodes/surface/setups.h"
+#include "tests/nodes/path/scallop_trace.h"
 #include "tests/nodes/surface/surface_test_util.h"
 #include "tests/test_support.h"
 
@@ -19,18 +20,6 @@ namespace {
 
 using V = Eigen::Vector3d;
 
-// The clampings as post.setup_programs reads them from surface.setups' report.
-std::vector<SetupSpec> specs_of(const std::vector<Setup>& setups) {
-  std::vector<SetupSpec> out;
-  for (const auto& s : setups) {
-    SetupSpec spec;
-    spec.name = s.name, spec.rotation = s.rotation, spec.translation = s.translation;
-    spec.patches.assign(s.patches.begin(), s.patches.end());
-    out.push_back(spec);
-  }
-  return out;
-}
-
 // A 20 x 10 x 5 block standing on z = 0: its top and its front wall (y = 0) as patches, planned
 // with contour grids, set up by plan_setups against the block's mesh.
 struct Block {
@@ -38,7 +27,7 @@ struct Block {
   Mesh part;
   Toolpath path;
   std::vector<std::size_t> counts;
-  std::vector<SetupSpec> setups;
+  std::vector<Setup> setups;
 
   Block() {
     surfaces.patches.push_back(test::flat_patch({0, 0, 5}, {20, 0, 5}, {0, 10, 5}, {20, 10, 5}, {0, 0, 1}));
@@ -55,7 +44,7 @@ struct Block {
       counts.push_back(g.passes.size());
       path.passes.insert(path.passes.end(), g.passes.begin(), g.passes.end());
     }
-    setups = specs_of(plan_setups(surfaces, part));
+    setups = plan_setups(surfaces, part);
   }
 };
 
@@ -132,8 +121,8 @@ TEST(SetupPrograms, ABallAgainstAWallIsLiftedOverIt) {
   Toolpath path;
   path.tool_radius = 2, path.scallop_height = 0.05, path.chord_error = 0.01;
   path.passes = g.passes;
-  SetupSpec top;
-  top.name = "1: +z", top.patches = {0};
+  scallop::Setup top;  // gtest has a Setup of its own
+  top.name = "1: +z", top.axis = V::UnitZ(), top.rotation.setIdentity(), top.translation.setZero(), top.patches = {0};
   const auto programs = setup_programs(path, {g.passes.size()}, {top}, part, {}, {});
   ASSERT_EQ(programs.size(), 1u);
   EXPECT_GT(programs[0].lifted, 0u);
@@ -167,11 +156,11 @@ TEST(SetupPrograms, ABoxInFiveClampingsHasEveryFaceButItsBaseCutWithinH) {
     counts.push_back(g.passes.size());
     path.passes.insert(path.passes.end(), g.passes.begin(), g.passes.end());
   }
-  const std::vector<SetupSpec> setups = specs_of(plan_setups(s, part));
+  const auto setups = plan_setups(s, part);
   ASSERT_EQ(setups.size(), 5u);
   const auto programs = setup_programs(path, counts, setups, part, {}, {});
   ASSERT_EQ(programs.size(), 5u);
-  std::vector<std::array<V, 2>> moves;  // feed moves' ball centres, part frame
+  std::vector<test::Segment> moves;  // feed moves' ball centres, part frame
   for (std::size_t k = 0; k < 5; ++k) {
     std::istringstream in(programs[k].gcode);
     V at(0, 0, 0), prev(0, 0, 0);
@@ -186,25 +175,13 @@ TEST(SetupPrograms, ABoxInFiveClampingsHasEveryFaceButItsBaseCutWithinH) {
       prev = centre, have = true;
     }
   }
-  auto segment_distance = [](const V& q, const V& a, const V& b) {
-    const V ab = b - a;
-    const double t = ab.squaredNorm() > 0 ? std::clamp((q - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-    return (q - (a + t * ab)).norm();
-  };
   double worst = 0;
   for (const auto& sp : s.patches) {
     const BSplinePatch face(sp.surface, sp.direction);
     for (int i = 0; i <= 24; ++i)
       for (int j = 0; j <= 24; ++j) {
         const SurfaceSample x = face({i / 24.0, j / 24.0});
-        double t = 0;
-        for (int it = 0; it < 100; ++it) {
-          double d = 1e9;
-          for (const auto& m : moves) d = std::min(d, segment_distance(x.position + t * x.normal, m[0], m[1]));
-          if (d - r <= 1e-6 || t > 1) break;
-          t += d - r;
-        }
-        worst = std::max(worst, t);
+        worst = std::max(worst, test::traced_scallop(x.position, x.normal, moves, r));
       }
   }
   EXPECT_LE(worst, h * 1.01);
@@ -216,12 +193,6 @@ TEST(SetupPrograms, BadInputIsNamed) {
                 [&] { setup_programs(b.path, {1, 2}, b.setups, b.part, {}, {}); }),
             "the patches' pass counts do not add up to the toolpath's " + std::to_string(b.path.passes.size()) +
                 " passes");
-  const auto report = nlohmann::json::parse(
-      R"({"setups": [{"name": "1: +z", "part_to_machine": [[2, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]], "patches": [0]}]})");
-  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { setups_from_report(report, 2); }),
-            "setup '1: +z': part_to_machine's R is not a rotation");
-  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { setups_from_report(nlohmann::json::object(), 2); }),
-            "the setups report has no setups");
 }
 
 }  // namespace

@@ -143,6 +143,26 @@ TEST(Setups, BadInputIsNamed) {
             "patch 3: its direction is not a unit vector");
 }
 
+TEST(Setups, TheReportReadsBackAndABadOneIsNamed) {
+  const auto planned = plan_setups(open_box(), box_corners());
+  const auto back = setups_from_report({{"setups", setups_report(planned)}}, 5);
+  ASSERT_EQ(back.size(), planned.size());
+  for (std::size_t k = 0; k < back.size(); ++k) {
+    EXPECT_EQ(back[k].name, planned[k].name);
+    EXPECT_EQ(back[k].patches, planned[k].patches);
+    EXPECT_LT((back[k].axis - planned[k].axis).norm(), 1e-12);
+    EXPECT_EQ(part_to_machine(back[k]), part_to_machine(planned[k]));
+  }
+  const auto report = nlohmann::json::parse(
+      R"({"setups": [{"name": "1: +z", "part_to_machine": [[2, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]], "patches": [0]}]})");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { setups_from_report(report, 2); }),
+            "setup '1: +z': part_to_machine's R is not a rotation");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { setups_from_report(nlohmann::json::object(), 2); }),
+            "the setups report has no setups");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { setups_from_report({{"setups", setups_report(planned)}}, 3); }),
+            "setup '4: -y': patch 3 of 3");
+}
+
 TEST(Setups, TheNodeReportsPartToMachineAsTheSetupsFileHasIt) {
   const Mesh part = box_corners();
   auto out = test::run_node(surface_nodes::make_setups_node(), nlohmann::json::object(),
