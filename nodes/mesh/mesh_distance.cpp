@@ -52,6 +52,11 @@ double MeshDistance::operator()(const Eigen::Vector3d& p) const {
   return std::sqrt(impl_->tree.squared_distance(point(p)));
 }
 
+double MeshDistance::operator()(const Eigen::Vector3d& p, const Eigen::Vector3d& hint) const {
+  if (impl_->tris.empty()) return std::numeric_limits<double>::infinity();
+  return std::sqrt(impl_->tree.squared_distance(point(p), point(hint)));
+}
+
 double MeshDistance::ray_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& d) const {
   if (impl_->tris.empty()) return std::numeric_limits<double>::infinity();
   const Kernel::Ray_3 ray(point(p), Kernel::Direction_3(d.x(), d.y(), d.z()));
@@ -60,6 +65,28 @@ double MeshDistance::ray_distance(const Eigen::Vector3d& p, const Eigen::Vector3
   if (const Kernel::Point_3* q = boost::get<Kernel::Point_3>(&hit->first))
     return std::sqrt(CGAL::squared_distance(*q, ray.source()));
   return 0;  // the ray runs along a face from p
+}
+
+double MeshDistance::signed_distance(const Eigen::Vector3d& p) const {
+  if (impl_->tris.empty()) return std::numeric_limits<double>::infinity();
+  const Kernel::Point_3 q = point(p);
+  const auto [foot, prim] = impl_->tree.closest_point_and_primitive(q);
+  const double d = std::sqrt(CGAL::squared_distance(q, foot));
+  const Kernel::Triangle_3& t = *prim;
+  const Kernel::Vector_3 normal = CGAL::cross_product(t[1] - t[0], t[2] - t[0]);
+  // Barycentric coordinates of the foot: all clearly positive = inside the face.
+  const double area2 = normal.squared_length();
+  bool inside_face = area2 > 0;
+  for (int k = 0; k < 3 && inside_face; ++k) {
+    const Kernel::Vector_3 nk = CGAL::cross_product(t[(k + 2) % 3] - t[(k + 1) % 3], foot - t[(k + 1) % 3]);
+    inside_face = nk * normal > 1e-9 * area2;
+  }
+  if (inside_face) return (q - foot) * normal < 0 ? -d : d;
+  int odd = 0;
+  for (const Kernel::Vector_3& dir : {Kernel::Vector_3(0.5773, 0.3131, 0.7544), Kernel::Vector_3(-0.6421, 0.5172, -0.2913),
+                                      Kernel::Vector_3(0.1173, -0.8839, 0.3253)})
+    odd += impl_->tree.number_of_intersected_primitives(Kernel::Ray_3(q, dir)) % 2;
+  return odd >= 2 ? -d : d;
 }
 
 std::vector<double> distances_to_mesh(const std::vector<Eigen::Vector3d>& points, const Mesh& m) {

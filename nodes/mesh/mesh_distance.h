@@ -1,6 +1,6 @@
 // Distances from points to a mesh's surface, and rays against it (CGAL's AABB tree): for reports
 // that measure a reconstruction or a fitted surface against a mesh, and for what a tool axis can
-// reach (surface.setups).
+// reach (surface.setups), and a ball centre inside the part (post.simulate_part).
 #pragma once
 
 #include <Eigen/Core>
@@ -20,9 +20,16 @@ class MeshDistance {
   MeshDistance& operator=(const MeshDistance&) = delete;
   // Unsigned distance from p to the nearest point of the faces; +infinity without faces.
   double operator()(const Eigen::Vector3d& p) const;
+  // The same, the search started from `hint`, a point on the faces near p (faster).
+  double operator()(const Eigen::Vector3d& p, const Eigen::Vector3d& hint) const;
   // How far along the ray from p in direction d (unit) the first face lies; +infinity when the
   // ray meets none.
   double ray_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& d) const;
+  // Signed distance, negative inside the part: the side of the nearest face's outward normal
+  // (corners counter-clockwise seen from outside) where the nearest point lies inside a face;
+  // where it lies on an edge or a corner, where faces disagree, the parity of the crossings of
+  // three skew rays (majority), which needs a closed mesh. +infinity without faces.
+  double signed_distance(const Eigen::Vector3d& p) const;
 
  private:
   struct Impl;

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 #include "nodes/geom/kd_tree.h"
+#include "nodes/post/centre_index.h"
 
 namespace scallop {
 namespace {
@@ -19,13 +20,6 @@ std::string mm(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%.4g", v);
   return b;
-}
-
-double seg_dist(const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  Eigen::Vector3d e = b - a;
-  double ee = e.squaredNorm();
-  double t = ee > 0 ? std::clamp((q - a).dot(e) / ee, 0.0, 1.0) : 0.0;
-  return (a + t * e - q).norm();
 }
 
 double seg_dist_xy(const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
@@ -100,7 +94,7 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
     for (const auto& [i, d2] : hits) {
       const Eigen::Vector3d& q = surface[i];
       if (seg_dist_xy(q, a, b) > r) continue;
-      if (seg_dist(q, a, b) < r - tol) return false;
+      if (segment_distance(q, a, b) < r - tol) return false;
     }
     if (!model) return true;
     // The model under the ball: ball centres along the link every quarter of the cloud spacing

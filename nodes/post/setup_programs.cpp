@@ -143,6 +143,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     prog.passes = local.passes.size();
     prog.moves = linked.moves.size();
     prog.clearance_z = linked.clearance_z;
+    prog.linked = linked;
     out.push_back(std::move(prog));
   }
   return out;

@@ -24,7 +24,7 @@ struct SetupProgramsOptions {
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 1;
+  d.version = 2;  // 2: outputs the programs' moves (post.simulate_part certifies them)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), linked "
       "against the whole part, and the setups file (scallop-setups/1) naming them";
@@ -34,6 +34,7 @@ NodeDecl make_setup_programs_node() {
       .input("setups", "Report", "surface.setups' report: the clampings, their part_to_machine and patches")
       .input("mesh", "Mesh", "the whole part: links avoid it and the clearance plane clears it in every setup")
       .output("file", "File", "the setups file")
+      .output("programs", "SetupPaths", "each program's moves with its part_to_machine (post.simulate_part)")
       .output("report", "Report", "{setups: [{name, gcode, passes, moves, clearance_z (mm, machine frame), lifted (ball positions kept off "
               "the part), lift_max (mm)}]}")
       .param_output_path("path", "the setups file to write, relative to the output folder (-o); the programs "
@@ -83,6 +84,10 @@ NodeDecl make_setup_programs_node() {
     for (const SetupProgram& p : programs)
       list.push_back({{"name", p.name}, {"gcode", p.file}, {"passes", p.passes}, {"moves", p.moves},
                       {"clearance_z", p.clearance_z}, {"lifted", p.lifted}, {"lift_max", p.lift_max}});
+    SetupPaths paths;
+    for (const SetupProgram& p : programs)
+      paths.setups.push_back({p.name, p.file, setups[p.setup].rotation, setups[p.setup].translation, p.linked});
+    ctx.set("programs", std::move(paths));
     Report report;
     report.data = {{"setups", list}};
     ctx.set("report", std::move(report));

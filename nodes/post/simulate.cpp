@@ -13,7 +13,7 @@
 #include <nanoflann.hpp>
 #include <numeric>
 #include <stdexcept>
-#include "nodes/geom/kd_tree.h"
+#include "nodes/post/centre_index.h"
 
 namespace scallop {
 namespace {
@@ -23,140 +23,6 @@ constexpr double kPhaseU = 0.37, kPhaseV = 0.71;  // ... and its shift, in spaci
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 
-// Every index within a radius, unsorted (cheaper than nanoflann's sorted radiusSearch).
-struct CollectAll {
-  double radius;  // squared
-  std::vector<std::uint32_t>* out;
-  void init() {}
-  void clear() { out->clear(); }
-  std::size_t size() const { return out->size(); }
-  bool full() const { return true; }
-  bool addPoint(double d, std::uint32_t i) {
-    if (d < radius) out->push_back(i);
-    return true;
-  }
-  double worstDist() const { return radius; }
-};
-
-// First t >= 0 at which the ray o + t·d (|d| = 1) is within r of the segment [a, b]; +inf if
-// never. The capsule is the union of a finite cylinder and two balls; the flat ends of the
-// cylinder lie inside the balls, so the first entry is the least of the side entry (when its
-// foot falls on the segment) and the two ball entries. The ray starts outside the capsule.
-double capsule_entry(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& a,
-                     const Eigen::Vector3d& b, double r) {
-  double best = INFINITY;
-  auto ball = [&](const Eigen::Vector3d& c) {
-    Eigen::Vector3d oc = o - c;
-    double bb = oc.dot(d), cc = oc.squaredNorm() - r * r;
-    double disc = bb * bb - cc;
-    if (disc < 0) return;
-    double t = -bb - std::sqrt(disc);
-    if (t >= 0) best = std::min(best, t);
-  };
-  ball(a);
-  ball(b);
-  Eigen::Vector3d e = b - a;
-  double ee = e.squaredNorm();
-  if (ee > 0) {
-    Eigen::Vector3d w = o - a;
-    double ed = e.dot(d), ew = e.dot(w);
-    // |w + t d − ((ew + t ed)/ee) e|² = r²  →  A t² + 2 B t + C = 0
-    double A = ee - ed * ed, B = ee * w.dot(d) - ew * ed, C = ee * w.squaredNorm() - ew * ew - r * r * ee;
-    if (A > 1e-12 * ee) {
-      double disc = B * B - A * C;
-      if (disc >= 0) {
-        double s = std::sqrt(disc);
-        double t = B > 0 ? (-B - s) / A : C / (-B + s);  // the smaller root, without cancellation
-        if (t >= 0) {
-          double f = ew + t * ed;
-          if (f >= 0 && f <= ee) best = std::min(best, t);
-        }
-      }
-    }
-  }
-  return best;
-}
-
-double segment_distance(const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  Eigen::Vector3d e = b - a;
-  double ee = e.squaredNorm();
-  double t = ee > 0 ? std::clamp((q - a).dot(e) / ee, 0.0, 1.0) : 0.0;
-  return (a + t * e - q).norm();
-}
-
-// Pieces of the centre polyline no longer than `piece`, with a k-d tree over their midpoints.
-struct PieceIndex {
-  std::vector<Eigen::Vector3d> a, b, mid;
-  double half = 0;
-  std::unique_ptr<PointsAdaptor<Eigen::Vector3d>> adaptor;
-  std::unique_ptr<KdTree<Eigen::Vector3d, 3>> tree;
-
-  PieceIndex(const std::vector<CentreSegment>& segs, double piece) {
-    for (const auto& s : segs) {
-      double L = (s.b - s.a).norm();
-      int k = std::max(1, static_cast<int>(std::ceil(L / piece)));
-      for (int j = 0; j < k; ++j) {
-        a.push_back(s.a + (s.b - s.a) * (double(j) / k));
-        b.push_back(s.a + (s.b - s.a) * (double(j + 1) / k));
-        mid.push_back(0.5 * (a.back() + b.back()));
-        half = std::max(half, 0.5 * L / k);
-      }
-    }
-    adaptor = std::make_unique<PointsAdaptor<Eigen::Vector3d>>(PointsAdaptor<Eigen::Vector3d>{mid});
-    tree = std::make_unique<KdTree<Eigen::Vector3d, 3>>(3, *adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-    tree->buildIndex();
-  }
-
-  // gouge and scallop (NaN: uncut) at p with normal n, where the real surface may lie up to
-  // `delta` off p either way: the gouge is then at most r - d(p) + delta, the scallop at most
-  // its value at p plus delta (the ray from p - delta n reaches p after delta). Every piece that
-  // comes within r of the ray segment [p, p + T n] has its midpoint within r + T/2 + half of the
-  // ray's middle, so the candidates are complete and, for delta = 0, both values exact.
-  void trace(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double r, double T, double delta,
-             double& gouge, double& scallop, std::vector<std::uint32_t>& cand) const {
-    Eigen::Vector3d m = p + 0.5 * T * n;
-    double R = r + 0.5 * T + half;
-    CollectAll rs{R * R, &cand};
-    cand.clear();
-    tree->findNeighbors(rs, m.data(), nanoflann::SearchParams(32, 0, false));
-    double d = INFINITY;
-    for (auto i : cand) d = std::min(d, segment_distance(p, a[i], b[i]));
-    gouge = std::max(0.0, r - d + delta);
-    if (d <= r) {
-      scallop = std::max(0.0, delta - (r - d));
-      return;
-    }
-    double t = INFINITY;
-    for (auto i : cand) t = std::min(t, capsule_entry(p, n, a[i], b[i], r));
-    scallop = t <= T ? t + delta : kNaN;
-  }
-};
-
-struct WeightedStats {
-  double max = kNaN, p99 = kNaN, mean = kNaN;
-};
-
-WeightedStats weighted_stats(std::vector<std::pair<double, double>> vw) {
-  WeightedStats s;
-  if (vw.empty()) return s;
-  std::sort(vw.begin(), vw.end());
-  double total = 0, sum = 0;
-  for (auto& [v, w] : vw) total += w, sum += v * w;
-  s.max = vw.back().first;
-  s.mean = total > 0 ? sum / total : kNaN;
-  double acc = 0;
-  s.p99 = vw.back().first;
-  for (auto& [v, w] : vw) {
-    acc += w;
-    if (acc / total >= 0.99) {
-      s.p99 = v;
-      break;
-    }
-  }
-  return s;
-}
-
-nlohmann::json num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 
 }  // namespace
 
@@ -378,7 +244,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
   for (const auto& s : feed) lengths.push_back((s.b - s.a).norm()), cut_length += lengths.back();
   std::nth_element(lengths.begin(), lengths.begin() + lengths.size() * 9 / 10, lengths.end());
   const double piece = std::clamp(lengths[lengths.size() * 9 / 10], spacing, std::max(spacing, r / 2));
-  PieceIndex index(feed, piece);
+  CentreIndex index(feed, piece);
 
   Simulation res;
   res.spacing = spacing;
@@ -494,12 +360,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
   rep["samples_interior"] = n_interior;
   rep["samples_refined"] = res.samples.size() - n_grid;
   rep["surface_area"] = area;
-  rep["scallop_max"] = num(max_all);
-  rep["scallop_max_interior"] = num(max_inner);
-  rep["scallop_p99"] = num(st.p99);
-  rep["scallop_p99_interior"] = num(sti.p99);
-  rep["scallop_mean"] = num(st.mean);
-  rep["scallop_mean_interior"] = num(sti.mean);
+  report_scallop(rep, max_all, max_inner, st, sti);
   rep["gouge_max"] = gouge_max;
   rep["uncut_fraction"] = area > 0 ? uncut / area : 0.0;
   rep["uncut_fraction_interior"] = area_i > 0 ? uncut_i / area_i : 0.0;

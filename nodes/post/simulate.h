@@ -24,15 +24,11 @@
 #include <vector>
 
 #include "nodes/geom/height_field_model.h"
+#include "nodes/post/centre_index.h"
 #include "nodes/types/simulation.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
-
-// One straight piece of the ball-centre polyline (mm).
-struct CentreSegment {
-  Eigen::Vector3d a, b;
-};
 
 // Ball centres of a planned path: consecutive contact points of each pass, c + r·n.
 std::vector<CentreSegment> feed_centres(const Toolpath& path);

@@ -29,10 +29,12 @@ void register_types(Registry& r) {
   v.add({"UVMap", "bin", "(u,v) parameterisation of the points", UVMap::deserialize});
   v.add({"Toolpath", "json", "passes of cutter-contact points for a ball-end tool", Toolpath::deserialize});
   v.add({"LinkedPath", "bin", "linked machine moves (tool tip)", LinkedPath::deserialize});
+  v.add({"SetupPaths", "bin", "a part's programs, one per clamping: name, file, part_to_machine and linked moves",
+         SetupPaths::deserialize});
   v.add({"GCode", "ngc", "a machine program", GCode::deserialize});
   v.add({"Report", "json", "a JSON report", Report::deserialize});
   v.add({"Simulation", "bin", "a cutting simulation: what the path left at every surface sample, its limits and its report",
-         Simulation::deserialize, 1});
+         Simulation::deserialize, 2});  // 2: the face of each sample (whole parts)
   v.add({"Image", "png", "a PNG picture", Image::deserialize});
   v.add({"Svg", "svg", "an SVG picture", Svg::deserialize});
 }

@@ -25,6 +25,7 @@ void Simulation::serialize(std::ostream& out) const {
   std::vector<std::uint8_t> interior(samples.size());
   for (std::size_t i = 0; i < samples.size(); ++i) interior[i] = samples[i].interior;
   bin::write_vector(out, interior);
+  bin::write_vector(out, face);
 }
 
 ValuePtr Simulation::deserialize(std::istream& in) {
@@ -45,6 +46,9 @@ ValuePtr Simulation::deserialize(std::istream& in) {
   const std::vector<std::uint8_t> interior = bin::read_vector<std::uint8_t>(in);
   if (interior.size() != s->samples.size()) throw std::runtime_error("corrupt simulation: columns of different lengths");
   for (std::size_t i = 0; i < interior.size(); ++i) s->samples[i].interior = interior[i] != 0;
+  s->face = bin::read_vector<std::uint32_t>(in);
+  if (!s->face.empty() && s->face.size() != s->samples.size())
+    throw std::runtime_error("corrupt simulation: columns of different lengths");
   return s;
 }
 

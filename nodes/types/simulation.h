@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -29,9 +30,11 @@ struct Simulation final : Value {
   std::vector<Eigen::Vector2d> outline;  // grid nodes just outside the patch (xy, mm)
   double scallop_limit = 0;        // h (mm): a scallop above 1.01 h fails
   double gouge_tolerance = 0;      // mm: a deeper gouge fails, max(e, 0.001)
+  std::vector<std::uint32_t> face;  // a whole part's simulation (post.simulate_part): the mesh
+                                    // face of each sample; empty for a patch's
 
   std::string type_name() const override { return "Simulation"; }
-  // Column by column (x, y, z, weight, scallop, gouge, interior), so the bytes are the same for
+  // Column by column (x, y, z, weight, scallop, gouge, interior, face), so the bytes are the same for
   // the same simulation (a struct's padding would not be).
   void serialize(std::ostream& out) const override;
   // Throws std::runtime_error for a truncated stream or columns of different lengths.

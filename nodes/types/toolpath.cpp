@@ -76,6 +76,33 @@ ValuePtr LinkedPath::deserialize(std::istream& in) {
   return l;
 }
 
+void SetupPaths::serialize(std::ostream& out) const {
+  bin::write_u64(out, setups.size());
+  for (const SetupPath& s : setups) {
+    bin::write_string(out, s.name);
+    bin::write_string(out, s.file);
+    for (int k = 0; k < 9; ++k) bin::write_f64(out, s.rotation.data()[k]);
+    for (int k = 0; k < 3; ++k) bin::write_f64(out, s.translation[k]);
+    s.path.serialize(out);
+  }
+}
+
+ValuePtr SetupPaths::deserialize(std::istream& in) {
+  auto v = std::make_shared<SetupPaths>();
+  const std::uint64_t n = bin::read_u64(in);
+  if (n > (1u << 20)) throw std::runtime_error("corrupt setup paths: " + std::to_string(n) + " setups");
+  for (std::uint64_t i = 0; i < n; ++i) {
+    SetupPath s;
+    s.name = bin::read_string(in);
+    s.file = bin::read_string(in);
+    for (int k = 0; k < 9; ++k) s.rotation.data()[k] = bin::read_f64(in);
+    for (int k = 0; k < 3; ++k) s.translation[k] = bin::read_f64(in);
+    s.path = *std::static_pointer_cast<const LinkedPath>(LinkedPath::deserialize(in));
+    v->setups.push_back(std::move(s));
+  }
+  return v;
+}
+
 void Toolpath::check_passes() const {
   if (!(tool_radius > 0)) throw std::invalid_argument("tool radius must be > 0");
   bool any = false;

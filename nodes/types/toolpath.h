@@ -61,4 +61,23 @@ struct LinkedPath final : Value {
   static ValuePtr deserialize(std::istream& in);
 };
 
+// The programs of a part machined in several clampings (post.setup_programs): per setup its
+// name, its program's file name, the rigid motion part_to_machine (a part point p is at
+// rotation p + translation in the machine frame, tool axis +z) and its linked moves in the
+// machine frame.
+struct SetupPath {
+  std::string name;
+  std::string file;
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  LinkedPath path;
+};
+struct SetupPaths final : Value {
+  std::vector<SetupPath> setups;
+
+  std::string type_name() const override { return "SetupPaths"; }
+  void serialize(std::ostream& out) const override;
+  static ValuePtr deserialize(std::istream& in);
+};
+
 }  // namespace scallop

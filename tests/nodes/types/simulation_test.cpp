@@ -46,8 +46,21 @@ TEST(Simulation, CacheFormRoundTripsEveryField) {
   EXPECT_TRUE(std::isnan(back->samples[1].scallop));  // uncut
   EXPECT_EQ(back->samples[1].gouge, 0.002);
   EXPECT_FALSE(back->samples[1].interior);
+  EXPECT_TRUE(back->face.empty());
   // the same bytes again: the cache form has no padding that could differ
   EXPECT_EQ(bytes_of(*back), bytes_of(s));
+}
+
+TEST(Simulation, APartsSimulationKeepsTheFaceOfEachSample) {
+  Simulation s = two_samples();
+  s.face = {7, 3};
+  std::stringstream in(bytes_of(s));
+  auto back = std::dynamic_pointer_cast<const Simulation>(Simulation::deserialize(in));
+  EXPECT_EQ(back->face, std::vector<std::uint32_t>({7, 3}));
+  s.face = {7};
+  std::stringstream bad(bytes_of(s));
+  EXPECT_EQ(test::error_of<std::runtime_error>([&] { Simulation::deserialize(bad); }),
+            "corrupt simulation: columns of different lengths");
 }
 
 TEST(Simulation, ATruncatedCacheEntryIsRefused) {
@@ -71,7 +84,7 @@ TEST(Simulation, IsARegisteredValueTypeWithAFormatVersion) {
   const ValueType* t = builtin_registry().values().find("Simulation");
   ASSERT_TRUE(t);
   EXPECT_EQ(t->extension, "bin");
-  EXPECT_EQ(t->format, 1);
+  EXPECT_EQ(t->format, 2);
   EXPECT_FALSE(t->description.empty());
   std::stringstream in(bytes_of(two_samples()));
   EXPECT_EQ(t->deserialize(in)->type_name(), "Simulation");

@@ -1,0 +1,482 @@
+#include "nodes/post/simulate_part.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <tuple>
+#include <limits>
+#include <map>
+#include <stdexcept>
+#include <utility>
+
+#include "nodes/mesh/mesh_distance.h"
+
+namespace scallop {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kPi = 3.14159265358979323846;
+
+// A triangle of the part (a polygon fanned from its first corner) with its polygon.
+struct Triangle {
+  Eigen::Vector3d a, b, c, n;  // n: outward unit normal
+  std::uint32_t face;
+};
+
+std::vector<Triangle> triangles_of(const Mesh& m) {
+  std::vector<Triangle> out;
+  for (std::size_t f = 0; f < m.num_faces(); ++f)
+    for (std::size_t k = 1; k + 1 < m.face_size(f); ++k) {
+      Triangle t{m.vertices[m.face(f)[0]], m.vertices[m.face(f)[k]], m.vertices[m.face(f)[k + 1]], {}, std::uint32_t(f)};
+      const Eigen::Vector3d n = (t.b - t.a).cross(t.c - t.a);
+      if (!(n.norm() > 0)) continue;  // a degenerate triangle stands for no area
+      t.n = n.normalized();
+      out.push_back(t);
+    }
+  return out;
+}
+
+int subdivisions(const Triangle& t, double spacing) {
+  const double longest = std::max({(t.b - t.a).norm(), (t.c - t.b).norm(), (t.a - t.c).norm()});
+  return std::max(1, static_cast<int>(std::ceil(longest / (1.5 * spacing))));
+}
+
+struct Sample {
+  Eigen::Vector3d p;
+  double weight;
+  std::uint32_t tri;
+};
+
+// n² centroids of the triangle cut into n² equal ones, each standing for 1/n² of its area.
+void sample_triangle(const Triangle& t, std::uint32_t index, int n, std::vector<Sample>& out) {
+  const double w = 0.5 * (t.b - t.a).cross(t.c - t.a).norm() / (double(n) * n);
+  const Eigen::Vector3d du = (t.b - t.a) / n, dv = (t.c - t.a) / n;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; i + j < n; ++j) {
+      out.push_back({t.a + (i + 1.0 / 3) * du + (j + 1.0 / 3) * dv, w, index});
+      if (i + j + 1 < n) out.push_back({t.a + (i + 2.0 / 3) * du + (j + 2.0 / 3) * dv, w, index});
+    }
+}
+
+bool in_triangle(const Triangle& t, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d e[3] = {t.b - t.a, t.c - t.b, t.a - t.c}, v[3] = {t.a, t.b, t.c};
+  for (int k = 0; k < 3; ++k)
+    if (e[k].cross(p - v[k]).dot(t.n) < 0) return false;
+  return true;
+}
+
+// Border edges and edges whose two faces' normals differ by more than `angle`, as segments.
+std::vector<CentreSegment> edges_to_keep_off(const Mesh& m, const std::vector<Triangle>& tris, double angle) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<Eigen::Vector3d>> normals;
+  std::vector<Eigen::Vector3d> face_normal(m.num_faces(), Eigen::Vector3d::Zero());
+  for (const Triangle& t : tris) face_normal[t.face] += t.n;
+  for (std::size_t f = 0; f < m.num_faces(); ++f) {
+    const std::size_t k = m.face_size(f);
+    for (std::size_t i = 0; i < k; ++i) {
+      std::uint32_t a = m.face(f)[i], b = m.face(f)[(i + 1) % k];
+      normals[{std::min(a, b), std::max(a, b)}].push_back(face_normal[f].normalized());
+    }
+  }
+  const double cos_angle = std::cos(angle * kPi / 180);
+  std::vector<CentreSegment> out;
+  for (const auto& [e, ns] : normals) {
+    bool keep = ns.size() != 2;
+    if (!keep) keep = !(ns[0].dot(ns[1]) >= cos_angle);
+    if (keep) out.push_back({m.vertices[e.first], m.vertices[e.second]});
+  }
+  return out;
+}
+
+nlohmann::json xyz(const Eigen::Vector3d& p) { return {{"x", p.x()}, {"y", p.y()}, {"z", p.z()}}; }
+
+// Largest r - D(c) + delta along the ball-centre segment [a, b] (D signed, negative inside),
+// exact wherever it exceeds tol (verify_part.py's rule): between two points g apart, D is at least
+// (d1 + d2 - g) / 2 (it is 1-Lipschitz) and at least min(d1, d2) - g² / (8 d_low) (a minimum of
+// convex functions of curvature at most 1 / d_low, d_low > 0 the first bound); where these leave
+// room for more than max(tol, the largest found + 1e-4) the stretch is halved.
+double gouge_along(const MeshDistance& part, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
+                   double delta, double step, double tol, std::size_t& positions) {
+  const double L = (b - a).norm();
+  const int k = std::max(1, static_cast<int>(std::ceil(L / step)));
+  std::vector<double> d(k + 1);
+  for (int i = 0; i <= k; ++i) d[i] = part.signed_distance(a + (b - a) * (double(i) / k));
+  positions += k + 1;
+  double best = r + delta - *std::min_element(d.begin(), d.end());
+  std::vector<std::tuple<double, double, double, double>> todo;  // t0, t1, d0, d1
+  for (int i = 0; i < k; ++i) todo.emplace_back(double(i) / k, double(i + 1) / k, d[i], d[i + 1]);
+  while (!todo.empty()) {
+    auto [t0, t1, d0, d1] = todo.back();
+    todo.pop_back();
+    const double gap = (t1 - t0) * L;
+    const double lip = 0.5 * (d0 + d1 - gap);
+    const double conv = lip > 0 ? std::min(d0, d1) - gap * gap / (8 * lip) : -INFINITY;
+    if (r + delta - std::max(lip, conv) <= std::max(tol, best + 1e-4) || gap < 1e-6) continue;
+    const double tm = 0.5 * (t0 + t1);
+    const double dm = part.signed_distance(a + (b - a) * tm);
+    ++positions;
+    best = std::max(best, r + delta - dm);
+    todo.emplace_back(t0, tm, d0, dm);
+    todo.emplace_back(tm, t1, dm, d1);
+  }
+  return best;
+}
+
+// The least clearance D(c) - r along a rapid's ball centres [a, b], marched by the clearance
+// itself (it cannot fall faster than c moves), to within `tol` / 2.
+double rapid_clearance(const MeshDistance& part, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
+                       double tol) {
+  const double L = (b - a).norm();
+  double least = INFINITY, t = 0;
+  for (;;) {
+    const Eigen::Vector3d c = L > 0 ? Eigen::Vector3d(a + (b - a) * (t / L)) : a;
+    const double clear = part.signed_distance(c) - r;
+    least = std::min(least, clear);
+    if (t >= L) break;
+    t = std::min(L, t + std::max(std::abs(clear), 0.5 * tol));
+  }
+  return least;
+}
+
+}  // namespace
+
+Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setups, const PartSimulateOptions& o,
+                         const std::function<void(double)>& progress) {
+  const double r = o.tool_radius, H = o.scallop, delta = o.surface_uncertainty;
+  if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
+  if (!(H > 0)) throw std::invalid_argument("scallop limit must be > 0");
+  if (!(H < r)) {
+    char text[160];
+    std::snprintf(text, sizeof text, "the scallop limit %g mm is not below the tool radius %g mm", H, r);
+    throw std::invalid_argument(text);
+  }
+  if (!(delta >= 0) || !std::isfinite(delta)) throw std::invalid_argument("surface uncertainty must be >= 0");
+  if (setups.empty()) throw std::invalid_argument("no setup to simulate");
+  std::vector<CentreSegment> feed;
+  std::vector<std::uint32_t> feed_setup;
+  for (std::size_t s = 0; s < setups.size(); ++s) {
+    for (const auto* list : {&setups[s].feed, &setups[s].rapid})
+      for (const CentreSegment& c : *list)
+        if (!c.a.allFinite() || !c.b.allFinite())
+          throw std::invalid_argument("setup '" + setups[s].name + "' has a ball centre that is not finite");
+    feed.insert(feed.end(), setups[s].feed.begin(), setups[s].feed.end());
+    feed_setup.insert(feed_setup.end(), setups[s].feed.size(), std::uint32_t(s));
+  }
+  if (feed.empty()) throw std::invalid_argument("no setup has a feed move");
+  const std::vector<Triangle> tris = triangles_of(part);
+  if (tris.empty()) throw std::invalid_argument("the part's mesh has no face with an area");
+  const double tol = std::max(o.chord, 1e-3);
+  const double nominal = std::sqrt(8 * r * H);
+  const double margin = o.margin > 0 ? o.margin : nominal;
+  const double T = 20 * H;
+
+  // Spacing: raised until the samples fit max_samples.
+  double spacing = o.spacing > 0 ? o.spacing : nominal / 8;
+  auto count_at = [&](double s) {
+    std::size_t c = 0;
+    for (const Triangle& t : tris) c += std::size_t(subdivisions(t, s)) * subdivisions(t, s);
+    return c;
+  };
+  if (o.spacing <= 0)
+    for (int it = 0; it < 40 && count_at(spacing) > o.max_samples; ++it) spacing *= 1.15;
+  std::vector<Sample> samples;
+  samples.reserve(count_at(spacing));
+  for (std::size_t i = 0; i < tris.size(); ++i) sample_triangle(tris[i], std::uint32_t(i), subdivisions(tris[i], spacing), samples);
+  if (progress) progress(0.05);
+
+  const MeshDistance distance(part);
+  const CentreIndex keep_off(edges_to_keep_off(part, tris, o.feature_angle), std::max(spacing, margin / 2));
+  std::vector<double> lengths;
+  for (const auto& s : feed) lengths.push_back((s.b - s.a).norm());
+  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() * 9 / 10, lengths.end());
+  const double piece = std::clamp(lengths[lengths.size() * 9 / 10], spacing, std::max(spacing, r / 2));
+  const CentreIndex centres(feed, piece);
+
+  // Classify and trace every sample: 0 measured, 1 base, 2 unreachable.
+  const bool has_base = o.base_normal.norm() > 0;
+  const Eigen::Vector3d base_n = has_base ? Eigen::Vector3d(o.base_normal.normalized()) : Eigen::Vector3d::Zero();
+  const double cos_base = std::cos(o.base_angle * kPi / 180);
+  // The sample itself is within `radius` of the centre: the search starts from it.
+  auto reaches = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& n, double radius) {
+    return distance(p + radius * n, p) >= radius - tol;
+  };
+  struct Traced {
+    int kind = 0;
+    double scallop = kNaN, gouge = 0, reach = 0;
+    bool interior = false;
+    std::uint32_t finisher = 0;
+  };
+  std::vector<Traced> traced(samples.size());
+  std::atomic<std::size_t> done{0};
+  auto trace_one = [&](const Sample& s, Traced& out, std::vector<std::uint32_t>& cand) {
+    const Eigen::Vector3d& n = tris[s.tri].n;
+    if (has_base && n.dot(base_n) >= cos_base) {
+      out.kind = 1;
+      return;
+    }
+    if (!reaches(s.p, n, r)) {
+      out.kind = 2;
+      double lo = 0, hi = r;  // the largest radius that reaches, by bisection
+      for (int it = 0; it < 30; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (reaches(s.p, n, mid) ? lo : hi) = mid;
+      }
+      out.reach = lo;
+      return;
+    }
+    centres.trace(s.p, n, r, T, delta, out.gouge, out.scallop, cand);
+    out.interior = !std::isfinite(keep_off.distance(s.p, margin, cand));
+    if (!std::isnan(out.scallop)) {
+      const std::uint32_t piece_at = centres.nearest(s.p + std::max(0.0, out.scallop - delta) * n, r + spacing, cand);
+      if (piece_at != std::numeric_limits<std::uint32_t>::max()) out.finisher = feed_setup[centres.segment_of(piece_at)];
+    }
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size(), 512), [&](const tbb::blocked_range<std::size_t>& rg) {
+    std::vector<std::uint32_t> cand;
+    for (std::size_t i = rg.begin(); i < rg.end(); ++i) trace_one(samples[i], traced[i], cand);
+    const std::size_t d = done.fetch_add(rg.size()) + rg.size();
+    if (progress) progress(0.05 + 0.6 * double(d) / samples.size());
+  });
+  const std::size_t n_grid = samples.size();
+  bool no_interior = true;
+  for (const Traced& t : traced) no_interior = no_interior && !(t.kind == 0 && t.interior);
+  if (no_interior)
+    for (Traced& t : traced) t.interior = true;
+
+  // Local refinement around the highest scallops, inside their own triangles (verify_part.py's
+  // levels: seeds, half-width / spacing; a cusp's slope makes the maximum's error linear in the
+  // finest step, spacing / 1024).
+  const std::pair<int, double> levels[] = {{1000, 1.0}, {100, 0.25}, {30, 1.0 / 16}, {10, 1.0 / 64}, {10, 1.0 / 256}};
+  for (const auto& level : levels) {
+    std::vector<std::size_t> seeds;
+    for (bool interior_only : {true, false}) {
+      std::vector<std::size_t> c;
+      for (std::size_t i = 0; i < samples.size(); ++i)
+        if (traced[i].kind == 0 && !std::isnan(traced[i].scallop) && traced[i].scallop > 0 &&
+            (!interior_only || traced[i].interior))
+          c.push_back(i);
+      const std::size_t k = interior_only ? level.first : level.first / 4;
+      if (c.size() > k)
+        std::nth_element(c.begin(), c.begin() + k, c.end(),
+                         [&](auto a, auto b) { return traced[a].scallop > traced[b].scallop; }),
+            c.resize(k);
+      seeds.insert(seeds.end(), c.begin(), c.end());
+    }
+    std::sort(seeds.begin(), seeds.end());
+    seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
+    if (seeds.empty()) break;
+    const int m = 4;  // (2m+1)² points per seed
+    std::vector<Sample> extra(seeds.size() * (2 * m + 1) * (2 * m + 1));
+    std::vector<Traced> extra_traced(extra.size());
+    std::vector<std::uint8_t> valid(extra.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size()), [&](const tbb::blocked_range<std::size_t>& rg) {
+      std::vector<std::uint32_t> cand;
+      for (std::size_t si = rg.begin(); si < rg.end(); ++si) {
+        const Sample seed = samples[seeds[si]];
+        const Triangle& t = tris[seed.tri];
+        const Eigen::Vector3d e1 = (t.b - t.a).normalized(), e2 = t.n.cross(e1);
+        for (int a = -m; a <= m; ++a)
+          for (int b = -m; b <= m; ++b) {
+            const std::size_t slot = (si * (2 * m + 1) + (a + m)) * (2 * m + 1) + (b + m);
+            const Eigen::Vector3d p = seed.p + level.second * spacing * (a * e1 + b * e2) / m;
+            if (!in_triangle(t, p)) continue;
+            extra[slot] = {p, 0, seed.tri};
+            trace_one(extra[slot], extra_traced[slot], cand);
+            if (no_interior) extra_traced[slot].interior = true;
+            valid[slot] = 1;
+          }
+      }
+    });
+    for (std::size_t i = 0; i < extra.size(); ++i)
+      if (valid[i]) samples.push_back(extra[i]), traced.push_back(extra_traced[i]);
+  }
+  if (progress) progress(0.7);
+
+  // Gouge and rapids, setup by setup.
+  nlohmann::json per_setup = nlohmann::json::array();
+  double gouge_max = 0, rapid_min = INFINITY, cut_total = 0, rapid_total = 0;
+  std::size_t through_total = 0;
+  double measured_area = 0;
+  std::vector<double> finished(setups.size(), 0);
+  for (std::size_t i = 0; i < n_grid; ++i)
+    if (traced[i].kind == 0) {
+      measured_area += samples[i].weight;
+      if (!std::isnan(traced[i].scallop)) finished[traced[i].finisher] += samples[i].weight;
+    }
+  for (std::size_t s = 0; s < setups.size(); ++s) {
+    const PartSetupCut& cut = setups[s];
+    tbb::combinable<double> g_max([] { return -INFINITY; }), r_min([] { return INFINITY; });
+    tbb::combinable<std::size_t> through([] { return std::size_t(0); }), positions([] { return std::size_t(0); });
+    tbb::parallel_for(std::size_t(0), cut.feed.size(), [&](std::size_t k) {
+      g_max.local() = std::max(g_max.local(), gouge_along(distance, cut.feed[k].a, cut.feed[k].b, r, delta, spacing,
+                                                          tol, positions.local()));
+    });
+    tbb::parallel_for(std::size_t(0), cut.rapid.size(), [&](std::size_t k) {
+      const double c = rapid_clearance(distance, cut.rapid[k].a, cut.rapid[k].b, r, tol);
+      r_min.local() = std::min(r_min.local(), c);
+      if (c < -tol) ++through.local();
+    });
+    const double g = std::max(0.0, g_max.combine([](double a, double b) { return std::max(a, b); }));
+    const double rc = r_min.combine([](double a, double b) { return std::min(a, b); });
+    const std::size_t thr = through.combine(std::plus<>());
+    double cut_length = 0, rapid_length = 0;
+    for (const auto& c : cut.feed) cut_length += (c.b - c.a).norm();
+    for (const auto& c : cut.rapid) rapid_length += (c.b - c.a).norm();
+    gouge_max = std::max(gouge_max, g);
+    rapid_min = std::min(rapid_min, rc);
+    through_total += thr;
+    cut_total += cut_length, rapid_total += rapid_length;
+    per_setup.push_back({{"name", cut.name},
+                         {"cut_length", cut_length},
+                         {"rapid_length", rapid_length},
+                         {"gouge_max", g},
+                         {"ball_positions", positions.combine(std::plus<>())},
+                         {"rapid_min_clearance", finite_or_null(rc)},
+                         {"rapids_through_part", thr},
+                         {"finished_fraction", measured_area > 0 ? finished[s] / measured_area : 0.0}});
+    if (progress) progress(0.7 + 0.28 * double(s + 1) / setups.size());
+  }
+
+  // Statistics: area-weighted over the grid; maxima include the refinement samples.
+  Simulation res;
+  res.spacing = spacing;
+  res.scallop_limit = H;
+  res.gouge_tolerance = tol;
+  double area = 0, base_area = 0, unreachable_area = 0, area_i = 0, uncut = 0, uncut_i = 0, over = 0, over_i = 0;
+  double max_all = -INFINITY, max_inner = -INFINITY;
+  std::vector<std::pair<double, double>> all, inner;
+  std::size_t n_measured = 0, n_interior = 0;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const Sample& s = samples[i];
+    const Traced& t = traced[i];
+    const bool grid = i < n_grid;
+    if (grid) {
+      area += s.weight;
+      if (t.kind == 1) base_area += s.weight;
+      if (t.kind == 2) unreachable_area += s.weight;
+    }
+    if (t.kind != 0) continue;
+    res.samples.push_back({s.p.x(), s.p.y(), s.p.z(), s.weight, t.scallop, t.gouge, t.interior});
+    res.face.push_back(tris[s.tri].face);
+    const bool cut = !std::isnan(t.scallop);
+    const bool bad = !cut || t.scallop > 1.01 * H;
+    if (cut) {
+      max_all = std::max(max_all, t.scallop);
+      if (t.interior) max_inner = std::max(max_inner, t.scallop);
+    }
+    if (!grid) continue;
+    ++n_measured;
+    if (t.interior) ++n_interior, area_i += s.weight;
+    if (cut) {
+      all.emplace_back(t.scallop, s.weight);
+      if (t.interior) inner.emplace_back(t.scallop, s.weight);
+    } else {
+      uncut += s.weight;
+      if (t.interior) uncut_i += s.weight;
+    }
+    if (bad) {
+      over += s.weight;
+      if (t.interior) over_i += s.weight;
+    }
+  }
+  const double measured = area - base_area - unreachable_area;
+  const WeightedStats st = weighted_stats(std::move(all)), sti = weighted_stats(std::move(inner));
+  auto& rep = res.report;
+  report_scallop(rep, max_all, max_inner, st, sti);
+  rep["frac_over_limit"] = measured > 0 ? nlohmann::json(over / measured) : nlohmann::json();
+  rep["frac_over_limit_interior"] = area_i > 0 ? nlohmann::json(over_i / area_i) : nlohmann::json();
+  rep["uncut_fraction"] = measured > 0 ? nlohmann::json(uncut / measured) : nlohmann::json();
+  rep["uncut_fraction_interior"] = area_i > 0 ? nlohmann::json(uncut_i / area_i) : nlohmann::json();
+  rep["gouge_max"] = gouge_max;
+  rep["rapids_through_part"] = through_total;
+  rep["rapid_min_clearance"] = finite_or_null(rapid_min);
+  rep["cut_length"] = cut_total;
+  rep["rapid_length"] = rapid_total;
+  rep["surface_area"] = area;
+  rep["base_fraction"] = base_area / area;
+  rep["unreachable_fraction"] = unreachable_area / area;
+  rep["measured_fraction"] = measured / area;
+  rep["samples"] = n_grid;
+  rep["samples_measured"] = n_measured;
+  rep["samples_interior"] = n_interior;
+  rep["samples_refined"] = samples.size() - n_grid;
+  rep["spacing"] = spacing;
+  rep["margin"] = margin;
+  rep["surface_uncertainty"] = delta;
+  rep["tool_radius"] = r;
+  rep["scallop_limit"] = H;
+  rep["chord_limit"] = o.chord;
+  rep["setups"] = per_setup;
+
+  // Unreachable places, 2 r apart, the smallest reach first.
+  std::vector<std::size_t> unreachable;
+  for (std::size_t i = 0; i < n_grid; ++i)
+    if (traced[i].kind == 2) unreachable.push_back(i);
+  std::sort(unreachable.begin(), unreachable.end(), [&](auto a, auto b) { return traced[a].reach < traced[b].reach; });
+  nlohmann::json places = nlohmann::json::array();
+  std::vector<Eigen::Vector3d> chosen;
+  for (std::size_t i : unreachable) {
+    if (chosen.size() == 10) break;
+    const Eigen::Vector3d& p = samples[i].p;
+    if (std::any_of(chosen.begin(), chosen.end(), [&](const auto& c) { return (c - p).norm() < 2 * r; })) continue;
+    chosen.push_back(p);
+    nlohmann::json place = xyz(p);
+    place["reach_radius"] = traced[i].reach;
+    places.push_back(place);
+  }
+  rep["unreachable"] = places;
+
+  // The worst places: uncut first, then the highest scallops and gouges (interior scallops over
+  // the limit are what fails).
+  enum Kind { Scallop, Gouge, Uncut };
+  std::vector<std::tuple<double, std::size_t, Kind>> rank;
+  for (std::size_t i = 0; i < res.samples.size(); ++i) {
+    const SimSample& s = res.samples[i];
+    if (std::isnan(s.scallop)) rank.emplace_back(1e9, i, Uncut);
+    else if (s.scallop > 1.01 * H) rank.emplace_back(s.scallop / H, i, Scallop);
+    if (s.gouge > tol) rank.emplace_back(s.gouge / tol, i, Gouge);
+  }
+  std::sort(rank.rbegin(), rank.rend());
+  nlohmann::json worst = nlohmann::json::array();
+  for (const auto& [score, i, kind] : rank) {
+    if (worst.size() == 10) break;
+    const SimSample& s = res.samples[i];
+    nlohmann::json w = xyz({s.x, s.y, s.z});
+    w["kind"] = kind == Uncut ? "uncut" : kind == Gouge ? "gouge" : "scallop";
+    w["value"] = kind == Uncut ? nlohmann::json() : nlohmann::json(kind == Gouge ? s.gouge : s.scallop);
+    w["interior"] = s.interior;
+    worst.push_back(w);
+  }
+  rep["worst"] = worst;
+
+  nlohmann::json reasons = nlohmann::json::array();
+  char buf[160];
+  if (!std::isfinite(max_inner)) {
+    reasons.push_back("no interior sample was cut");
+  } else if (max_inner > 1.01 * H) {
+    std::snprintf(buf, sizeof buf, "interior scallop max %.4g > 1.01 H (whole part %.4g)", max_inner, max_all);
+    reasons.push_back(buf);
+  }
+  if (gouge_max > tol) {
+    std::snprintf(buf, sizeof buf, "gouge max %.4g > %.4g", gouge_max, tol);
+    reasons.push_back(buf);
+  }
+  if (measured <= 0) {
+    reasons.push_back("nothing to measure: every sample is base or unreachable");
+  } else if (uncut > 0) {
+    std::snprintf(buf, sizeof buf, "uncut fraction %.4g > 0", uncut / measured);
+    reasons.push_back(buf);
+  }
+  if (through_total > 0) reasons.push_back(std::to_string(through_total) + " rapid(s) through the part");
+  rep["pass"] = reasons.empty();
+  rep["fail_reasons"] = reasons;
+  if (progress) progress(1.0);
+  return res;
+}
+
+}  // namespace scallop

@@ -1,0 +1,88 @@
+#include <cstdio>
+#include <stdexcept>
+
+#include "engine/node.h"
+#include "nodes/post/simulate_part.h"
+#include "nodes/types/document.h"
+#include "nodes/types/mesh.h"
+#include "nodes/types/toolpath.h"
+
+namespace scallop::post_nodes {
+NodeDecl make_simulate_part_node() {
+  NodeDecl d;
+  d.type = "post.simulate_part";
+  d.version = 1;
+  d.description =
+      "the certificate of a whole part cut in several clampings: every setup's program taken back to the part, "
+      "scallop left over the whole mesh, gouge and rapids against it (verify_part.py's definitions)";
+  d.input("programs", "SetupPaths", "the programs and their part_to_machine (post.setup_programs)")
+      .input("mesh", "Mesh", "the part, faces outward (the mesh the programs were kept off)")
+      .input("base", "Report",
+             "mesh.setup_base's report: faces within base_angle of its base_direction sit on the table and are not "
+             "measured; absent: every face is measured", false)
+      .output("report", "Report",
+              "pass (verify_part.py's rule: interior scallop <= 1.01 h, gouge <= max(e, 0.001), nothing uncut, no rapid "
+              "through the part), fail_reasons, scallop/uncut figures for the whole part and its interior, gouge, "
+              "rapids, base and unreachable fractions, per setup figures, the unreachable places with the largest "
+              "tool radius that reaches each, the 10 worst places")
+      .output("simulation", "Simulation", "what the programs left at every measured sample, with its face (post.render)")
+      .param_float("surface_uncertainty", 0, 0, 100, "mm",
+                   "how far the real part may lie off the mesh (0 for a CAD mesh): scallop and gouge become bounds")
+      .param_float("base_angle", 10, 0, 90, "deg", "faces within this of the base direction are on the table")
+      .param_float("feature_angle", 30, 0, 180, "deg",
+                   "interior = farther than the margin from borders and from edges whose faces turn by more than this");
+  d.options<PartSimulateOptions>()
+      .number("spacing", &PartSimulateOptions::spacing, 0, 100, "mm", "sample spacing; 0: sqrt(8 r h)/8")
+      .number("margin", &PartSimulateOptions::margin, 0, 1000, "mm",
+              "interior = farther than this from sharp edges and borders; 0: sqrt(8 r h)")
+      .integer("max_samples", &PartSimulateOptions::max_samples, 1000, 100000000, "",
+               "the spacing is raised to stay below this many samples");
+  d.run = [](NodeContext& ctx) {
+    auto programs = ctx.input<SetupPaths>("programs");
+    auto mesh = ctx.input<Mesh>("mesh");
+    PartSimulateOptions o = ctx.options<PartSimulateOptions>();
+    o.surface_uncertainty = ctx.number("surface_uncertainty");
+    o.base_angle = ctx.number("base_angle");
+    o.feature_angle = ctx.number("feature_angle");
+    if (ctx.has_input("base")) {
+      const auto& b = ctx.input<Report>("base")->data;
+      const auto it = b.find("base_direction");
+      if (it == b.end() || !it->is_array() || it->size() != 3)
+        throw NodeError("the input 'base' has no base_direction [x, y, z]: give mesh.setup_base's report");
+      o.base_normal = {(*it)[0].get<double>(), (*it)[1].get<double>(), (*it)[2].get<double>()};
+    }
+    if (programs->setups.empty()) throw NodeError("the input 'programs' has no setup");
+    std::vector<PartSetupCut> cuts;
+    const LinkedPath& first = programs->setups.front().path;
+    o.tool_radius = first.tool_radius, o.scallop = first.scallop_height, o.chord = first.chord_error;
+    for (const SetupPath& s : programs->setups) {
+      if (s.path.tool_radius != o.tool_radius) {
+        char text[120];
+        std::snprintf(text, sizeof text, "' uses a tool of radius %g mm, the first %g mm: one tool for the whole part",
+                      s.path.tool_radius, o.tool_radius);
+        throw NodeError("setup '" + s.name + text);
+      }
+      PartSetupCut& cut = cuts.emplace_back();
+      cut.name = s.name;
+      // Ball centres (tip + r z) taken back to the part: p = R^T (x - t).
+      const Eigen::Vector3d up(0, 0, s.path.tool_radius);
+      auto to_part = [&](const Eigen::Vector3d& tip) { return Eigen::Vector3d(s.rotation.transpose() * (tip + up - s.translation)); };
+      for (std::size_t i = 1; i < s.path.moves.size(); ++i) {
+        const Move& m0 = s.path.moves[i - 1];
+        const Move& m1 = s.path.moves[i];
+        (m1.kind == MoveKind::Rapid ? cut.rapid : cut.feed).push_back({to_part(m0.tip), to_part(m1.tip)});
+      }
+    }
+    try {
+      Simulation sim = simulate_part(*mesh, cuts, o, [&](double f) { ctx.progress(f, "simulating the part"); });
+      Report rep;
+      rep.data = sim.report;
+      ctx.set("report", std::move(rep));
+      ctx.set("simulation", std::move(sim));
+    } catch (const std::invalid_argument& ex) {
+      throw NodeError(std::string("post.simulate_part: ") + ex.what());
+    }
+  };
+  return d;
+}
+}  // namespace scallop::post_nodes

@@ -1,0 +1,176 @@
+#include "nodes/post/simulate_part.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "engine/node.h"
+#include "nodes/types/document.h"
+#include "nodes/types/toolpath.h"
+#include "tests/nodes/mesh/mesh_test_util.h"
+#include "tests/test_support.h"
+
+namespace scallop {
+namespace post_nodes {
+NodeDecl make_simulate_part_node();
+}  // namespace post_nodes
+namespace {
+
+using V = Eigen::Vector3d;
+
+// Straight passes along x over the top z = Z of the box [0, 20]^2 x [0, Z], ball centres r above
+// it at y = y0, y0 + w, ..., y1, running 1 mm past the box on both ends.
+std::vector<CentreSegment> top_passes(double y0, double y1, double w, double r, double Z) {
+  std::vector<CentreSegment> out;
+  for (double y = y0; y <= y1 + 1e-9; y += w) out.push_back({V(-1, y, Z + r), V(21, y, Z + r)});
+  return out;
+}
+
+PartSimulateOptions options(double r, double h) {
+  PartSimulateOptions o;
+  o.tool_radius = r, o.scallop = h, o.chord = 0.01;
+  return o;
+}
+
+TEST(SimulatePart, TwoSetupsShareTheTopTheScallopIsTheClosedFormTheSidesAreUncut) {
+  // The box 20 x 20 x 10 on its base (-z). Two setups each cut half of the top with passes w = 1
+  // apart: between two passes the ball leaves r - sqrt(r² - (w/2)²); the sides are never
+  // reached, so 800 of the 1200 mm² measured (the base's 400 are not) stay uncut.
+  const double r = 3, h = 0.05, w = 1;
+  const Mesh box = test::quad_box({1, 1, 1}, V(20, 20, 10));
+  std::vector<PartSetupCut> cuts(2);
+  cuts[0].name = "front", cuts[0].feed = top_passes(0, 10, w, r, 10);
+  cuts[1].name = "back", cuts[1].feed = top_passes(10, 20, w, r, 10);
+  PartSimulateOptions o = options(r, h);
+  o.base_normal = V(0, 0, -1);
+  const Simulation sim = simulate_part(box, cuts, o);
+  const auto& rep = sim.report;
+  const double closed_form = r - std::sqrt(r * r - 0.25 * w * w);  // 0.04196
+  EXPECT_NEAR(rep["scallop_max_interior"].get<double>(), closed_form, 1e-5);
+  EXPECT_NEAR(rep["base_fraction"].get<double>(), 0.25, 1e-12);
+  EXPECT_NEAR(rep["measured_fraction"].get<double>(), 0.75, 1e-12);
+  EXPECT_NEAR(rep["uncut_fraction"].get<double>(), 2.0 / 3, 1e-10);
+  EXPECT_NEAR(rep["surface_area"].get<double>(), 1600, 1e-7);
+  EXPECT_EQ(rep["unreachable_fraction"].get<double>(), 0);
+  EXPECT_LT(rep["gouge_max"].get<double>(), 1e-9);
+  EXPECT_EQ(rep["rapids_through_part"], 0);
+  EXPECT_NEAR(rep["setups"][0]["finished_fraction"].get<double>(), 1.0 / 6, 0.01);
+  EXPECT_NEAR(rep["setups"][1]["finished_fraction"].get<double>(), 1.0 / 6, 0.01);
+  EXPECT_EQ(rep["pass"], false);
+  EXPECT_EQ(rep["fail_reasons"], nlohmann::json::array({"uncut fraction 0.6667 > 0"}));
+  EXPECT_EQ(rep["worst"][0]["kind"], "uncut");
+  ASSERT_EQ(sim.face.size(), sim.samples.size());
+  for (std::size_t i = 0; i < sim.samples.size(); ++i)
+    if (std::abs(sim.samples[i].z - 10) < 1e-9) EXPECT_FALSE(std::isnan(sim.samples[i].scallop)) << "a top sample is uncut";
+}
+
+TEST(SimulatePart, GougesInsideAndNearAreMeasuredAndARapidThroughThePartIsCounted) {
+  // A feed move through the middle of the box: its centre 5 below the top, r + 5 deep in the
+  // material. Another setup dips 0.02 into the top and passes a corner outside (sqrt(12) > r
+  // from it: no gouge there, though its nearest point is a corner, where the sign comes from the
+  // rays' parity). A rapid crosses the box at mid height; another runs above it.
+  const double r = 3;
+  const Mesh box = test::quad_box({1, 1, 1}, V(20, 20, 10));
+  std::vector<PartSetupCut> cuts(2);
+  cuts[0].name = "through";
+  cuts[0].feed = {{V(10, 10, 5), V(10, 12, 5)}};
+  cuts[0].rapid = {{V(-5, 10, 5), V(25, 10, 5)}, {V(-5, 10, 20), V(25, 10, 20)}};
+  cuts[1].name = "dip";
+  cuts[1].feed = {{V(5, 5, 10 + r), V(10, 10, 10 + r - 0.02)}, {V(10, 10, 10 + r - 0.02), V(15, 15, 10 + r)},
+                  {V(22, 22, 12), V(22, 23, 12)}};
+  const Simulation sim = simulate_part(box, cuts, options(r, 0.05));
+  const auto& rep = sim.report;
+  EXPECT_NEAR(rep["setups"][0]["gouge_max"].get<double>(), r + 5, 1e-9);
+  EXPECT_NEAR(rep["setups"][1]["gouge_max"].get<double>(), 0.02, 1e-4);
+  EXPECT_NEAR(rep["gouge_max"].get<double>(), r + 5, 1e-9);
+  EXPECT_EQ(rep["setups"][0]["rapids_through_part"], 1);
+  EXPECT_EQ(rep["rapids_through_part"], 1);
+  EXPECT_NEAR(rep["rapid_min_clearance"].get<double>(), -5 - r, 1e-3);
+  EXPECT_EQ(rep["fail_reasons"][1], "gouge max 8 > 0.01");
+  EXPECT_EQ(rep["fail_reasons"][3], "1 rapid(s) through the part");
+}
+
+TEST(SimulatePart, AChannelNarrowerThanTheBallIsUnreachableWithTheRadiusThatWouldReachIt) {
+  // An open channel 2 mm wide, walls 10 high, floor at z = 0: a ball of radius 3 reaches none of
+  // it. On the floor at x a ball of radius rho stands clear while min(x, 2 - x) >= rho - tol; on
+  // a wall at height z, while min(z, 2 - rho, rho) >= rho - tol.
+  Mesh channel;
+  for (V p : {V(0, 0, 0), V(2, 0, 0), V(2, 20, 0), V(0, 20, 0), V(0, 0, 10), V(2, 0, 10), V(2, 20, 10), V(0, 20, 10)})
+    channel.vertices.push_back(p);
+  channel.add_face({0, 1, 2, 3});  // floor, +z
+  channel.add_face({0, 3, 7, 4});  // x = 0, +x
+  channel.add_face({1, 5, 6, 2});  // x = 2, -x
+  std::vector<PartSetupCut> cuts(1);
+  cuts[0].name = "top", cuts[0].feed = {{V(1, -5, 30), V(1, 25, 30)}};
+  const double tol = 0.01;
+  const Simulation sim = simulate_part(channel, cuts, options(3, 0.05));
+  const auto& rep = sim.report;
+  EXPECT_NEAR(rep["unreachable_fraction"].get<double>(), 1, 1e-12);
+  EXPECT_EQ(rep["fail_reasons"], nlohmann::json::array({"no interior sample was cut",
+                                                         "nothing to measure: every sample is base or unreachable"}));
+  ASSERT_GE(rep["unreachable"].size(), 3u);
+  double previous = 0;
+  for (const auto& place : rep["unreachable"]) {
+    const double x = place["x"], z = place["z"], reach = place["reach_radius"];
+    const double expected = z < 1e-9 ? std::min(x, 2 - x) + tol : std::min(1 + tol / 2, z + tol);
+    EXPECT_NEAR(reach, expected, 1e-6) << "at x " << x << ", z " << z;
+    EXPECT_GE(reach, previous);  // the smallest first
+    previous = reach;
+  }
+}
+
+TEST(SimulatePart, BadInputIsNamed) {
+  const Mesh box = test::quad_box({1, 1, 1}, V(20, 20, 10));
+  std::vector<PartSetupCut> cuts(1);
+  cuts[0].name = "1: +z", cuts[0].feed = top_passes(0, 20, 1, 3, 10);
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { simulate_part(box, cuts, options(3, 3)); }),
+            "the scallop limit 3 mm is not below the tool radius 3 mm");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { simulate_part(box, {}, options(3, 0.05)); }),
+            "no setup to simulate");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { simulate_part(Mesh(), cuts, options(3, 0.05)); }),
+            "the part's mesh has no face with an area");
+  cuts[0].feed[0].b.x() = NAN;
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { simulate_part(box, cuts, options(3, 0.05)); }),
+            "setup '1: +z' has a ball centre that is not finite");
+}
+
+TEST(SimulatePart, TheNodeTakesEachProgramBackToThePartThroughItsPartToMachine) {
+  // The box's top cut in a setup that stands the part on its base turned a quarter about z and
+  // raised by 5: tips in the machine frame, taken back by R^T (tip + r z - t).
+  const double r = 3, h = 0.05;
+  const Mesh box = test::quad_box({1, 1, 1}, V(20, 20, 10));
+  SetupPaths programs;
+  SetupPath& s = programs.setups.emplace_back();
+  s.name = "1: +z", s.file = "setup_1.ngc";
+  s.rotation << 0, -1, 0, 1, 0, 0, 0, 0, 1;
+  s.translation = V(0, 0, 5);
+  s.path.tool_radius = r, s.path.scallop_height = h, s.path.chord_error = 0.01;
+  for (const CentreSegment& c : top_passes(0, 20, 1, r, 10)) {
+    s.path.moves.push_back({MoveKind::Rapid, s.rotation * c.a + s.translation - V(0, 0, r)});
+    s.path.moves.push_back({MoveKind::Feed, s.rotation * c.b + s.translation - V(0, 0, r)});
+  }
+  Report base;
+  base.data = {{"base_direction", {0, 0, -1}}};
+  auto out = test::run_node(post_nodes::make_simulate_part_node(), {},
+                            {{"programs", std::make_shared<SetupPaths>(programs)},
+                             {"mesh", std::make_shared<Mesh>(box)},
+                             {"base", std::make_shared<Report>(base)}});
+  const auto& rep = std::dynamic_pointer_cast<const Report>(out.at("report"))->data;
+  EXPECT_NEAR(rep["scallop_max_interior"].get<double>(), r - std::sqrt(r * r - 0.25), 1e-5);
+  EXPECT_NEAR(rep["uncut_fraction"].get<double>(), 2.0 / 3, 1e-10);
+  EXPECT_EQ(rep["setups"][0]["name"], "1: +z");
+  EXPECT_NEAR(rep["setups"][0]["cut_length"].get<double>(), 21 * 22, 1e-9);
+  EXPECT_NEAR(rep["setups"][0]["rapid_length"].get<double>(), 20 * std::hypot(22, 1), 1e-9);
+  // one tool for the whole part
+  SetupPaths two = programs;
+  two.setups.push_back(programs.setups[0]);
+  two.setups[1].name = "2: -z", two.setups[1].path.tool_radius = 2;
+  EXPECT_EQ(test::error_of<NodeError>([&] {
+              test::run_node(post_nodes::make_simulate_part_node(), {},
+                             {{"programs", std::make_shared<SetupPaths>(two)}, {"mesh", std::make_shared<Mesh>(box)}});
+            }),
+            "setup '2: -z' uses a tool of radius 2 mm, the first 3 mm: one tool for the whole part");
+}
+
+}  // namespace
+}  // namespace scallop
