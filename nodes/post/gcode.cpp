@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
@@ -172,6 +173,11 @@ std::vector<Eigen::Vector3d> arc_points(const Eigen::Vector3d& start, const ArcP
   }
   pts.back() = piece.end;
   return pts;
+}
+
+Eigen::Vector3d as_written(const Eigen::Vector3d& tip) {
+  return {std::strtod(fmt4(tip.x()).c_str(), nullptr), std::strtod(fmt4(tip.y()).c_str(), nullptr),
+          std::strtod(fmt4(tip.z()).c_str(), nullptr)};
 }
 
 std::string write_gcode(const LinkedPath& path, const GCodeOptions& o) {

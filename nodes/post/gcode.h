@@ -31,6 +31,10 @@ struct GCodeOptions {
 // coordinate, or non-positive feeds.
 std::string write_gcode(const LinkedPath& path, const GCodeOptions& options);
 
+// A tool tip as write_gcode writes it (each coordinate to 4 decimals): what the machine, and so
+// the certificate, sees.
+Eigen::Vector3d as_written(const Eigen::Vector3d& tip);
+
 // One piece of an arc-fitted polyline: either a straight segment to point `end`, or an arc to
 // `end` around `centre` in the plane whose normal axis is `axis` (0: YZ/G19, 1: XZ/G18, 2: XY/G17),
 // counter-clockwise seen from the + side of that axis when `ccw`.

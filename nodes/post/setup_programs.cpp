@@ -144,6 +144,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     prog.moves = linked.moves.size();
     prog.clearance_z = linked.clearance_z;
     prog.linked = linked;
+    for (Move& m : prog.linked.moves) m.tip = as_written(m.tip);  // as the program has them
     out.push_back(std::move(prog));
   }
   return out;

@@ -33,7 +33,7 @@ struct SetupProgram {
   std::string name;
   std::string file;        // "setup_<k>.ngc", k from 1
   std::string gcode;       // the program text
-  LinkedPath linked;       // its moves, machine frame
+  LinkedPath linked;       // its moves, machine frame, as the program writes them (4 decimals)
   std::size_t passes = 0;  // contours cut
   std::size_t moves = 0;
   double clearance_z = 0;  // mm, machine frame

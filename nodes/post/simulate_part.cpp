@@ -95,19 +95,23 @@ std::vector<CentreSegment> edges_to_keep_off(const Mesh& m, const std::vector<Tr
 
 nlohmann::json xyz(const Eigen::Vector3d& p) { return {{"x", p.x()}, {"y", p.y()}, {"z", p.z()}}; }
 
-// Largest r - D(c) + delta along the ball-centre segment [a, b] (D signed, negative inside),
-// exact wherever it exceeds tol (verify_part.py's rule): between two points g apart, D is at least
-// (d1 + d2 - g) / 2 (it is 1-Lipschitz) and at least min(d1, d2) - g² / (8 d_low) (a minimum of
-// convex functions of curvature at most 1 / d_low, d_low > 0 the first bound); where these leave
-// room for more than max(tol, the largest found + 1e-4) the stretch is halved.
+// A bound on the largest r - D(c) + delta along the ball-centre segment [a, b] (D signed,
+// negative inside), within 1e-5 mm of the true value wherever it exceeds tol (verify_part.py's
+// rule, 10 times finer): between two points g apart, D is at least (d1 + d2 - g) / 2 (it is
+// 1-Lipschitz) and at least min(d1, d2) - g² / (8 d_low) (a minimum of convex functions of
+// curvature at most 1 / d_low, d_low > 0 the first bound). A stretch where these leave room for
+// more than max(tol, the largest found + 1e-5) is halved; the others' bounds above tol count in
+// the result, so it is never below the truth.
 double gouge_along(const MeshDistance& part, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
                    double delta, double step, double tol, std::size_t& positions) {
+  constexpr double kEps = 1e-5;
   const double L = (b - a).norm();
   const int k = std::max(1, static_cast<int>(std::ceil(L / step)));
   std::vector<double> d(k + 1);
   for (int i = 0; i <= k; ++i) d[i] = part.signed_distance(a + (b - a) * (double(i) / k));
   positions += k + 1;
   double best = r + delta - *std::min_element(d.begin(), d.end());
+  double bound = best;
   std::vector<std::tuple<double, double, double, double>> todo;  // t0, t1, d0, d1
   for (int i = 0; i < k; ++i) todo.emplace_back(double(i) / k, double(i + 1) / k, d[i], d[i + 1]);
   while (!todo.empty()) {
@@ -116,15 +120,20 @@ double gouge_along(const MeshDistance& part, const Eigen::Vector3d& a, const Eig
     const double gap = (t1 - t0) * L;
     const double lip = 0.5 * (d0 + d1 - gap);
     const double conv = lip > 0 ? std::min(d0, d1) - gap * gap / (8 * lip) : -INFINITY;
-    if (r + delta - std::max(lip, conv) <= std::max(tol, best + 1e-4) || gap < 1e-6) continue;
+    const double upper = r + delta - std::max(lip, conv);
+    if (upper <= std::max(tol, best + kEps) || gap < 1e-6) {
+      if (upper > tol) bound = std::max(bound, upper);
+      continue;
+    }
     const double tm = 0.5 * (t0 + t1);
     const double dm = part.signed_distance(a + (b - a) * tm);
     ++positions;
     best = std::max(best, r + delta - dm);
+    bound = std::max(bound, best);
     todo.emplace_back(t0, tm, d0, dm);
     todo.emplace_back(tm, t1, dm, d1);
   }
-  return best;
+  return bound;
 }
 
 // The least clearance D(c) - r along a rapid's ball centres [a, b], marched by the clearance
@@ -433,20 +442,26 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
 
   // The worst places: uncut first, then the highest scallops and gouges (interior scallops over
   // the limit are what fails).
+  // The worst places, one per stepover around: uncut, gouges and scallops over the limit,
+  // interior ones (what pass asks) before the others, each by its excess.
   enum Kind { Scallop, Gouge, Uncut };
-  std::vector<std::tuple<double, std::size_t, Kind>> rank;
+  std::vector<std::tuple<bool, double, std::size_t, Kind>> rank;
   for (std::size_t i = 0; i < res.samples.size(); ++i) {
     const SimSample& s = res.samples[i];
-    if (std::isnan(s.scallop)) rank.emplace_back(1e9, i, Uncut);
-    else if (s.scallop > 1.01 * H) rank.emplace_back(s.scallop / H, i, Scallop);
-    if (s.gouge > tol) rank.emplace_back(s.gouge / tol, i, Gouge);
+    if (std::isnan(s.scallop)) rank.emplace_back(s.interior, 1e9, i, Uncut);
+    else if (s.scallop > 1.01 * H) rank.emplace_back(s.interior, s.scallop / H, i, Scallop);
+    if (s.gouge > tol) rank.emplace_back(true, 1e6 * s.gouge / tol, i, Gouge);
   }
   std::sort(rank.rbegin(), rank.rend());
   nlohmann::json worst = nlohmann::json::array();
-  for (const auto& [score, i, kind] : rank) {
+  std::vector<Eigen::Vector3d> listed;
+  for (const auto& [interior, score, i, kind] : rank) {
     if (worst.size() == 10) break;
     const SimSample& s = res.samples[i];
-    nlohmann::json w = xyz({s.x, s.y, s.z});
+    const Eigen::Vector3d p(s.x, s.y, s.z);
+    if (std::any_of(listed.begin(), listed.end(), [&](const auto& q) { return (q - p).norm() < nominal; })) continue;
+    listed.push_back(p);
+    nlohmann::json w = xyz(p);
     w["kind"] = kind == Uncut ? "uncut" : kind == Gouge ? "gouge" : "scallop";
     w["value"] = kind == Uncut ? nlohmann::json() : nlohmann::json(kind == Gouge ? s.gouge : s.scallop);
     w["interior"] = s.interior;

@@ -80,9 +80,13 @@ TEST(SimulatePart, GougesInsideAndNearAreMeasuredAndARapidThroughThePartIsCounte
                   {V(22, 22, 12), V(22, 23, 12)}};
   const Simulation sim = simulate_part(box, cuts, options(r, 0.05));
   const auto& rep = sim.report;
-  EXPECT_NEAR(rep["setups"][0]["gouge_max"].get<double>(), r + 5, 1e-9);
-  EXPECT_NEAR(rep["setups"][1]["gouge_max"].get<double>(), 0.02, 1e-4);
-  EXPECT_NEAR(rep["gouge_max"].get<double>(), r + 5, 1e-9);
+  // the figures are upper bounds within 1e-5 of the truth
+  const double through = rep["setups"][0]["gouge_max"], dip = rep["setups"][1]["gouge_max"];
+  EXPECT_GE(through, r + 5);
+  EXPECT_LE(through, r + 5 + 1e-5);
+  EXPECT_GE(dip, 0.02 - 1e-12);
+  EXPECT_LE(dip, 0.02 + 1e-5);
+  EXPECT_EQ(rep["gouge_max"].get<double>(), through);
   EXPECT_EQ(rep["setups"][0]["rapids_through_part"], 1);
   EXPECT_EQ(rep["rapids_through_part"], 1);
   EXPECT_NEAR(rep["rapid_min_clearance"].get<double>(), -5 - r, 1e-3);
