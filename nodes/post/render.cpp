@@ -1,4 +1,5 @@
 #include "nodes/post/render.h"
+#include "nodes/post/render_mesh.h"
 
 #include <png.h>
 
@@ -221,6 +222,24 @@ struct HeatGrid {
 
 constexpr int kBar = 110;  // width of the colour-bar strip (px)
 
+// Colour bar at x = bx: 0 at the bottom, 1.01 h at the top (red above), labelled.
+void colour_bar(Canvas& c, int bx, double limit, int text_scale) {
+  int top = 20, bottom = c.p.height - 20;
+  for (int y = top; y <= bottom; ++y) {
+    RGB col = ramp(double(bottom - y) / (bottom - top));
+    for (int x = bx; x < bx + 20; ++x) c.set(x, y, col);
+  }
+  for (int y = top - 12; y < top - 2; ++y)
+    for (int x = bx; x < bx + 20; ++x) c.set(x, y, kRed);
+  const double vals[3] = {0, 0.5 * 1.01 * limit, 1.01 * limit};
+  for (int k = 0; k < 3; ++k) {
+    int y = bottom - static_cast<int>(std::lround(k * 0.5 * (bottom - top)));
+    c.line(bx + 20, y, bx + 24, y, kBlack);
+    c.text(bx + 27, y - 7, label(vals[k]), text_scale, kBlack);
+  }
+}
+
+
 }  // namespace
 
 std::string encode_png(const Picture& pic) {
@@ -314,20 +333,49 @@ Picture render_scallop(const Simulation& sim, int width) {
     Eigen::Vector2d p = f.px(q);
     c.set(int(p.x()), int(p.y()), kGrey);
   }
-  // Colour bar: 0 at the bottom, 1.01 h at the top, labelled.
-  int bx = f.width + 10, top = 20, bottom = c.p.height - 20;
-  for (int y = top; y <= bottom; ++y) {
-    RGB col = ramp(double(bottom - y) / (bottom - top));
-    for (int x = bx; x < bx + 20; ++x) c.set(x, y, col);
+  colour_bar(c, f.width + 10, limit, width > 400 ? 2 : 1);
+  return c.p;
+}
+
+Picture render_part_scallop(const Mesh& mesh, const Simulation& sim, int width) {
+  if (width < kBar + 128) throw std::invalid_argument("width must be at least " + std::to_string(kBar + 128) + " px");
+  const double limit = sim.scallop_limit, gouge_tol = sim.gouge_tolerance;
+  if (!(limit > 0)) throw std::invalid_argument("scallop limit must be > 0");
+  if (sim.face.empty() || sim.face.size() != sim.samples.size())
+    throw std::invalid_argument("the simulation has no face per sample: give post.simulate_part's");
+  std::vector<long> worst(mesh.num_faces(), -1);
+  for (std::size_t i = 0; i < sim.samples.size(); ++i) {
+    if (sim.face[i] >= mesh.num_faces())
+      throw std::invalid_argument("the simulation has a sample on face " + std::to_string(sim.face[i]) + " but the mesh has " +
+                                  std::to_string(mesh.num_faces()) + " faces: give the mesh it was simulated on");
+    long& w = worst[sim.face[i]];
+    const SimSample &s = sim.samples[i];
+    if (w >= 0) {
+      const SimSample& o = sim.samples[w];
+      const int a = severity(s, limit, gouge_tol), b = severity(o, limit, gouge_tol);
+      const double sv = std::isnan(s.scallop) ? 0 : s.scallop, ov = std::isnan(o.scallop) ? 0 : o.scallop;
+      if (!(a > b || (a == b && (a == 3 ? s.gouge > o.gouge : sv > ov)))) continue;
+    }
+    w = long(i);
   }
-  for (int y = top - 12; y < top - 2; ++y)
-    for (int x = bx; x < bx + 20; ++x) c.set(x, y, kRed);
-  const double vals[3] = {0, 0.5 * 1.01 * limit, 1.01 * limit};
-  for (int k = 0; k < 3; ++k) {
-    int y = bottom - static_cast<int>(std::lround(k * 0.5 * (bottom - top)));
-    c.line(bx + 20, y, bx + 24, y, kBlack);
-    c.text(bx + 27, y - 7, label(vals[k]), width > 400 ? 2 : 1, kBlack);
+  MeshPictureOptions o;
+  o.width = (width - kBar) / 2;
+  for (long w : worst) {
+    const RGB c = w < 0 ? RGB{200, 200, 200} : sample_colour(sim.samples[w], limit, gouge_tol);
+    o.face_colours.push_back({c[0] / 255.0, c[1] / 255.0, c[2] / 255.0});
   }
+  o.view = "iso";
+  const Picture front = render_mesh(mesh, o);
+  o.view = "back";
+  const Picture back = render_mesh(mesh, o);
+  Canvas c(width, std::max({front.height, back.height, 200}));
+  for (const auto& [pic, x0] : {std::pair<const Picture&, int>{front, 0}, {back, front.width}})
+    for (int y = 0; y < pic.height; ++y)
+      for (int x = 0; x < pic.width; ++x) {
+        const std::size_t i = (std::size_t(y) * pic.width + x) * 3;
+        c.set(x0 + x, y, RGB{pic.rgb[i], pic.rgb[i + 1], pic.rgb[i + 2]});
+      }
+  colour_bar(c, front.width + back.width + 10, limit, width > 400 ? 2 : 1);
   return c.p;
 }
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "nodes/types/cloud.h"
+#include "nodes/types/mesh.h"
 #include "nodes/types/simulation.h"
 #include "nodes/types/toolpath.h"
 
@@ -37,5 +38,12 @@ std::string render_path_svg(const Toolpath& path, const PointCloud* cloud, const
 Picture render_scallop(const Simulation& sim, int width);
 std::string render_scallop_png(const Simulation& sim, int width);
 std::string render_scallop_svg(const Simulation& sim, int width);
+
+// A whole part's simulation (post.simulate_part) on its mesh, seen from (-1, -1, 1) and from
+// (1, 1, 1) side by side, each face coloured by its worst sample as render_scallop colours them
+// (light grey: nothing measured there, on the table or unreachable), with the colour bar.
+// Throws std::invalid_argument for a simulation without faces, a face the mesh lacks, or width <
+// 238 px.
+Picture render_part_scallop(const Mesh& mesh, const Simulation& sim, int width);
 
 }  // namespace scallop

@@ -21,6 +21,9 @@ struct Camera {
     if (view == "iso") {
       forward = Eigen::Vector3d(1, 1, -1).normalized();
       right = Eigen::Vector3d(1, -1, 0).normalized();
+    } else if (view == "back") {
+      forward = Eigen::Vector3d(-1, -1, -1).normalized();
+      right = Eigen::Vector3d(-1, 1, 0).normalized();
     } else if (view == "top") {
       forward = Eigen::Vector3d(0, 0, -1);
       right = Eigen::Vector3d(1, 0, 0);
@@ -28,7 +31,7 @@ struct Camera {
       forward = Eigen::Vector3d(0, 1, 0);
       right = Eigen::Vector3d(1, 0, 0);
     } else {
-      throw std::invalid_argument("unknown view '" + view + "' (iso, top or front)");
+      throw std::invalid_argument("unknown view '" + view + "' (iso, back, top or front)");
     }
     up = right.cross(forward);
   }
@@ -114,7 +117,9 @@ Picture render_mesh(const Mesh& mesh, const MeshPictureOptions& o) {
     const Eigen::Vector3d n = face_area_vector(mesh, f);
     const std::size_t m = mesh.face_size(f);
     const double lambert = n.norm() > 0 ? std::abs(n.normalized().dot(light)) : 0.0;
-    const RGB base = labels ? label_colour(mesh.face_label[f]) : RGB{0.62, 0.70, 0.80};
+    const RGB base = o.face_colours.size() == mesh.num_faces() ? o.face_colours[f]
+                     : labels                                  ? label_colour(mesh.face_label[f])
+                                                               : RGB{0.62, 0.70, 0.80};
     const double shade = 0.25 + 0.75 * lambert;
     const RGB col{base[0] * shade, base[1] * shade, base[2] * shade};
     for (std::size_t c = 1; c + 1 < m; ++c)  // a fan: polygons are convex enough for a picture

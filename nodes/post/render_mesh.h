@@ -22,11 +22,13 @@ struct MeshOverlay {
 };
 
 struct MeshPictureOptions {
-  std::string view = "iso";  // "iso" (seen from (-1, -1, 1), as render_path's), "top", "front" (from -Y)
+  std::string view = "iso";  // "iso" (seen from (-1, -1, 1), as render_path's), "back" (from (1, 1, 1)),
+                             // "top", "front" (from -Y)
   int width = 1000;          // pixels; the height follows the mesh's projected aspect
   bool by_label = false;     // colour each face by its label (grey when -1 or no labels)
   bool wireframe = false;    // thin dark polygon edges (readable up to a few thousand faces)
   std::vector<MeshOverlay> overlays;  // drawn last, in order
+  std::vector<std::array<double, 3>> face_colours;  // a colour per face (RGB in [0, 1]), before labels
 };
 
 // The mesh shaded with a headlight (Lambert on both sides, so an inverted face still shows) over

@@ -17,23 +17,26 @@ NodeDecl make_render_node() {
   NodeDecl d;
   d.type = "post.render";
   // 2: view 'scallop' draws post.simulate's simulation instead of simulating again; 3: meshes;
-  // 4: segments
-  d.version = 4;
+  // 4: segments; 5: a whole part's scallop (mesh and simulation), view 'back'
+  d.version = 5;
   d.description =
       "picture of the passes over the cloud (top, iso, uv), of the scallop a simulation found (heat map), or of a "
       "mesh (shaded, feature edges red, optionally a colour per face label), PNG and SVG";
   d.input("path", "Toolpath", "the passes (views top, iso, uv)", false)
       .input("cloud", "Cloud", "the surface points, drawn shaded by height under the passes", false)
-      .input("simulation", "Simulation", "post.simulate's simulation (view 'scallop')", false)
-      .input("mesh", "Mesh", "a mesh to draw instead of passes (views iso, top, front)", false)
+      .input("simulation", "Simulation",
+             "post.simulate's simulation (view 'scallop'), or post.simulate_part's with 'mesh': the part coloured by "
+             "scallop face by face, seen from two sides", false)
+      .input("mesh", "Mesh", "a mesh to draw instead of passes (views iso, back, top, front)", false)
       .input("segments", "Segments",
              "a segmentation to draw instead: faces coloured by patch, sharp edges red, clipping edges dark, an "
              "arrow along each patch's machining direction (views iso, top, front)",
              false)
       .output("image", "Image", "PNG picture")
       .output("svg", "Svg", "the same as SVG")
-      .param_choice("view", "top", {"top", "iso", "front", "uv", "scallop"},
-                    "top: xy; iso: isometric, seen from (-1, -1, 1); front: seen from -y (meshes); uv: "
+      .param_choice("view", "top", {"top", "iso", "back", "front", "uv", "scallop"},
+                    "top: xy; iso: isometric, seen from (-1, -1, 1); back: seen from (1, 1, 1) (meshes); front: "
+                    "seen from -y (meshes); uv: "
                     "parameter domain; scallop: heat map of the simulation, top view, colour bar 0..1.01 h of its "
                     "limits")
       .param_int("width", 1000, 64, 8000, "px", "picture width")
@@ -56,6 +59,12 @@ NodeDecl make_render_node() {
         o.view = view, o.width = width, o.by_label = true, o.wireframe = ctx.flag("wireframe");
         o.overlays = segment_overlays(*segments);
         draw_mesh(patch_colour_mesh(*segments), o);
+      } else if (ctx.has_input("mesh") && view == "scallop") {
+        if (!ctx.has_input("simulation"))
+          throw NodeError("view 'scallop' of a mesh needs the input 'simulation' (post.simulate_part's)");
+        const Picture picture = render_part_scallop(*ctx.input<Mesh>("mesh"), *ctx.input<Simulation>("simulation"), width);
+        img.png = encode_png(picture);
+        svg.text = svg_of_png(picture, img.png);
       } else if (ctx.has_input("mesh")) {
         MeshPictureOptions o;
         o.view = view, o.width = width, o.by_label = ctx.flag("labels"), o.wireframe = ctx.flag("wireframe");

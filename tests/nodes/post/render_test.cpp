@@ -106,6 +106,34 @@ TEST(Render, ScallopHeatMapWithColourBar) {
   EXPECT_NE(svg.find("0.0505 mm"), std::string::npos);
 }
 
+TEST(Render, APartsScallopColoursEachFaceByItsWorstSample) {
+  // The unit square as two triangles seen from both sides: one face's worst sample is uncut
+  // (magenta), the other's within the limit; no face is grey, both views and the bar are drawn.
+  Mesh square;
+  for (Eigen::Vector3d v : {Eigen::Vector3d(0, 0, 0), {10, 0, 0}, {10, 10, 0}, {0, 10, 0}}) square.vertices.push_back(v);
+  square.add_face({0, 1, 2});
+  square.add_face({0, 2, 3});
+  Simulation sim;
+  sim.scallop_limit = 0.05, sim.gouge_tolerance = 0.01, sim.spacing = 1;
+  sim.samples = {{7, 2, 0, 1, 0.01, 0, true}, {7, 3, 0, 1, NAN, 0, true}, {2, 7, 0, 1, 0.02, 0, true}};
+  sim.face = {0, 0, 1};
+  const Picture p = render_part_scallop(square, sim, 600);
+  EXPECT_EQ(p.width, 600);
+  std::size_t magenta = 0, grey = 0;
+  for (std::size_t i = 0; i < p.rgb.size(); i += 3) {
+    magenta += p.rgb[i] > 100 && p.rgb[i + 1] == 0 && p.rgb[i + 2] > 100;  // shaded magenta
+    grey += p.rgb[i] == p.rgb[i + 1] && p.rgb[i + 1] == p.rgb[i + 2] && p.rgb[i] > 120 && p.rgb[i] < 250;
+  }
+  EXPECT_GT(magenta, 1000u);
+  EXPECT_EQ(grey, 0u);
+  sim.face = {0, 0, 2};
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { render_part_scallop(square, sim, 600); }),
+            "the simulation has a sample on face 2 but the mesh has 2 faces: give the mesh it was simulated on");
+  sim.face.clear();
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { render_part_scallop(square, sim, 600); }),
+            "the simulation has no face per sample: give post.simulate_part's");
+}
+
 // The output `port` of a node run (test::run_node), of value type T.
 template <class T>
 std::shared_ptr<const T> output(const std::map<std::string, ValuePtr>& outputs, const std::string& port) {
