@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The whole-workpiece measurement (issue 14): a CAD mesh through
-# bench/mesh-workpiece-contour-uncertified.json (patches, contours, a program per clamping), then
+# graphs/mesh-workpiece-contour.json (patches, contours, a program per clamping), then
 # ../shared/tools/verify_part.py on the programs and setups.json it wrote (with the base the graph
 # found), its figures printed beside the certificate's (report.json, post.simulate_part).
 #   bench/workpiece_verify.sh [MESH] [SCALE] [OUT]   (default: the fandisk x 50 into /tmp/scallop-workpiece)
@@ -11,7 +11,7 @@ scale=${2:-50}
 out=${3:-/tmp/scallop-workpiece}
 r=3 h=0.05 e=0.01
 rm -rf "$out"
-/usr/bin/time -f "scallop run: %e s, peak %M KB" ./build/scallop run bench/mesh-workpiece-contour-uncertified.json \
+/usr/bin/time -f "scallop run: %e s, peak %M KB" ./build/scallop run graphs/mesh-workpiece-contour.json \
   --input mesh="$mesh" --set read.scale="$scale" --set tool_radius=$r --set scallop_height=$h --set chord_error=$e \
   -o "$out" --no-cache || test $? -eq 3  # 3: a certificate failed, measured below all the same
 base=$(/usr/bin/python3 -c 'import json,sys; print(",".join(map(str, json.load(open(sys.argv[1]))["base_direction"])))' "$out/base_report.json")

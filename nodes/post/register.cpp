@@ -11,13 +11,15 @@ NodeDecl make_simulate_node();
 NodeDecl make_render_node();
 NodeDecl make_setup_programs_node();
 NodeDecl make_simulate_part_node();
+NodeDecl make_setup_sheet_node();
 }  // namespace post_nodes
 
 void register_post(Registry& registry) {
   using namespace post_nodes;
   registry.add_domain("post",
                       {make_link_node(), make_gcode_node(), make_simulate_node(), make_render_node(),
-                       make_setup_programs_node(), make_simulate_part_node()});
+                       make_setup_programs_node(), make_simulate_part_node(),
+                       make_setup_sheet_node()});
 }
 
 }  // namespace scallop

@@ -16,6 +16,7 @@ namespace {
 
 constexpr int kSamples = 17;  // normals per side of a patch's (u, v) square
 constexpr int kSphere = 2000;  // candidate axes spread over the sphere
+constexpr double kSquareBonus = 0.005;  // a square axis wins a tie within this much n . a (5.7 degrees off a flat face)
 
 std::string axis_name(const Eigen::Vector3d& a) {
   static const char* names[] = {"x", "y", "z"};
@@ -59,6 +60,7 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
   }
   if (surfaces.base_direction.norm() > 0.5) candidates.push_back(-surfaces.base_direction.normalized());
   for (int k = 0; k < 3; ++k) candidates.push_back(Eigen::Vector3d::Unit(k)), candidates.push_back(-Eigen::Vector3d::Unit(k));
+  const std::size_t first_sphere = candidates.size();
   // Directions spread evenly over the sphere (a Fibonacci lattice).
   for (int k = 0; o.any_axis && k < kSphere; ++k) {
     const double z = 1 - (2 * k + 1.0) / kSphere, rho = std::sqrt(1 - z * z), phi = k * M_PI * (3 - std::sqrt(5.0));
@@ -104,6 +106,11 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
         if (c != p && hidden[c][p] > 0) can[c][p] = 0;
   }
 
+  // Square: the axes away from the base and along the coordinate axes, and any other candidate
+  // that is one of them.
+  std::vector<char> square(nc, 0);
+  for (std::size_t c = 0; c < nc; ++c)
+    for (std::size_t k = np; k < first_sphere && !square[c]; ++k) square[c] = (candidates[c] - candidates[k]).norm() < 1e-9;
   std::vector<char> covered(np, 0);
   std::vector<std::size_t> chosen;
   for (std::size_t left = np; left > 0;) {
@@ -114,6 +121,9 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
       double worst = 2;
       for (std::size_t p = 0; p < np; ++p)
         if (!covered[p] && can[c][p]) ++count, worst = std::min(worst, low[c][p]);
+      // A square axis (away from the base, or a coordinate axis: what a vise and an angle plate
+      // give) counts kSquareBonus better in a tie: a machinist sets it up without a protractor.
+      if (square[c]) worst += kSquareBonus;
       if (count > best_count || (count == best_count && count > 0 && worst > best_low + 1e-9))
         best = c, best_count = count, best_low = worst;
     }

@@ -15,8 +15,9 @@
 // lattice), for a fixture that tilts the part at compound angles (a box then needs 2 setups,
 // not 5). The
 // setups are chosen greedily (set cover): the candidate that can cut the most patches not yet
-// covered, ties to the one whose smallest n . a over them is larger, then to the earlier
-// candidate; repeated until every patch is covered. An axis reaches a patch only when the rays
+// covered, ties to the one whose smallest n . a over them is larger (a square axis, away from the
+// base or along a coordinate axis, counted 0.005 better: a machinist sets it up without a
+// protractor), then to the earlier candidate; repeated until every patch is covered. An axis reaches a patch only when the rays
 // along it from the patch's samples (started 0.01 of the part's diagonal along the axis, past the
 // gap between the fitted surface and the mesh) leave without meeting the part: an overhang hides
 // it (the ball's width is the gouge guard's matter). Each patch then goes to the chosen setup

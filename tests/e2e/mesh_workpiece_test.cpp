@@ -1,0 +1,55 @@
+// graphs/mesh-workpiece-contour.json end to end, through the scallop command: the bundled domed
+// block (examples/make_part.py) from its STL to a program per clamping, setups.json, the setup
+// sheet and the certificate on the whole mesh.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "tests/test_support.h"
+
+namespace scallop {
+namespace {
+
+TEST(MeshWorkpiece, TheDomedBlockGetsAProgramPerClampingASetupSheetAndACertificate) {
+  test::TempDir dir;
+  std::string out;
+  const std::filesystem::path o = dir.path / "out";
+  const std::string cmd = std::string(SCALLOP_BINARY) + " run " + SCALLOP_SOURCE_DIR +
+                          "/graphs/mesh-workpiece-contour.json --no-cache -q --input mesh=" + SCALLOP_SOURCE_DIR +
+                          "/examples/domed_block.stl -o " + o.string();
+  const int status = test::run_command(cmd, &out);
+  const auto report = nlohmann::json::parse(test::read_file(o / "report.json"));
+  // Exit 0 when the certificate passes, 3 when it fails (its reasons on the terminal).
+  EXPECT_EQ(status, report["pass"].get<bool>() ? 0 : 3) << out;
+  EXPECT_EQ(report["pass"].get<bool>(), report["fail_reasons"].empty());
+  // Top and four sides, each square to the part: five clampings, none at a compound angle.
+  const auto setups = nlohmann::json::parse(test::read_file(o / "setups.json"));
+  EXPECT_EQ(setups["format"], "scallop-setups/1");
+  ASSERT_EQ(setups["setups"].size(), 5u);
+  std::set<std::string> names;
+  for (const auto& s : setups["setups"]) {
+    names.insert(s["name"].get<std::string>().substr(3));
+    const std::string program = test::read_file(o / s["gcode"].get<std::string>());
+    EXPECT_NE(program.find("\nM2"), std::string::npos) << s["gcode"];
+  }
+  EXPECT_EQ(names, (std::set<std::string>{"+x", "-x", "+y", "-y", "+z"}));
+  // What the certificate measured: the whole surface, 2400 base + 3000 sides + the dome's
+  // 2423.89 mm² (the integral of sqrt(1 + |grad z|²) over 60 x 40); the base on the table;
+  // nothing unreachable, nothing uncut, no rapid through the part, the gouge within the chord
+  // error's order.
+  EXPECT_NEAR(report["surface_area"].get<double>(), 7823.89, 0.05);
+  EXPECT_NEAR(report["base_fraction"].get<double>(), 2400 / 7823.89, 1e-5);
+  EXPECT_EQ(report["unreachable_fraction"].get<double>(), 0);
+  EXPECT_EQ(report["uncut_fraction"].get<double>(), 0);
+  EXPECT_EQ(report["rapids_through_part"], 0);
+  EXPECT_LT(report["gouge_max"].get<double>(), 0.02);
+  EXPECT_EQ(report["setups"].size(), 5u);
+  const std::string sheet = test::read_file(o / "setup_sheet.md");
+  EXPECT_NE(sheet.find(report["pass"].get<bool>() ? "**Certificate: PASS.**" : "**Certificate: FAIL"), std::string::npos);
+  for (int k = 1; k <= 5; ++k) EXPECT_TRUE(std::filesystem::exists(o / ("setup_" + std::to_string(k) + ".png"))) << k;
+  EXPECT_TRUE(std::filesystem::exists(o / "scallop_map.png"));
+}
+
+}  // namespace
+}  // namespace scallop
