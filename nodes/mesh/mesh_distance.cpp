@@ -6,6 +6,8 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -87,6 +89,41 @@ double MeshDistance::signed_distance(const Eigen::Vector3d& p) const {
                                       Kernel::Vector_3(0.1173, -0.8839, 0.3253)})
     odd += impl_->tree.number_of_intersected_primitives(Kernel::Ray_3(q, dir)) % 2;
   return odd >= 2 ? -d : d;
+}
+
+double MeshDistance::least_along(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double step, double floor,
+                                 double eps, Eigen::Vector3d& where, std::size_t& evaluations,
+                                 bool is_signed) const {
+  auto distance = [&](const Eigen::Vector3d& p) { return is_signed ? signed_distance(p) : (*this)(p); };
+  const double L = (b - a).norm();
+  const int k = std::max(1, static_cast<int>(std::ceil(L / step)));
+  std::vector<double> d(k + 1);
+  for (int i = 0; i <= k; ++i) d[i] = distance(a + (b - a) * (double(i) / k));
+  evaluations += k + 1;
+  const auto least_at = std::min_element(d.begin(), d.end());
+  double least = *least_at, bound = least;
+  where = a + (b - a) * (double(least_at - d.begin()) / k);
+  std::vector<std::array<double, 4>> todo;  // t0, t1, d0, d1
+  for (int i = 0; i < k; ++i) todo.push_back({double(i) / k, double(i + 1) / k, d[i], d[i + 1]});
+  while (!todo.empty()) {
+    const auto [t0, t1, d0, d1] = todo.back();
+    todo.pop_back();
+    const double gap = (t1 - t0) * L;
+    const double lip = 0.5 * (d0 + d1 - gap);
+    const double lower = std::max(lip, lip > 0 ? std::min(d0, d1) - gap * gap / (8 * lip) : -INFINITY);
+    if (lower >= std::min(floor, least - eps) || gap < 1e-6) {
+      if (lower < floor) bound = std::min(bound, lower);
+      continue;
+    }
+    const double tm = 0.5 * (t0 + t1);
+    const double dm = distance(a + (b - a) * tm);
+    ++evaluations;
+    if (dm < least) least = dm, where = a + (b - a) * tm;
+    bound = std::min(bound, least);
+    todo.push_back({t0, tm, d0, dm});
+    todo.push_back({tm, t1, dm, d1});
+  }
+  return bound;
 }
 
 std::vector<double> distances_to_mesh(const std::vector<Eigen::Vector3d>& points, const Mesh& m) {

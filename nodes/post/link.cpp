@@ -96,6 +96,7 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
       if (seg_dist_xy(q, a, b) > r) continue;
       if (segment_distance(q, a, b) < r - tol) return false;
     }
+    if (o.link_clear && !o.link_clear(a, b)) return false;
     if (!model) return true;
     // The model under the ball: ball centres along the link every quarter of the cloud spacing
     // (at most r / 16), each against its foot point on the model (found by stepping from below

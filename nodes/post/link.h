@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <vector>
 
 #include "nodes/geom/height_field_model.h"
@@ -22,6 +23,9 @@ struct LinkOptions {
   double lead_height = 1;  // mm above a pass start/end where plunges end and lifts begin
   double tolerance = 0;    // mm the ball may come closer than r to the surface on a link; <= 0:
                            // max(path chord error, 0.001) (what a simulation lets pass as gouge)
+  // Optional: a further check that a straight link of the ball centre from a to b is clear (a
+  // whole part's mesh, post.setup_programs): the surface points alone miss a dip between them.
+  std::function<bool(const Eigen::Vector3d& a, const Eigen::Vector3d& b)> link_clear;
 };
 
 // surface  #S by 3 points of the surface (the cloud); when empty the passes' own contact points

@@ -1,5 +1,6 @@
 #include "nodes/post/setup_programs.h"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <numeric>
@@ -58,17 +59,31 @@ void keep_off_part(Toolpath& path, const MeshDistance& part, double tolerance, S
                      const Eigen::Vector3d& nb, int depth) {
           if (depth == 0) return;
           const Eigen::Vector3d ca = a + r * na, cb = b + r * nb;
-          for (double q : {0.5, 0.25, 0.75, 0.125, 0.375, 0.625, 0.875}) {
-            const Eigen::Vector3d n = ((1 - q) * na + q * nb).normalized();
-            if (!n.allFinite() || !blocked((1 - q) * ca + q * cb)) continue;
-            Eigen::Vector3d m = (1 - q) * ca + q * cb - r * n;
-            lift_point(m, n);
-            middle(a, na, m, n, depth - 1);
-            out.contact.push_back(m), out.normal.push_back(n);
-            if (!pass.uv.empty()) out.uv.push_back(out.uv.back());
-            middle(m, n, b, nb, depth - 1);
-            return;
+          // Where the move comes nearest the part, if nearer than r - tolerance (found exactly,
+          // MeshDistance::least_along, unsigned: the part may be open); else where a point of it
+          // lies under the part.
+          double q = -1;
+          Eigen::Vector3d nearest;
+          std::size_t evaluations = 0;
+          if (part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false) < r - tolerance) {
+            const double len2 = (cb - ca).squaredNorm();
+            q = len2 > 0 ? std::clamp((nearest - ca).dot(cb - ca) / len2, 1.0 / 16, 15.0 / 16) : 0.5;
+          } else {
+            for (double f : {0.5, 0.25, 0.75, 0.125, 0.375, 0.625, 0.875})
+              if (std::isfinite(part.ray_distance((1 - f) * ca + f * cb, Eigen::Vector3d::UnitZ()))) {
+                q = f;
+                break;
+              }
           }
+          if (q < 0) return;
+          const Eigen::Vector3d n = ((1 - q) * na + q * nb).normalized();
+          if (!n.allFinite()) return;
+          Eigen::Vector3d m = (1 - q) * ca + q * cb - r * n;
+          lift_point(m, n);
+          middle(a, na, m, n, depth - 1);
+          out.contact.push_back(m), out.normal.push_back(n);
+          if (!pass.uv.empty()) out.uv.push_back(out.uv.back());
+          middle(m, n, b, nb, depth - 1);
         };
     for (std::size_t k = 0; k < pass.contact.size(); ++k) {
       if (k > 0) middle(pass.contact[k - 1], pass.normal[k - 1], pass.contact[k], pass.normal[k], 6);
@@ -81,7 +96,9 @@ void keep_off_part(Toolpath& path, const MeshDistance& part, double tolerance, S
       bool raised = false;
       for (std::size_t k = 1; k < out.contact.size(); ++k) {
         const Eigen::Vector3d ca = out.contact[k - 1] + r * out.normal[k - 1], cb = out.contact[k] + r * out.normal[k];
-        bool reaches = false;
+        Eigen::Vector3d nearest;
+        std::size_t evaluations = 0;
+        bool reaches = part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false) < r - tolerance;
         for (int q = 1; q < 8 && !reaches; ++q) reaches = blocked(ca + (cb - ca) * (q / 8.0));
         if (!reaches) continue;
         const std::size_t low = ca.z() < cb.z() ? k - 1 : k;
@@ -132,9 +149,22 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     for (auto& v : placed.vertices) v = s.rotation * v + s.translation;
     SetupProgram prog;
     prog.setup = index;
-    if (placed.num_faces() > 0)
-      keep_off_part(local, MeshDistance(placed), std::max(0.25 * path.chord_error, 1e-3), prog);
-    const LinkedPath linked = link_passes(local, placed.vertices, link);
+    const double tolerance = std::max(0.25 * path.chord_error, 1e-3);
+    const MeshDistance distance(placed);
+    LinkOptions linking = link;
+    if (placed.num_faces() > 0) {
+      keep_off_part(local, distance, tolerance, prog);
+      // Links kept as far off the part as the balls: checked against its faces, not only its
+      // vertices.
+      const double r = path.tool_radius;
+      linking.tolerance = tolerance;
+      linking.link_clear = [&distance, r, tolerance](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+        Eigen::Vector3d nearest;
+        std::size_t evaluations = 0;
+        return distance.least_along(a, b, r / 4, r - tolerance, 1e-4, nearest, evaluations, false) >= r - tolerance;
+      };
+    }
+    const LinkedPath linked = link_passes(local, placed.vertices, linking);
     prog.name = s.name;
     prog.file = "setup_" + std::to_string(out.size() + 1) + ".ngc";
     GCodeOptions g = gcode;

@@ -7,11 +7,12 @@
 // (its mesh, in that frame) comes closer than r - max(e/4, 0.001) to a ball centre, or lies
 // straight above it (the tool comes down along +z: it cannot reach under an overhang, and a
 // centre inside the solid is far from its surface), the ball is lifted along +z until clear. A
-// move is checked at eighths of its length; at the first blocked place a lifted point is
+// move's nearest approach to the part is found exactly (MeshDistance::least_along), and where it is
+// too near (or, checked at eighths, a point of it lies under the part) a lifted point is
 // inserted and both halves are checked again (6 times at most); a move that still reaches in
 // (a narrow neck above a free pocket) has its lower end raised to its upper end's height. The
-// lifts are counted (stock left). Links are
-// checked, and the clearance plane set, against the whole part's points (link.h).
+// lifts are counted (stock left). Links are kept as far off the part (checked against its
+// vertices and its faces), and the clearance plane set above its points (link.h).
 #pragma once
 
 #include <Eigen/Core>

@@ -24,7 +24,8 @@ struct SetupProgramsOptions {
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 2;  // 2: outputs the programs' moves as written (post.simulate_part certifies them)
+  d.version = 3;  // 2: outputs the programs' moves as written (post.simulate_part certifies them)
+                  // 3: moves and links kept off the part's faces exactly (MeshDistance::least_along)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), linked "
       "against the whole part, and the setups file (scallop-setups/1) naming them";

@@ -95,47 +95,6 @@ std::vector<CentreSegment> edges_to_keep_off(const Mesh& m, const std::vector<Tr
 
 nlohmann::json xyz(const Eigen::Vector3d& p) { return {{"x", p.x()}, {"y", p.y()}, {"z", p.z()}}; }
 
-// A bound on the largest r - D(c) + delta along the ball-centre segment [a, b] (D signed,
-// negative inside), within 1e-5 mm of the true value wherever it exceeds tol (verify_part.py's
-// rule, 10 times finer): between two points g apart, D is at least (d1 + d2 - g) / 2 (it is
-// 1-Lipschitz) and at least min(d1, d2) - g² / (8 d_low) (a minimum of convex functions of
-// curvature at most 1 / d_low, d_low > 0 the first bound). A stretch where these leave room for
-// more than max(tol, the largest found + 1e-5) is halved; the others' bounds above tol count in
-// the result, so it is never below the truth.
-double gouge_along(const MeshDistance& part, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
-                   double delta, double step, double tol, std::size_t& positions) {
-  constexpr double kEps = 1e-5;
-  const double L = (b - a).norm();
-  const int k = std::max(1, static_cast<int>(std::ceil(L / step)));
-  std::vector<double> d(k + 1);
-  for (int i = 0; i <= k; ++i) d[i] = part.signed_distance(a + (b - a) * (double(i) / k));
-  positions += k + 1;
-  double best = r + delta - *std::min_element(d.begin(), d.end());
-  double bound = best;
-  std::vector<std::tuple<double, double, double, double>> todo;  // t0, t1, d0, d1
-  for (int i = 0; i < k; ++i) todo.emplace_back(double(i) / k, double(i + 1) / k, d[i], d[i + 1]);
-  while (!todo.empty()) {
-    auto [t0, t1, d0, d1] = todo.back();
-    todo.pop_back();
-    const double gap = (t1 - t0) * L;
-    const double lip = 0.5 * (d0 + d1 - gap);
-    const double conv = lip > 0 ? std::min(d0, d1) - gap * gap / (8 * lip) : -INFINITY;
-    const double upper = r + delta - std::max(lip, conv);
-    if (upper <= std::max(tol, best + kEps) || gap < 1e-6) {
-      if (upper > tol) bound = std::max(bound, upper);
-      continue;
-    }
-    const double tm = 0.5 * (t0 + t1);
-    const double dm = part.signed_distance(a + (b - a) * tm);
-    ++positions;
-    best = std::max(best, r + delta - dm);
-    bound = std::max(bound, best);
-    todo.emplace_back(t0, tm, d0, dm);
-    todo.emplace_back(tm, t1, dm, d1);
-  }
-  return bound;
-}
-
 // The least clearance D(c) - r along a rapid's ball centres [a, b], marched by the clearance
 // itself (it cannot fall faster than c moves), to within `tol` / 2.
 double rapid_clearance(const MeshDistance& part, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
@@ -319,18 +278,24 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     }
   for (std::size_t s = 0; s < setups.size(); ++s) {
     const PartSetupCut& cut = setups[s];
-    tbb::combinable<double> g_max([] { return -INFINITY; }), r_min([] { return INFINITY; });
+    using Deepest = std::pair<double, Eigen::Vector3d>;  // a gouge bound and where (ball centre)
+    tbb::combinable<Deepest> g_max([] { return Deepest{-INFINITY, Eigen::Vector3d::Zero()}; });
+    tbb::combinable<double> r_min([] { return INFINITY; });
     tbb::combinable<std::size_t> through([] { return std::size_t(0); }), positions([] { return std::size_t(0); });
     tbb::parallel_for(std::size_t(0), cut.feed.size(), [&](std::size_t k) {
-      g_max.local() = std::max(g_max.local(), gouge_along(distance, cut.feed[k].a, cut.feed[k].b, r, delta, spacing,
-                                                          tol, positions.local()));
+      Eigen::Vector3d at;
+      // r + delta - D: an upper bound within 1e-5 of the truth where it exceeds tol.
+      const double g = r + delta - distance.least_along(cut.feed[k].a, cut.feed[k].b, spacing, r + delta - tol, 1e-5,
+                                                        at, positions.local());
+      if (g > g_max.local().first) g_max.local() = {g, at};
     });
     tbb::parallel_for(std::size_t(0), cut.rapid.size(), [&](std::size_t k) {
       const double c = rapid_clearance(distance, cut.rapid[k].a, cut.rapid[k].b, r, tol);
       r_min.local() = std::min(r_min.local(), c);
       if (c < -tol) ++through.local();
     });
-    const double g = std::max(0.0, g_max.combine([](double a, double b) { return std::max(a, b); }));
+    const Deepest deepest = g_max.combine([](const Deepest& a, const Deepest& b) { return a.first >= b.first ? a : b; });
+    const double g = std::max(0.0, deepest.first);
     const double rc = r_min.combine([](double a, double b) { return std::min(a, b); });
     const std::size_t thr = through.combine(std::plus<>());
     double cut_length = 0, rapid_length = 0;
@@ -344,6 +309,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
                          {"cut_length", cut_length},
                          {"rapid_length", rapid_length},
                          {"gouge_max", g},
+                         {"gouge_at", g > 0 ? xyz(deepest.second) : nlohmann::json()},
                          {"ball_positions", positions.combine(std::plus<>())},
                          {"rapid_min_clearance", finite_or_null(rc)},
                          {"rapids_through_part", thr},

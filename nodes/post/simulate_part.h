@@ -14,9 +14,9 @@
 //               as post.simulate), uncut when none by t = 20 h;
 //   the surface known to ±delta (surface_uncertainty) makes it a bound: scallop + delta.
 // - gouge (per setup): r - D(c) + delta over the feed ball centres c of the setup, D the signed
-//   distance to the mesh (negative inside): sampled every `spacing` along each move and halved
-//   where a bound on D between two points leaves room for more than tol (as verify_part.py); the
-//   figure is an upper bound, within 1e-5 mm of the truth where it exceeds tol.
+//   distance to the mesh (negative inside), the least along each move found by
+//   MeshDistance::least_along (as verify_part.py): an upper bound, within 1e-5 mm of the truth
+//   where it exceeds tol.
 // - rapids: a rapid is through the part where D(c) - r < -tol anywhere along it (marched by the
 //   clearance, which bounds how far it can fall).
 // - interior: farther than `margin` from a border edge or an edge whose faces' normals differ
@@ -65,7 +65,8 @@ struct PartSimulateOptions {
 // gouge_max, rapids_through_part, rapid_min_clearance, cut_length, rapid_length, base_fraction,
 // unreachable_fraction, measured_fraction, surface_area, samples, samples_measured,
 // samples_interior, samples_refined, spacing, margin, surface_uncertainty, tool_radius,
-// scallop_limit, chord_limit, setups [{name, cut_length, rapid_length, gouge_max,
+// scallop_limit, chord_limit, setups [{name, cut_length, rapid_length, gouge_max, gouge_at (the
+// ball centre there, part frame),
 // rapids_through_part, finished_fraction}], unreachable [{x, y, z, reach_radius}] (up to 10
 // places, 2 r apart, smallest reach first), worst [{x, y, z, kind, value, interior}] (up to 10,
 // one per sqrt(8 r h): interior first, then by excess).
