@@ -92,9 +92,13 @@ void keep_off_part(Toolpath& path, const MeshDistance& part, double tolerance, S
     }
     // Where a move still reaches in (a narrow neck above a free pocket: its ends clear, its
     // middle not), its lower end is raised to its upper end's height, until no move does.
+    // A sweep checks the moves next to a point the previous one raised (the first, all of them).
+    std::vector<char> check(out.contact.size(), 1), next(out.contact.size(), 0);  // move k-1 -> k
     for (int sweep = 0; sweep < 50; ++sweep) {
       bool raised = false;
+      std::fill(next.begin(), next.end(), 0);
       for (std::size_t k = 1; k < out.contact.size(); ++k) {
+        if (!check[k]) continue;
         const Eigen::Vector3d ca = out.contact[k - 1] + r * out.normal[k - 1], cb = out.contact[k] + r * out.normal[k];
         Eigen::Vector3d nearest;
         std::size_t evaluations = 0;
@@ -108,8 +112,11 @@ void keep_off_part(Toolpath& path, const MeshDistance& part, double tolerance, S
         ++stats.lifted;
         stats.lift_max = std::max(stats.lift_max, rise);
         raised = true;
+        next[low] = 1;
+        if (low + 1 < next.size()) next[low + 1] = 1;
       }
       if (!raised) break;
+      check.swap(next);
     }
     pass = std::move(out);
   }
