@@ -3,6 +3,8 @@
 
 #include <functional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "engine/file_ref.h"
 #include "engine/node.h"
@@ -16,5 +18,11 @@ namespace scallop::io {
 // message.
 FileRef write_output_file(const NodeContext& ctx, const std::string& param,
                           const std::function<void(const std::string& path)>& write);
+
+// The same for a file with others beside it (a setups file and its programs, a setup sheet and
+// its pictures): each (name, bytes) of `beside` written into the main file's folder, then the
+// main file with `text`. Errors as write_output_file's.
+FileRef write_output_files(const NodeContext& ctx, const std::string& param, const std::string& text,
+                           const std::vector<std::pair<std::string, std::string>>& beside);
 
 }  // namespace scallop::io

@@ -1,5 +1,3 @@
-#include <filesystem>
-#include <fstream>
 #include <stdexcept>
 #include <string>
 
@@ -70,17 +68,9 @@ NodeDecl make_setup_programs_node() {
       throw NodeError(std::string("post.setup_programs: ") + e.what());
     }
     const nlohmann::json file = setups_file(programs, setups);
-    ctx.set("file", io::write_output_file(ctx, param, [&](const std::string& written) {
-              const std::filesystem::path folder = std::filesystem::path(written).parent_path();
-              for (const SetupProgram& p : programs) {
-                std::ofstream out(folder / p.file, std::ios::binary);
-                out << p.gcode;
-                if (!out) throw std::runtime_error("cannot write '" + (folder / p.file).string() + "'");
-              }
-              std::ofstream out(written, std::ios::binary);
-              out << file.dump(1) << "\n";
-              if (!out) throw std::runtime_error("cannot write '" + written + "'");
-            }));
+    std::vector<std::pair<std::string, std::string>> beside;
+    for (const SetupProgram& p : programs) beside.emplace_back(p.file, p.gcode);
+    ctx.set("file", io::write_output_files(ctx, param, file.dump(1) + "\n", beside));
     nlohmann::json list = nlohmann::json::array();
     for (const SetupProgram& p : programs)
       list.push_back({{"name", p.name}, {"gcode", p.file}, {"passes", p.passes}, {"moves", p.moves},

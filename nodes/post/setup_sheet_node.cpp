@@ -1,5 +1,3 @@
-#include <filesystem>
-#include <fstream>
 #include <stdexcept>
 #include <string>
 
@@ -47,17 +45,7 @@ NodeDecl make_setup_sheet_node() {
     } catch (const std::invalid_argument& e) {
       throw NodeError(std::string("post.setup_sheet: ") + e.what());
     }
-    ctx.set("file", io::write_output_file(ctx, param, [&](const std::string& written) {
-              const std::filesystem::path folder = std::filesystem::path(written).parent_path();
-              for (const auto& [name, png] : sheet.pictures) {
-                std::ofstream out(folder / name, std::ios::binary);
-                out << png;
-                if (!out) throw std::runtime_error("cannot write '" + (folder / name).string() + "'");
-              }
-              std::ofstream out(written, std::ios::binary);
-              out << sheet.markdown;
-              if (!out) throw std::runtime_error("cannot write '" + written + "'");
-            }));
+    ctx.set("file", io::write_output_files(ctx, param, sheet.markdown, sheet.pictures));
   };
   return d;
 }
