@@ -59,6 +59,12 @@ double MeshDistance::operator()(const Eigen::Vector3d& p, const Eigen::Vector3d&
   return std::sqrt(impl_->tree.squared_distance(point(p), point(hint)));
 }
 
+Eigen::Vector3d MeshDistance::closest_point(const Eigen::Vector3d& p) const {
+  if (impl_->tris.empty()) return p;
+  const Kernel::Point_3 q = impl_->tree.closest_point(point(p));
+  return {q.x(), q.y(), q.z()};
+}
+
 double MeshDistance::ray_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& d) const {
   if (impl_->tris.empty()) return std::numeric_limits<double>::infinity();
   const Kernel::Ray_3 ray(point(p), Kernel::Direction_3(d.x(), d.y(), d.z()));

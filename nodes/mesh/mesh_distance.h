@@ -22,6 +22,8 @@ class MeshDistance {
   double operator()(const Eigen::Vector3d& p) const;
   // The same, the search started from `hint`, a point on the faces near p (faster).
   double operator()(const Eigen::Vector3d& p, const Eigen::Vector3d& hint) const;
+  // The nearest point of the faces to p (p itself without faces).
+  Eigen::Vector3d closest_point(const Eigen::Vector3d& p) const;
   // How far along the ray from p in direction d (unit) the first face lies; +infinity when the
   // ray meets none.
   double ray_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& d) const;

@@ -200,13 +200,17 @@ double point_segment_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a
   return (p - (a + t * ab)).norm();
 }
 
+double mean_edge_length(const Mesh& m) {
+  const MeshEdges edges = mesh_edges(m);
+  double sum = 0;
+  for (const auto& e : edges.edges) sum += (m.vertices[e[0]] - m.vertices[e[1]]).norm();
+  return edges.size() > 0 ? sum / static_cast<double>(edges.size()) : 0;
+}
+
 // The feature share (see the header) of the input's feature edges `reference` on the quads'.
 void measure_features(const Mesh& input, const std::vector<std::array<std::uint32_t, 2>>& reference, const Mesh& quads,
                       double tolerance_fraction, QuadRemeshReport& report) {
-  const MeshEdges qe = mesh_edges(quads);
-  double sum = 0;
-  for (const auto& e : qe.edges) sum += (quads.vertices[e[0]] - quads.vertices[e[1]]).norm();
-  const double h = qe.size() > 0 ? sum / static_cast<double>(qe.size()) : 0;
+  const double h = mean_edge_length(quads);
   const double tol = tolerance_fraction * h;
   report.mean_edge_length = h;
   report.feature_tolerance_mm = tol;
@@ -499,6 +503,10 @@ Mesh quad_remesh(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshReport&
   check();
   if (const std::string holes = holes_torn(mesh, quads); !holes.empty()) throw std::runtime_error(holes);
   quads.feature_edges = sharp_edges(quads, mesh_edges(quads), o.angle_deg).edges;
+  if (o.snap) {
+    say(0.9, "moving the quads' vertices onto the input");
+    report.snap = snap_to_reference(quads, mesh, reference, mean_edge_length(quads));
+  }
 
   say(0.95, "measuring the quads");
   report.faces = quads.num_faces();

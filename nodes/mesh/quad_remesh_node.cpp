@@ -12,7 +12,7 @@ namespace scallop::mesh_nodes {
 NodeDecl make_quad_remesh_node() {
   NodeDecl d;
   d.type = "mesh.quad_remesh";
-  d.version = 1;
+  d.version = 2;
   d.description =
       "remeshes into quads aligned with the sharp features by QuadriFlow, run in Blender (Debian package blender) "
       "as a separate process";
@@ -31,7 +31,8 @@ NodeDecl make_quad_remesh_node() {
               "doublets_zipped (QuadriFlow's triangles, written as quads of no area, joined away), holes_filled "
               "(three-edge holes where it left a triangle out, closed keeping all quads), quads_split (by that), "
               "repeated_corners_removed, faces_dropped, components_reversed, seconds, quadriflow_seconds, "
-              "blender_version, blender, seed, topology}");
+              "blender_version, blender, seed, snap: {corners, feature_vertices, surface_vertices (moved onto the input's "
+              "corners, feature curves, faces), kept, off_surface_max (mm, before), moved_max (mm)}, topology}");
   d.options<QuadRemeshOptions>()
       .integer("target_faces", &QuadRemeshOptions::target_faces, 1, 10000000, "",
                "quads asked of QuadriFlow (it gives about as many)")
@@ -43,6 +44,9 @@ NodeDecl make_quad_remesh_node() {
               "input's feature curves when it has no feature_edges")
       .number("feature_tolerance", &QuadRemeshOptions::feature_tolerance, 0.001, 1, "",
               "a feature piece lies on quad edges within this many mean edge lengths of an output sharp edge")
+      .flag("snap", &QuadRemeshOptions::snap,
+            "move the quads' vertices back onto the input, corners onto its corners and feature vertices onto its "
+            "feature curves, each by at most the mean edge length (QuadriFlow leaves them off near features)")
       .text("blender", &QuadRemeshOptions::blender,
             "Blender's executable; empty: the environment variable SCALLOP_BLENDER, else blender on PATH")
       .number("timeout", &QuadRemeshOptions::timeout_s, 1, 86400, "s", "Blender is stopped after this long");
@@ -78,6 +82,13 @@ NodeDecl make_quad_remesh_node() {
                    {"quads_split", r.quads_split},
                    {"repeated_corners_removed", r.repeated_corners_removed},
                    {"faces_dropped", r.faces_dropped},
+                   {"snap",
+                    {{"corners", r.snap.corners},
+                     {"feature_vertices", r.snap.feature_vertices},
+                     {"surface_vertices", r.snap.surface_vertices},
+                     {"kept", r.snap.kept},
+                     {"off_surface_max", r.snap.off_surface_max},
+                     {"moved_max", r.snap.moved_max}}},
                    {"components_reversed", r.components_reversed},
                    {"seconds", r.seconds},
                    {"quadriflow_seconds", r.quadriflow_seconds},

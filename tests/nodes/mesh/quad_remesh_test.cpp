@@ -89,19 +89,27 @@ TEST(QuadRemesh, ABoxComesBackAllQuadsClosedOutwardWithItsEdgesOnQuadEdges) {
   EXPECT_EQ(r["feature_length_below_60"], 0.0);
   EXPECT_FALSE(q.feature_edges.empty());
   for (const auto& [a, b] : q.feature_edges) EXPECT_TRUE(e.find(a, b).has_value());
-  // In the part's frame: each corner of the box has a vertex near it, no vertex strays off it.
-  const double h = r["mean_edge_length"];
+  // In the part's frame, snapped back onto the box: a vertex on each of its corners, every vertex
+  // on one of its sides (QuadriFlow's own lie up to a tenth of an edge off).
+  EXPECT_EQ(r["snap"]["corners"], 8);
+  EXPECT_EQ(r["snap"]["kept"], 0);
+  EXPECT_GT(r["snap"]["off_surface_max"].get<double>(), 0);
+  EXPECT_LE(r["snap"]["moved_max"].get<double>(), r["mean_edge_length"].get<double>());
   for (int i = 0; i < 8; ++i) {
     const V corner = kLow + V(i & 1, (i >> 1) & 1, (i >> 2) & 1).cwiseProduct(kSize);
     double nearest = 1e9;
     for (const V& v : q.vertices) nearest = std::min(nearest, (v - corner).norm());
-    EXPECT_LT(nearest, 0.2 * h) << "corner " << i;
+    EXPECT_LT(nearest, 1e-9) << "corner " << i;
   }
-  for (const V& v : q.vertices)
+  for (const V& v : q.vertices) {
+    double off_sides = 1e9;  // the distance to the nearest side's plane, the vertex within the box
     for (int k = 0; k < 3; ++k) {
-      EXPECT_GT(v[k], kLow[k] - 0.2 * h);
-      EXPECT_LT(v[k], kLow[k] + kSize[k] + 0.2 * h);
+      EXPECT_GT(v[k], kLow[k] - 1e-9);
+      EXPECT_LT(v[k], kLow[k] + kSize[k] + 1e-9);
+      off_sides = std::min({off_sides, std::abs(v[k] - kLow[k]), std::abs(v[k] - kLow[k] - kSize[k])});
     }
+    EXPECT_LT(off_sides, 1e-9) << v.transpose();
+  }
   EXPECT_FALSE(r["blender_version"].get<std::string>().empty());
   EXPECT_EQ(r["seed"], 0);
   EXPECT_EQ(r["target_faces"], 600);
