@@ -77,11 +77,6 @@ class ContourPlanner {
   // The largest scallop between contours ca (rectangle a) and cb (rectangle b, inside a) over the
   // strip between their sides s: sampled, then the worst places refined.
   double strip_scallop(const Rect& a, const Rect& b, int s, const Contour& ca, const Contour& cb) const {
-    const std::array<double, 4> widths{b.v0 - a.v0, a.u1 - b.u1, a.v1 - b.v1, b.u0 - a.u0};
-    const double width = widths[s], length = along_u(s) ? a.u1 - a.u0 : a.v1 - a.v0;
-    const int along = std::clamp(static_cast<int>(std::ceil(8 * length / std::max(width, 1e-12))) + 1,
-                                 2 * o_.side_samples, 20000),
-              across = 9;
     // (t along, f across) in [0, 1]^2 -> (u, v)
     auto at = [&](double t, double f) -> Eigen::Vector2d {
       t = std::clamp(t, 0.0, 1.0), f = std::clamp(f, 0.0, 1.0);
@@ -90,6 +85,20 @@ class ContourPlanner {
       if (s == 2) return {a.u0 + t * (a.u1 - a.u0), a.v1 + f * (b.v1 - a.v1)};
       return {a.u0 + f * (b.u0 - a.u0), a.v0 + t * (a.v1 - a.v0)};
     };
+    // The strip's length along contour a and its narrowest width, in mm on the surface: the
+    // samples are spaced by the width in both directions however unevenly (u, v) is stretched
+    // (in parameter units a corner of a 60 x 15 mm patch was sampled 0.5 mm apart, and missed).
+    double length = 0, width = kInf;
+    Eigen::Vector3d previous = f_(at(0, 0)).position;
+    for (int i = 0; i <= 32; ++i) {
+      const Eigen::Vector3d outer = f_(at(i / 32.0, 0)).position;
+      length += (outer - previous).norm();
+      previous = outer;
+      width = std::min(width, (f_(at(i / 32.0, 1)).position - outer).norm());
+    }
+    const int along = std::clamp(static_cast<int>(std::ceil(8 * length / std::max(width, 1e-12))) + 1,
+                                 2 * o_.side_samples, 20000),
+              across = 9;
     auto scallop = [&](double t, double f) {
       const SurfaceSample x = f_(at(t, f));
       return std::min(scallop_at(x, ca), scallop_at(x, cb));
@@ -166,17 +175,23 @@ class ContourPlanner {
         dtau = std::min(forward_interval(o_.chord_error, curvature), o_.max_segment) / speed;
       }
       dtau = std::min(dtau, 1 - tau);
-      // The ball-centre chord against the ball-centre curve.
+      // The ball-centre chord against the ball-centre curve: at most e off it, and at most
+      // part_clearance_tolerance(e) toward the surface (a convex pass's chords dip toward it).
       const Eigen::Vector3d c0 = d.sample.position + r_ * d.sample.normal;
+      const double inward_limit = std::min(o_.chord_error, part_clearance_tolerance(o_.chord_error));
       for (int tries = 0; tries < 40; ++tries) {
         const Eigen::Vector3d c1 = centre(a + (tau + dtau) * delta);
         double dev = 0;
+        bool dips = false;
         for (double q : {0.25, 0.5, 0.75}) {
-          const Eigen::Vector3d m = centre(a + (tau + q * dtau) * delta), seg = c1 - c0;
+          const SurfaceSample x = f_(a + (tau + q * dtau) * delta);
+          const Eigen::Vector3d m = x.position + r_ * x.normal, seg = c1 - c0;
           const double s = seg.squaredNorm() > 0 ? std::clamp((m - c0).dot(seg) / seg.squaredNorm(), 0.0, 1.0) : 0.0;
-          dev = std::max(dev, (m - (c0 + s * seg)).norm());
+          const Eigen::Vector3d off = c0 + s * seg - m;
+          dev = std::max(dev, off.norm());
+          dips = dips || (off.dot(x.normal) < 0 && off.norm() > inward_limit);
         }
-        if (dev <= o_.chord_error || tries == 39) {
+        if ((dev <= o_.chord_error && !dips) || tries == 39) {
           chord_max = std::max(chord_max, dev);
           break;
         }

@@ -1,5 +1,6 @@
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <stdexcept>
 #include <string>
@@ -7,6 +8,8 @@
 #include "engine/node.h"
 #include "nodes/geom/bspline_surface.h"
 #include "nodes/path/contour_grid.h"
+#include "nodes/surface/fit_bspline.h"
+#include "nodes/types/mesh.h"
 #include "nodes/types/document.h"
 #include "nodes/types/surfaces.h"
 #include "nodes/types/toolpath.h"
@@ -16,19 +19,24 @@ namespace scallop::path_nodes {
 NodeDecl make_contour_grid_node() {
   NodeDecl d;
   d.type = "path.contour_grid";
-  d.version = 1;
+  d.version = 2;
   d.description =
       "contour-parallel passes on every B-spline patch (the second paper's Algorithm 1): nested rectangles of the "
       "patch's (u, v) square, each side stepped in from the scallop limit and the scallop between every two "
       "contours evaluated on the surface";
   d.input("surfaces", "Surfaces", "the patches (surface.fit_bspline), each machined along its own direction")
+      .input("part", "Mesh",
+             "the part's own mesh, what the programs are measured against: on each patch the scallop is held to h less "
+             "the surface's largest distance from it (at most h / 2; more is warned about)",
+             false)
       .output("toolpath", "Toolpath",
               "the contours of every patch in the part's frame (patch by patch, outermost first, each closed), "
               "normals turned to the patch's direction")
       .output("report", "Report",
               "{patches: [{patch, contours, points, u_step_min/max, v_step_min/max (parameter units), "
               "side_steps_shrunk, scallop_max and chord_max (found by the checks, mm), unreachable_samples, "
-              "grid_lines}], contours, points, scallop_max, chord_max}");
+              "grid_lines, part_distance_max and scallop_target (mm, with part)}], contours, points, scallop_max, "
+              "chord_max}");
   d.options<ContourGridOptions>()
       .number("tool_radius", &ContourGridOptions::tool_radius, 1e-3, 1e3, "mm", "ball-end cutter radius r")
       .number("scallop_height", &ContourGridOptions::scallop_height, 1e-6, 1e2, "mm", "largest scallop height h")
@@ -45,6 +53,10 @@ NodeDecl make_contour_grid_node() {
       throw NodeError("path.contour_grid: scallop_height must be smaller than tool_radius");
     const std::size_t np = surfaces->patches.size();
     if (np == 0) throw NodeError("path.contour_grid: there are no patches");
+    // The surface is not the part: where it lies d off the part's faces (a facet's sag on a curved
+    // part, the fit between vertices), the scallop on the part can be up to d more.
+    std::vector<double> part_distance(np, 0.0);
+    if (ctx.has_input("part")) part_distance = surface_distance_max(*surfaces, *ctx.input<Mesh>("part"));
     std::vector<ContourGridResult> results(np);
     std::vector<std::string> errors(np);
     std::atomic<std::size_t> done{0};
@@ -52,7 +64,9 @@ NodeDecl make_contour_grid_node() {
       try {
         const SurfacePatch& sp = surfaces->patches[p];
         const BSplinePatch patch(sp.surface, sp.direction);
-        results[p] = plan_contour_grid(patch, o);
+        ContourGridOptions patch_options = o;
+        patch_options.scallop_height = o.scallop_height - std::min(part_distance[p], o.scallop_height / 2);
+        results[p] = plan_contour_grid(patch, patch_options);
       } catch (const std::invalid_argument& e) {
         errors[p] = e.what();
       }
@@ -72,6 +86,14 @@ NodeDecl make_contour_grid_node() {
     for (std::size_t p = 0; p < np; ++p) {
       nlohmann::json r = results[p].report;
       r["patch"] = p;
+      if (ctx.has_input("part")) {
+        r["part_distance_max"] = part_distance[p];
+        r["scallop_target"] = o.scallop_height - std::min(part_distance[p], o.scallop_height / 2);
+        if (part_distance[p] > o.scallop_height / 2)
+          ctx.warn("patch " + std::to_string(p) + " lies up to " + std::to_string(part_distance[p]) +
+                   " mm off the part's faces, more than h / 2: its contours are planned to h / 2 and may leave more "
+                   "than h on the part (the certificate measures it)");
+      }
       contours += r["contours"].get<std::size_t>();
       points += r["points"].get<std::size_t>();
       scallop_max = std::max(scallop_max, r["scallop_max"].get<double>());

@@ -8,6 +8,8 @@
 // derivative along a direction, kappa = -(n . r_uu) / |r_u|^2.
 #pragma once
 
+#include <algorithm>
+
 #include <Eigen/Core>
 
 namespace scallop {
@@ -36,6 +38,12 @@ Eigen::Vector2d principal_curvatures(const FundamentalForms& f);
 // allowed chord deviation (mm). curvature = 1/R >= 0 (1/mm); returns +infinity for a straight
 // pass (curvature 0), and 2R when e >= 2R (the chord may span the whole circle's diameter).
 double forward_interval(double chord_error, double curvature);
+
+// How near the part a ball centre may come, less than r (mm): post.setup_programs lifts a ball
+// (and inserts lifted points into a move) nearer than r - this, so a planner whose ball-centre
+// chords dip toward the surface keeps the dip within it (a lifted point leaves stock that the
+// scallop checks did not see). A quarter of the chord error, at least 1 micron.
+inline double part_clearance_tolerance(double chord_error) { return std::max(0.25 * chord_error, 1e-3); }
 
 // True where a ball of radius r cannot reach the bottom of a concave section: normal
 // curvature radius below r (1 + r kappa <= 0).

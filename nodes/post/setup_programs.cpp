@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "nodes/mesh/mesh_distance.h"
+#include "nodes/path/step_size.h"
 
 namespace scallop {
 namespace {
@@ -156,7 +157,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     for (auto& v : placed.vertices) v = s.rotation * v + s.translation;
     SetupProgram prog;
     prog.setup = index;
-    const double tolerance = std::max(0.25 * path.chord_error, 1e-3);
+    const double tolerance = part_clearance_tolerance(path.chord_error);
     const MeshDistance distance(placed);
     LinkOptions linking = link;
     if (placed.num_faces() > 0) {

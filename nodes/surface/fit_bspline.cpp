@@ -268,6 +268,25 @@ GridFit fit_grid_bspline(const std::vector<Eigen::Vector3d>& points, std::uint32
   return fit;
 }
 
+std::vector<double> surface_distance_max(const Surfaces& surfaces, const Mesh& mesh) {
+  const std::size_t np = surfaces.patches.size();
+  std::vector<Eigen::Vector3d> samples;
+  std::vector<std::size_t> first(np + 1, 0);
+  for (std::size_t p = 0; p < np; ++p) {
+    const SurfacePatch& sp = surfaces.patches[p];
+    const std::uint32_t nu = kFine * (std::max<std::uint32_t>(sp.cols, 2) - 1),
+                        nv = kFine * (std::max<std::uint32_t>(sp.rows, 2) - 1);
+    for (std::uint32_t i = 0; i <= nv; ++i)
+      for (std::uint32_t j = 0; j <= nu; ++j) samples.push_back(surface_point(sp.surface, double(j) / nu, double(i) / nv));
+    first[p + 1] = samples.size();
+  }
+  const std::vector<double> distance = distances_to_mesh(samples, mesh);
+  std::vector<double> out(np);
+  for (std::size_t p = 0; p < np; ++p)
+    out[p] = *std::max_element(distance.begin() + std::ptrdiff_t(first[p]), distance.begin() + std::ptrdiff_t(first[p + 1]));
+  return out;
+}
+
 Surfaces fit_surfaces(const Segments& seg, const FitBSplineOptions& o, FitStats* stats,
                       const std::function<void(double, const std::string&)>& progress) {
   const Mesh& mesh = seg.mesh;
@@ -329,20 +348,8 @@ Surfaces fit_surfaces(const Segments& seg, const FitBSplineOptions& o, FitStats*
     if (progress) progress(double(++done) / double(np), "fitting B-spline patches");
   });
 
-  // Each surface against the mesh, at quarter steps of its grid.
-  std::vector<Eigen::Vector3d> samples;
-  std::vector<std::size_t> first(np + 1, 0);
-  for (std::size_t p = 0; p < np; ++p) {
-    const SurfacePatch& sp = out.patches[p];
-    const std::uint32_t nu = kFine * (sp.cols - 1), nv = kFine * (sp.rows - 1);
-    for (std::uint32_t i = 0; i <= nv; ++i)
-      for (std::uint32_t j = 0; j <= nu; ++j) samples.push_back(surface_point(sp.surface, double(j) / nu, double(i) / nv));
-    first[p + 1] = samples.size();
-  }
-  const std::vector<double> distance = distances_to_mesh(samples, mesh);
-  for (std::size_t p = 0; p < np; ++p)
-    out.patches[p].mesh_distance_max =
-        *std::max_element(distance.begin() + std::ptrdiff_t(first[p]), distance.begin() + std::ptrdiff_t(first[p + 1]));
+  const std::vector<double> distance = surface_distance_max(out, mesh);
+  for (std::size_t p = 0; p < np; ++p) out.patches[p].mesh_distance_max = distance[p];
 
   if (stats) {
     *stats = FitStats{};

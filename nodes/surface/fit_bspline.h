@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "nodes/geom/bspline_surface.h"
+#include "nodes/types/mesh.h"
 #include "nodes/types/segments.h"
 #include "nodes/types/surfaces.h"
 
@@ -62,6 +63,12 @@ std::vector<Eigen::Vector3d> fit_border_curve(const std::vector<Eigen::Vector3d>
 //           rows-1), row rows-1 (j = 0 .. cols-1), column 0 (i = 0 .. rows-1); empty: fitted here.
 GridFit fit_grid_bspline(const std::vector<Eigen::Vector3d>& points, std::uint32_t rows, std::uint32_t cols,
                          const FitBSplineOptions& options, const std::vector<std::vector<Eigen::Vector3d>>& borders = {});
+
+// The largest distance from each patch's surface, sampled at quarter steps of its grid (rows by
+// cols), to `mesh`'s faces (+infinity when it has none): against the quads it was fitted to, its
+// mesh_distance_max; against the part's own mesh, how far the surface the paths follow may lie
+// off the part (path.contour_grid).
+std::vector<double> surface_distance_max(const Surfaces& surfaces, const Mesh& mesh);
 
 // How the patches meet.
 struct FitStats {

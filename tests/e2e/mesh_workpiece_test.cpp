@@ -20,9 +20,13 @@ TEST(MeshWorkpiece, TheDomedBlockGetsAProgramPerClampingASetupSheetAndACertifica
                           "/examples/domed_block.stl -o " + o.string();
   const int status = test::run_command(cmd, &out);
   const auto report = nlohmann::json::parse(test::read_file(o / "report.json"));
-  // Exit 0 when the certificate passes, 3 when it fails (its reasons on the terminal).
-  EXPECT_EQ(status, report["pass"].get<bool>() ? 0 : 3) << out;
-  EXPECT_EQ(report["pass"].get<bool>(), report["fail_reasons"].empty());
+  // The certificate passes (exit 0; 3 would be a failed certificate): the quads snapped back onto
+  // the block's edges and corners, the limit lowered by the dome's facet sag, the top's chords
+  // within the balls' clearance (0.0548 mm and 0.0527 mm before each of those).
+  EXPECT_EQ(status, 0) << out;
+  EXPECT_TRUE(report["pass"].get<bool>()) << report["fail_reasons"];
+  EXPECT_TRUE(report["fail_reasons"].empty());
+  EXPECT_LE(report["scallop_max"].get<double>(), 0.05 * 1.01);  // rim included
   // Top and four sides, each square to the part: five clampings, none at a compound angle.
   const auto setups = nlohmann::json::parse(test::read_file(o / "setups.json"));
   EXPECT_EQ(setups["format"], "scallop-setups/1");

@@ -8,9 +8,11 @@
 
 #include <cmath>
 #include <map>
+#include <tuple>
 
 #include "nodes/path/step_size.h"
 #include "nodes/types/document.h"
+#include "nodes/types/mesh.h"
 #include "nodes/types/surfaces.h"
 #include "nodes/types/toolpath.h"
 #include "tests/nodes/path/scallop_trace.h"
@@ -32,6 +34,9 @@ using V = Eigen::Vector3d;
 struct Exact final : ParametricSurface {
   int shape;
   double R = 20;
+  double sx = 1, sy = 1;  // the plane: (u, v) -> (x(u), y(v), 0), stretched unevenly unless 1
+  double x(double u) const { return sx == 1 ? u : sx * (0.7 * u + 0.3 * u * u); }
+  double y(double v) const { return sy == 1 ? v : sy * (0.8 * v + 0.2 * v * v * v); }
   UVDomain d;
   explicit Exact(int s) : shape(s) {
     d.kind = UVDomain::Kind::Rectangle;
@@ -42,7 +47,7 @@ struct Exact final : ParametricSurface {
     const Eigen::Vector2d uv = d.clamp(uv_in);
     SurfaceSample x;
     if (shape == 0) {
-      x.position = V(uv.x(), uv.y(), 0);
+      x.position = V(this->x(uv.x()), y(uv.y()), 0);
       x.normal = V::UnitZ();
       return x;
     }
@@ -90,6 +95,20 @@ double measured_chord(const Exact& s, const ContourGridResult& g, double r) {
   return worst;
 }
 
+// The farthest a segment's ball-centre chord dips toward the surface from the exact centre at its
+// middle (post.setup_programs lifts balls nearer the part than r - max(e/4, 0.001)).
+double measured_dip(const Exact& s, const ContourGridResult& g, double r) {
+  double worst = 0;
+  for (const auto& p : g.passes)
+    for (std::size_t k = 0; k + 1 < p.uv.size(); ++k) {
+      const SurfaceSample m = s((p.uv[k] + p.uv[k + 1]) / 2);
+      const V c = m.position + r * m.normal, a = p.contact[k] + r * p.normal[k], b = p.contact[k + 1] + r * p.normal[k + 1];
+      const double t = std::clamp((c - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+      worst = std::max(worst, -(a + t * (b - a) - c).dot(m.normal));
+    }
+  return worst;
+}
+
 ContourGridOptions options() {
   ContourGridOptions o;
   o.tool_radius = 3;
@@ -122,6 +141,49 @@ TEST(ContourGrid, APlaneGetsNestedRectanglesSpacedForTheirCorners) {
   EXPECT_EQ(g.passes[0].uv[0], Eigen::Vector2d(0, 0));                 // the border first
 }
 
+// Where contour k + 1 turns a corner inside contour k, steps a and b from contour k's two sides
+// there, the point farthest from the balls is d from both of contour k's sides and from contour
+// k + 1's corner: (a - d)^2 + (b - d)^2 = d^2, d = a + b - sqrt(2 a b), when that point lies in the
+// corner's square (d <= a, b); its scallop on a plane is r - sqrt(r^2 - d^2). The largest over
+// every such corner, the steps in mm (the grid lines through x(u), y(v)).
+template <class X, class Y>
+double corner_scallop_max(const nlohmann::json& lines, double r, X x, Y y) {
+  double worst = 0;
+  const auto& u0 = lines["u_from_0"];
+  const auto& u1 = lines["u_from_1"];
+  const auto& v0 = lines["v_from_0"];
+  const auto& v1 = lines["v_from_1"];
+  for (std::size_t k = 0; k + 1 < u0.size(); ++k) {
+    const double left = x(u0[k + 1].get<double>()) - x(u0[k].get<double>()),
+                 right = x(u1[k].get<double>()) - x(u1[k + 1].get<double>());
+    const double bottom = y(v0[k + 1].get<double>()) - y(v0[k].get<double>()),
+                 top = y(v1[k].get<double>()) - y(v1[k + 1].get<double>());
+    for (double a : {left, right})
+      for (double b : {bottom, top}) {
+        const double d = a + b - std::sqrt(2 * a * b);
+        if (a > 0 && b > 0 && d <= std::min(a, b)) worst = std::max(worst, r - std::sqrt(r * r - d * d));
+      }
+  }
+  return worst;
+}
+
+// A plane on the unit square stretched unevenly to 60 x 15 mm (as a B-spline patch of a block's
+// side is): the strips are sampled by their size in mm, not in parameter units, or the corners
+// where the steps differ are missed (0.053 for h = 0.05 was measured on such a patch).
+TEST(ContourGrid, EveryCornerHoldsHOnAPlaneStretchedAsAPatchIs) {
+  for (const auto& [sx, sy] : {std::pair{60.0, 15.0}, std::pair{15.0, 60.0}, std::pair{40.0, 30.0}}) {
+    Exact plane(0);
+    plane.d.width = plane.d.height = 1;
+    plane.sx = sx, plane.sy = sy;
+    ContourGridOptions o = options();
+    o.scallop_height = 0.05;
+    const ContourGridResult g = plan_contour_grid(plane, o);
+    const double scallop = corner_scallop_max(
+        g.report["grid_lines"], 3, [&](double u) { return plane.x(u); }, [&](double v) { return plane.y(v); });
+    EXPECT_LE(scallop, 0.05 * (1 + 1e-6)) << sx << " x " << sy;
+  }
+}
+
 TEST(ContourGrid, ARidgeAndATroughStayWithinHTheTroughWithWiderSteps) {
   std::map<int, double> first_u_step;
   for (int shape : {+1, -1}) {
@@ -131,6 +193,8 @@ TEST(ContourGrid, ARidgeAndATroughStayWithinHTheTroughWithWiderSteps) {
     EXPECT_LE(g.report["scallop_max"].get<double>(), 0.02);
     EXPECT_LE(measured_scallop(s, g, 3, 61), 0.02 * 1.01);
     EXPECT_LE(measured_chord(s, g, 3), 0.005 * 1.01);
+    EXPECT_LE(measured_dip(s, g, 3), 0.00125 * 1.01);  // max(e / 4, 0.001)
+    if (shape > 0) EXPECT_GT(measured_dip(s, g, 3), 0.0005);  // the ridge's chords do dip
     const auto& u = g.report["grid_lines"]["u_from_0"];
     first_u_step[shape] = u[1].get<double>() - u[0].get<double>();
   }
@@ -177,6 +241,27 @@ TEST(ContourGrid, TheNodePlansEveryPatchAlongItsOwnDirection) {
                              {{"surfaces", std::make_shared<Surfaces>()}});
             }),
             "path.contour_grid: there are no patches");
+}
+
+// The part's own mesh 0.004 mm under the patch: the scallop is held to h - 0.004 on the patch (a
+// facet's sag on a curved part is like this), and never to less than h / 2.
+TEST(ContourGrid, WhereThePartLiesOffThePatchTheLimitIsLoweredByThatMuch) {
+  auto s = std::make_shared<Surfaces>();
+  s->patches.push_back(test::flat_patch({0, 0, 5}, {20, 0, 5}, {0, 10, 5}, {20, 10, 5}, {0, 0, 1}));
+  s->patches.back().rows = s->patches.back().cols = 2;
+  for (const auto& [depth, target] : {std::pair{0.004, 0.006}, std::pair{1.0, 0.005}}) {
+    auto part = std::make_shared<Mesh>();
+    part->vertices = {{-5, -5, 5 - depth}, {25, -5, 5 - depth}, {25, 15, 5 - depth}, {-5, 15, 5 - depth}};
+    part->add_face({0, 1, 2, 3});
+    auto out = test::run_node(path_nodes::make_contour_grid_node(),
+                              {{"tool_radius", 2}, {"scallop_height", 0.01}, {"chord_error", 0.005}},
+                              {{"surfaces", s}, {"part", part}});
+    const auto& r = std::dynamic_pointer_cast<const Report>(out.at("report"))->data["patches"][0];
+    EXPECT_NEAR(r["part_distance_max"].get<double>(), depth, 1e-9);
+    EXPECT_NEAR(r["scallop_target"].get<double>(), target, 1e-12);
+    EXPECT_LE(r["scallop_max"].get<double>(), target);
+    EXPECT_GT(r["scallop_max"].get<double>(), 0.9 * target);
+  }
 }
 
 }  // namespace
