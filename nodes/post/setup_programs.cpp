@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
@@ -35,8 +36,29 @@ double lift_clear(Eigen::Vector3d& c, const MeshDistance& part, double r, double
 // Every ball centre of `path` (machine frame) kept off the whole part, and the middles of its
 // moves: a middle that reaches in gets a lifted point of its own, its halves checked again (up to
 // 4 times).
-void keep_off_part(Toolpath& path, const MeshDistance& part, double tolerance, SetupProgram& stats) {
+void keep_off_part(Toolpath& path, const MeshDistance& part, double part_top_z, double tolerance, SetupProgram& stats) {
   const double r = path.tool_radius;
+  // A pass's ends: the tool comes down onto its start and leaves its end straight along +z, so the
+  // ball must pass the part on the way, not only its centre line (a compound-angle clamping put
+  // an overhang 0.33 mm into a ball plunging onto a fandisk contour): the end is raised to the
+  // lowest height from which the vertical up to above the part stays r - tolerance off it
+  // (bisection: clear from a height, clear from any above it).
+  const double top = part_top_z + r + 1;
+  auto clear_above = [&](Eigen::Vector3d& contact, const Eigen::Vector3d& n) {
+    const Eigen::Vector3d c = contact + r * n;
+    auto clear_from = [&](double z) {
+      Eigen::Vector3d nearest;
+      std::size_t evaluations = 0;
+      return z >= top || part.least_along(Eigen::Vector3d(c.x(), c.y(), z), Eigen::Vector3d(c.x(), c.y(), top), r / 4,
+                                          r - tolerance, 1e-4, nearest, evaluations, false) >= r - tolerance;
+    };
+    if (clear_from(c.z())) return;
+    double low = c.z(), high = top;
+    while (high - low > 1e-4) (clear_from(0.5 * (low + high)) ? high : low) = 0.5 * (low + high);
+    contact.z() += high - c.z();
+    ++stats.lifted;
+    stats.lift_max = std::max(stats.lift_max, high - c.z());
+  };
   auto lift_point = [&](Eigen::Vector3d& contact, const Eigen::Vector3d& n) {
     Eigen::Vector3d c = contact + r * n;
     const double lift = lift_clear(c, part, r, tolerance);
@@ -48,6 +70,10 @@ void keep_off_part(Toolpath& path, const MeshDistance& part, double tolerance, S
   };
   for (ToolpathPass& pass : path.passes) {
     for (std::size_t k = 0; k < pass.contact.size(); ++k) lift_point(pass.contact[k], pass.normal[k]);
+    if (!pass.contact.empty()) {
+      clear_above(pass.contact.front(), pass.normal.front());
+      clear_above(pass.contact.back(), pass.normal.back());
+    }
     ToolpathPass out;
     // A ball centre the tool cannot be at: too near the part, or under it (inside the solid or
     // under an overhang: the unsigned distance alone misses a centre deep inside).
@@ -161,7 +187,9 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     const MeshDistance distance(placed);
     LinkOptions linking = link;
     if (placed.num_faces() > 0) {
-      keep_off_part(local, distance, tolerance, prog);
+      double top_z = -std::numeric_limits<double>::infinity();
+      for (const auto& v : placed.vertices) top_z = std::max(top_z, v.z());
+      keep_off_part(local, distance, top_z, tolerance, prog);
       // Links kept as far off the part as the balls: checked against its faces, not only its
       // vertices.
       const double r = path.tool_radius;

@@ -10,7 +10,9 @@
 // move's nearest approach to the part is found exactly (MeshDistance::least_along), and where it is
 // too near (or, checked at eighths, a point of it lies under the part) a lifted point is
 // inserted and both halves are checked again (6 times at most); a move that still reaches in
-// (a narrow neck above a free pocket) has its lower end raised to its upper end's height. The
+// (a narrow neck above a free pocket) has its lower end raised to its upper end's height. A
+// pass's first and last ball, where the tool comes down and goes up along +z, is raised until
+// that vertical keeps the ball as far off the part (an overhang beside it, not only above it). The
 // lifts are counted (stock left). Links are kept as far off the part (checked against its
 // vertices and its faces), and the clearance plane set above its points (link.h).
 #pragma once

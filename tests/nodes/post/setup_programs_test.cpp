@@ -132,6 +132,46 @@ TEST(SetupPrograms, ABallAgainstAWallIsLiftedOverIt) {
   for (const V& t : tips(programs[0].gcode)) EXPECT_GE(distance(t + V(0, 0, 2)), 2 - 0.0025 - 1e-4);
 }
 
+TEST(SetupPrograms, APassEndUnderAnOverhangIsRaisedUntilTheBallGoesUpClear) {
+  // A floor (z <= 0) and a block overhanging beside it ([12, 20] x [0, 10] x [10, 11]). A pass at
+  // x = 10 on the floor: its balls (r = 3) are clear there and nothing lies straight above their
+  // centres, but a ball going up to the clearance plane passes 2 mm from the block's side. Its
+  // ends are raised to the lowest height whose vertical clears the block's top edge by
+  // r - e/4: 11 + sqrt((3 - 0.0025)^2 - 2^2) = 13.2327 for the centre.
+  Mesh part = box({0, 0, -5}, {10, 10, 0});
+  const Mesh ledge = box({12, 0, 10}, {20, 10, 11});
+  const auto base = static_cast<std::uint32_t>(part.vertices.size());
+  part.vertices.insert(part.vertices.end(), ledge.vertices.begin(), ledge.vertices.end());
+  for (std::size_t f = 0; f < ledge.num_faces(); ++f) {
+    std::vector<std::uint32_t> c;
+    for (std::size_t k = 0; k < ledge.face_size(f); ++k) c.push_back(ledge.face(f)[k] + base);
+    part.add_face_range(c);
+  }
+  Toolpath path;
+  path.tool_radius = 3, path.scallop_height = 0.05, path.chord_error = 0.01;
+  ToolpathPass pass;
+  pass.contact = {V(10, 4, 0), V(10, 6, 0)};
+  pass.normal = {V::UnitZ(), V::UnitZ()};
+  path.passes = {pass};
+  scallop::Setup top;
+  top.name = "1: +z", top.axis = V::UnitZ(), top.rotation.setIdentity(), top.translation.setZero(), top.patches = {0};
+  const auto programs = setup_programs(path, {1}, {top}, part, {}, {});
+  ASSERT_EQ(programs.size(), 1u);
+  const double centre_z = 11 + std::sqrt(2.9975 * 2.9975 - 4);
+  EXPECT_NEAR(programs[0].lift_max, centre_z - 3, 2e-4);
+  // Every move of the program, rapids and plunges included, keeps the ball r - e/4 off the part.
+  const MeshDistance distance(part);
+  const std::vector<V> t = tips(programs[0].gcode);
+  ASSERT_GE(t.size(), 3u);
+  for (std::size_t k = 1; k < t.size(); ++k) {
+    V nearest;
+    std::size_t evaluations = 0;
+    EXPECT_GE(distance.least_along(t[k - 1] + V(0, 0, 3), t[k] + V(0, 0, 3), 0.5, 3, 1e-5, nearest, evaluations, false),
+              3 - 0.0025 - 2e-4)
+        << "move " << k << " to " << t[k].transpose();
+  }
+}
+
 TEST(SetupPrograms, ABoxInFiveClampingsHasEveryFaceButItsBaseCutWithinH) {
   // The box [0, 40] x [0, 30] x [0, 12] on its base: top and four sides, a patch each; five
   // setups, five programs. Their ball centres, read back from the G-code and taken to the part
