@@ -101,19 +101,23 @@ Mesh box(const V& lo, const V& hi) {
   return m;
 }
 
+// Two meshes as one (their faces side by side, nothing welded).
+Mesh joined(Mesh a, const Mesh& b) {
+  const auto base = static_cast<std::uint32_t>(a.vertices.size());
+  a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (std::size_t f = 0; f < b.num_faces(); ++f) {
+    std::vector<std::uint32_t> c;
+    for (std::size_t k = 0; k < b.face_size(f); ++k) c.push_back(b.face(f)[k] + base);
+    a.add_face_range(c);
+  }
+  return a;
+}
+
 TEST(SetupPrograms, ABallAgainstAWallIsLiftedOverIt) {
   // A 10 x 10 floor (z = 0) against a wall 5 mm high at x = 10: the contour along the floor's
   // edge x = 10 would put the ball (r = 2) into the wall; kept off, it rides on the wall's top
   // edge: its centre at z = 5 + 2 there, a lift of 5.
-  Mesh part = box({0, 0, -5}, {10, 10, 0});
-  const Mesh wall = box({10, 0, -5}, {15, 10, 5});
-  const auto base = static_cast<std::uint32_t>(part.vertices.size());
-  part.vertices.insert(part.vertices.end(), wall.vertices.begin(), wall.vertices.end());
-  for (std::size_t f = 0; f < wall.num_faces(); ++f) {
-    std::vector<std::uint32_t> c;
-    for (std::size_t k = 0; k < wall.face_size(f); ++k) c.push_back(wall.face(f)[k] + base);
-    part.add_face_range(c);
-  }
+  const Mesh part = joined(box({0, 0, -5}, {10, 10, 0}), box({10, 0, -5}, {15, 10, 5}));
   ContourGridOptions o;
   o.tool_radius = 2, o.scallop_height = 0.05, o.chord_error = 0.01;
   const SurfacePatch floor = test::flat_patch({0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {10, 10, 0}, {0, 0, 1});
@@ -138,15 +142,7 @@ TEST(SetupPrograms, APassEndUnderAnOverhangIsRaisedUntilTheBallGoesUpClear) {
   // centres, but a ball going up to the clearance plane passes 2 mm from the block's side. Its
   // ends are raised to the lowest height whose vertical clears the block's top edge by
   // r - e/4: 11 + sqrt((3 - 0.0025)^2 - 2^2) = 13.2327 for the centre.
-  Mesh part = box({0, 0, -5}, {10, 10, 0});
-  const Mesh ledge = box({12, 0, 10}, {20, 10, 11});
-  const auto base = static_cast<std::uint32_t>(part.vertices.size());
-  part.vertices.insert(part.vertices.end(), ledge.vertices.begin(), ledge.vertices.end());
-  for (std::size_t f = 0; f < ledge.num_faces(); ++f) {
-    std::vector<std::uint32_t> c;
-    for (std::size_t k = 0; k < ledge.face_size(f); ++k) c.push_back(ledge.face(f)[k] + base);
-    part.add_face_range(c);
-  }
+  const Mesh part = joined(box({0, 0, -5}, {10, 10, 0}), box({12, 0, 10}, {20, 10, 11}));
   Toolpath path;
   path.tool_radius = 3, path.scallop_height = 0.05, path.chord_error = 0.01;
   ToolpathPass pass;
