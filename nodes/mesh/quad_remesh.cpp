@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "nodes/geom/kd_tree.h"
+#include "nodes/geom/segment.h"
 #include "nodes/geom/union_find.h"
 #include "nodes/mesh/external_process.h"
 #include "nodes/mesh/face_geometry.h"
@@ -193,13 +194,6 @@ std::size_t match_orientation(Mesh& quads, const Mesh& input) {
   return reversed;
 }
 
-double point_segment_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const Eigen::Vector3d ab = b - a;
-  const double len2 = ab.squaredNorm();
-  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-  return (p - (a + t * ab)).norm();
-}
-
 double mean_edge_length(const Mesh& m) {
   const MeshEdges edges = mesh_edges(m);
   double sum = 0;
@@ -234,7 +228,7 @@ void measure_features(const Mesh& input, const std::vector<std::array<std::uint3
     for (int i = 0; i < pieces; ++i) {
       const Eigen::Vector3d p = pa + (i + 0.5) / pieces * (pb - pa);
       const bool on = std::any_of(targets.begin(), targets.end(), [&](const Segment& s) {
-        return (p - s.mid).squaredNorm() <= s.reach * s.reach && point_segment_distance(p, s.a, s.b) <= tol;
+        return (p - s.mid).squaredNorm() <= s.reach * s.reach && segment_distance(p, s.a, s.b) <= tol;
       });
       if (on) report.feature_length_on_quad_edges += len / pieces;
     }

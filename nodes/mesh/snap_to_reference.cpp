@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "nodes/geom/segment.h"
 #include "nodes/mesh/face_geometry.h"
 #include "nodes/mesh/mesh_distance.h"
 #include "nodes/mesh/mesh_topology.h"
@@ -33,12 +34,6 @@ std::vector<int> degrees(std::size_t vertices, const std::vector<Edge>& edges) {
   std::vector<int> d(vertices, 0);
   for (Edge e : edges) ++d[e[0]], ++d[e[1]];
   return d;
-}
-
-Eigen::Vector3d closest_on_segment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const Eigen::Vector3d ab = b - a;
-  const double t = ab.squaredNorm() > 0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-  return a + t * ab;
 }
 
 // Pieces of segments, none longer than a cell, filed by the cells their bounding boxes touch:

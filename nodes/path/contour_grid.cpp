@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "nodes/geom/segment.h"
 #include "nodes/path/step_size.h"
 
 namespace scallop {
@@ -185,9 +186,8 @@ class ContourPlanner {
         bool dips = false;
         for (double q : {0.25, 0.5, 0.75}) {
           const SurfaceSample x = f_(a + (tau + q * dtau) * delta);
-          const Eigen::Vector3d m = x.position + r_ * x.normal, seg = c1 - c0;
-          const double s = seg.squaredNorm() > 0 ? std::clamp((m - c0).dot(seg) / seg.squaredNorm(), 0.0, 1.0) : 0.0;
-          const Eigen::Vector3d off = c0 + s * seg - m;
+          const Eigen::Vector3d m = x.position + r_ * x.normal;
+          const Eigen::Vector3d off = closest_on_segment(m, c0, c1) - m;
           dev = std::max(dev, off.norm());
           dips = dips || (off.dot(x.normal) < 0 && off.norm() > inward_limit);
         }

@@ -55,8 +55,9 @@ NodeDecl make_contour_grid_node() {
     if (np == 0) throw NodeError("path.contour_grid: there are no patches");
     // The surface is not the part: where it lies d off the part's faces (a facet's sag on a curved
     // part, the fit between vertices), the scallop on the part can be up to d more.
-    std::vector<double> part_distance(np, 0.0);
+    std::vector<double> part_distance(np, 0.0), target(np);
     if (ctx.has_input("part")) part_distance = surface_distance_max(*surfaces, *ctx.input<Mesh>("part"));
+    for (std::size_t p = 0; p < np; ++p) target[p] = o.scallop_height - std::min(part_distance[p], o.scallop_height / 2);
     std::vector<ContourGridResult> results(np);
     std::vector<std::string> errors(np);
     std::atomic<std::size_t> done{0};
@@ -65,7 +66,7 @@ NodeDecl make_contour_grid_node() {
         const SurfacePatch& sp = surfaces->patches[p];
         const BSplinePatch patch(sp.surface, sp.direction);
         ContourGridOptions patch_options = o;
-        patch_options.scallop_height = o.scallop_height - std::min(part_distance[p], o.scallop_height / 2);
+        patch_options.scallop_height = target[p];
         results[p] = plan_contour_grid(patch, patch_options);
       } catch (const std::invalid_argument& e) {
         errors[p] = e.what();
@@ -88,7 +89,7 @@ NodeDecl make_contour_grid_node() {
       r["patch"] = p;
       if (ctx.has_input("part")) {
         r["part_distance_max"] = part_distance[p];
-        r["scallop_target"] = o.scallop_height - std::min(part_distance[p], o.scallop_height / 2);
+        r["scallop_target"] = target[p];
         if (part_distance[p] > o.scallop_height / 2)
           ctx.warn("patch " + std::to_string(p) + " lies up to " + std::to_string(part_distance[p]) +
                    " mm off the part's faces, more than h / 2: its contours are planned to h / 2 and may leave more "

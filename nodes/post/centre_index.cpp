@@ -62,13 +62,6 @@ double capsule_entry(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const E
   return best;
 }
 
-double segment_distance(const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  Eigen::Vector3d e = b - a;
-  double ee = e.squaredNorm();
-  double t = ee > 0 ? std::clamp((q - a).dot(e) / ee, 0.0, 1.0) : 0.0;
-  return (a + t * e - q).norm();
-}
-
 CentreIndex::CentreIndex(const std::vector<CentreSegment>& segs, double piece) {
   for (std::size_t i = 0; i < segs.size(); ++i) {
     const CentreSegment& s = segs[i];

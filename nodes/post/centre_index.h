@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "nodes/geom/kd_tree.h"
+#include "nodes/geom/segment.h"
 
 namespace scallop {
 
@@ -24,8 +25,6 @@ struct CentreSegment {
 // never (the ray starts outside that capsule).
 double capsule_entry(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& a,
                      const Eigen::Vector3d& b, double r);
-// Distance from q to the segment [a, b].
-double segment_distance(const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b);
 
 // The segments cut into pieces no longer than `piece`, with a k-d tree over their midpoints.
 class CentreIndex {
