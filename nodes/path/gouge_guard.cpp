@@ -12,6 +12,7 @@
 #include <string>
 
 #include "nodes/geom/kd_tree.h"
+#include "nodes/path/step_size.h"
 
 namespace scallop {
 
@@ -116,8 +117,15 @@ struct Tally {
 
 class PassGuard {
  public:
-  PassGuard(const BallClearance& clearance, double r, double tol, double chord_tol, int max_splits)
-      : clearance_(clearance), r_(r), tol_(tol), chord_tol_(chord_tol), max_splits_(max_splits) {}
+  // tol > 0: how far a position may reach in; <= 0: what the planner meant it to reach (the
+  // chord budget's reach for the surface's uncertainty there) plus e/4 for the two fits' difference.
+  PassGuard(const BallClearance& clearance, double r, double e, double tol, double chord_tol, int max_splits)
+      : clearance_(clearance), r_(r), e_(e), tol_(tol), chord_tol_(chord_tol), max_splits_(max_splits) {}
+
+  double position_tolerance(const BallClearance::Result& x) const {
+    if (tol_ > 0) return tol_;
+    return 0.25 * e_ + (x.on_surface ? chord_budget(e_, x.uncertainty).reach : 0.0);
+  }
 
   // How far the ball reaches into the band it must clear: the surface raised by its uncertainty
   // (a real surface that much higher must not be cut either); > 0: too deep.
@@ -126,11 +134,11 @@ class PassGuard {
   }
 
   // Lifts the sample's ball until it only touches that band, when it reaches more than
-  // `allowed` into it; true when it was lifted.
+  // `allowed` into it (< 0: position_tolerance); true when it was lifted.
   bool lift_if_needed(Sample& s, double allowed, Tally& t) const {
     Eigen::Vector3d c = s.contact + r_ * s.normal;
     auto res = clearance_(c, s.contact);
-    if (!(reach(res) > allowed)) return false;
+    if (!(reach(res) > (allowed < 0 ? position_tolerance(res) : allowed))) return false;
     if (reach(res) > t.deepest) t.deepest = reach(res), t.deepest_at = s.contact;
     const Eigen::Vector3d planned = c;
     const double z0 = c.z();
@@ -189,7 +197,7 @@ class PassGuard {
     for (std::size_t i = 0; i < s.size(); ++i) {
       s[i] = {p.contact[i], p.normal[i], has_uv ? p.uv[i] : Eigen::Vector2d::Zero()};
       ++t.positions;
-      lift_if_needed(s[i], tol_, t);
+      lift_if_needed(s[i], -1, t);
     }
     std::vector<Sample> out;
     out.reserve(s.size());
@@ -208,7 +216,7 @@ class PassGuard {
 
  private:
   const BallClearance& clearance_;
-  double r_, tol_, chord_tol_;
+  double r_, e_, tol_, chord_tol_;
   int max_splits_;
 };
 
@@ -226,14 +234,14 @@ GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearan
                               const GougeGuardOptions& o) {
   path.check_passes();
   const double r = path.tool_radius, e = path.chord_error;
-  const double tol = o.tolerance > 0 ? o.tolerance : 0.25 * e;
+  const double tol = o.tolerance;  // <= 0: per position (PassGuard::position_tolerance)
   const double chord_tol = o.chord_tolerance > 0 ? o.chord_tolerance : 0.95 * e;
   if (o.max_splits < 0) throw std::invalid_argument("max_splits must be >= 0");
 
   GougeGuardResult res;
   res.path = path;
   const std::size_t n = path.passes.size();
-  PassGuard guard(clearance, r, tol, chord_tol, o.max_splits);
+  PassGuard guard(clearance, r, e, tol, chord_tol, o.max_splits);
   Tally total;
   std::mutex mu;
   std::atomic<std::size_t> done{0};
@@ -260,7 +268,8 @@ GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearan
   }
 
   nlohmann::json rep;
-  rep["tolerance"] = tol;
+  rep["tolerance"] = tol > 0 ? tol : 0.25 * e;
+  rep["tolerance_adds_planned_reach"] = !(tol > 0);
   rep["chord_tolerance"] = chord_tol;
   rep["positions_checked"] = total.positions;
   rep["moves_checked"] = total.moves;

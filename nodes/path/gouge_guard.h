@@ -11,7 +11,8 @@
 // cloud's points themselves within r of c. clearance(c) = distance to the surface − r, and the
 // ball must clear the surface by its uncertainty δ there (0 on a clean cloud; grown beyond the
 // cloud's edge, where the field is extrapolated): the real surface may be δ higher. A position
-// reaching more than `tolerance` into that band (δ − clearance > tolerance) is lifted along +z
+// reaching more than `tolerance` into that band (δ − clearance > tolerance; by default e/4 plus
+// the reach the planner's chord budget leaves there, min(δ, 0.65 e), step_size.h) is lifted along +z
 // until it clears it by δ (what post.simulate's gouge bound counts), and a move whose quarter
 // points (and points 0.5 mm apart on longer moves) reach more than chord_tolerance into it
 // gets a lifted point inserted at its worst one
@@ -57,7 +58,8 @@ class BallClearance {
 };
 
 struct GougeGuardOptions {
-  double tolerance = 0;        // mm a planned position may reach in before it is lifted; <= 0: e/4
+  double tolerance = 0;        // mm a planned position may reach in before it is lifted;
+                               // <= 0: e/4 + chord_budget(e, δ).reach
   double chord_tolerance = 0;  // mm a move may reach in before a point is inserted; <= 0: 0.95 e
   int max_splits = 3;          // how often a move may be halved
   std::function<void(double)> progress;

@@ -12,7 +12,7 @@ namespace scallop::path_nodes {
 NodeDecl make_gouge_guard_node() {
   NodeDecl d;
   d.type = "path.gouge_guard";
-  d.version = 3;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge
+  d.version = 4;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge; 4: a position may reach in by what the planner meant (chord budget) + e/4
                   // 3: fails where a ball would have to be lifted by more than 3 tool radii
   d.description =
       "checks every planned ball position and the middle of every move against the cloud's "
@@ -27,7 +27,9 @@ NodeDecl make_gouge_guard_node() {
   d.options<GougeGuardOptions>()
       .number("tolerance", &GougeGuardOptions::tolerance, 0, 10, "mm",
               "how far the surface (raised by its uncertainty) may come inside the ball at a planned "
-              "position before it is lifted; 0: a quarter of the path's chord error")
+              "position before it is lifted; 0: a quarter of the path's chord error plus what the planner "
+              "meant the ball to reach into that band there (min(uncertainty, 0.65 e): the stock "
+              "it keeps for the uncertainty covers only the rest of it)")
       .number("chord_tolerance", &GougeGuardOptions::chord_tolerance, 0, 10, "mm",
               "how far the surface (raised by its uncertainty) may come inside the ball in the middle "
               "of a move before a lifted point is inserted; 0: 0.95 of the path's chord error")

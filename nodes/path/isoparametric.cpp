@@ -105,7 +105,7 @@ struct VertexInfo {
 
 struct Derivs {
   Eigen::Vector3d p, n, rs, rt, rss, rst, rtt;
-  double uncertainty = 0;  // of the surface there (SurfaceSample::uncertainty)
+  double uncertainty = 0;  // of the surface there: the larger of the planner's and the height field's
   double fit_gap = 0;      // Planner::fit_gap there
 };
 
@@ -152,42 +152,42 @@ class BallLifter {
 
 // The surface the planner sees (the cloud, through the (u,v) interpolant) may lie up to
 // delta off the real one, either way: delta = the larger of the surface_error option and the
-// cloud's own per-point uncertainty there (set by cloud.denoise). Then
-//   real scallop <= scallop on the estimate + delta, so the passes keep that <= h - delta/4;
-//   real gouge   <= chord overcut + delta - stock,  where the ball is kept `stock` above the
-//                                                   estimate so that this stays <= 0.9 e - delta/2.
-// With delta = 0: 90 % of e for the chord overcut (10 % is left for the interpolant's own error:
-// on the noisy bundled example the certificate's fit differs from the planner's by ~0.001 mm)
-// and no stock. With delta > 0 the overcut budget shrinks first (down to e/4, which only costs
-// forward points), and only the rest becomes stock (which costs side step).
+// cloud's own per-point uncertainty there (set by cloud.denoise, a bound on noise and shape bias).
+// Then
+//   real scallop <= scallop on the estimate + stock + delta, kept <= h;
+//   real gouge   <= chord overcut + delta - stock, kept <= 0.9 e (chord_budget, step_size.h).
+// The planner's fit is also checked against the cloud's height field, the surface the gouge guard
+// and the certificate use: where they disagree by fit_gap (see Planner::fit_gap), the scallop the
+// certificate sees may be that much higher, so it comes off the scallop limit too (up to h/4).
+// The gouge side needs no such margin: the guard lifts balls against that height field.
 struct Margins {
   double delta;     // mm, how far the estimate may be off here
-  double scallop;   // mm, the limit for the scallop on the estimate (stock included): h - 1.25 delta
+  double scallop;   // mm, the limit for the scallop on the estimate (stock included): h - delta - gap
   double overcut;   // mm, the chord overcut allowed
   double stock;     // mm, how far the ball is kept above the estimate
 };
-// fit_gap: how far the planner's fit lies from the cloud's height field there (see
-// Planner::fit_gap); it comes off the scallop limit (up to h/4), not off the chord budget (the
-// gouge guard downstream checks the ball against that height field).
 Margins margins(const IsoparametricOptions& o, double uncertainty, double fit_gap = 0) {
   Margins m;
   m.delta = std::max(o.surface_error, uncertainty);
   const double h = o.scallop_height * o.safety_factor;
-  // A quarter of delta more is kept off the scallop limit for the same reason as below (the
-  // certificate's scallop on the noisy catalog ran up to 0.13 delta over the planner's).
-  m.scallop = h - std::max(1.25 * m.delta, std::min(fit_gap, 0.25 * h));
-  m.overcut = std::max(0.25 * o.chord_error, 0.9 * o.chord_error - m.delta);
-  // Half of delta more is kept off the gouge limit: fits of the same denoised cloud from other
-  // neighbourhoods (post.simulate's height field) differ from the planner's by one or two of its
-  // standard errors (delta / 4) where the cloud is sparse (measured: 0.0033 mm with delta = 0.0095
-  // on the bundled example), and the certificate must agree that the real gouge stays under e.
-  m.stock = std::max(0.0, m.overcut + 1.5 * m.delta - 0.9 * o.chord_error);
+  m.scallop = h - (m.delta + std::min(fit_gap, 0.25 * h));
+  const ChordBudget b = chord_budget(o.chord_error, m.delta);
+  m.overcut = b.overcut;
+  m.stock = b.stock;
   return m;
 }
 // Too uncertain to plan for: less than a fifth of h would be left for the scallop itself.
 bool too_uncertain(const IsoparametricOptions& o, const Margins& m) {
   return m.scallop - m.stock < 0.2 * o.scallop_height * o.safety_factor;
 }
+// The smallest scallop height (mm) a surface known to +-delta can be planned for: the h with
+// 0.2 h = h - delta - stock (Margins), rounded up to a micron.
+double plannable_scallop_height(const IsoparametricOptions& o, double delta) {
+  const double d = std::max(o.surface_error, delta);
+  return std::ceil(1000 * (d + chord_budget(o.chord_error, d).stock) / (0.8 * o.safety_factor)) / 1000;
+}
+// The planner refuses when more than 1 / this of the cloud's points are too uncertain.
+constexpr std::size_t kMostlyCertainDivisor = 20;
 
 class Planner {
  public:
@@ -211,10 +211,14 @@ class Planner {
   // the (u, v) map straddles a corner or a squeezed part of the map: measured 0.002 mm beside a
   // 110 degree corner of the freeform patch (a clean cloud), where the scallop came out 3 % over
   // h without it.
-  double fit_gap(const SurfaceSample& x) const {
-    double z;
+  // field_delta, when given, gets the height field's uncertainty there, as the certificate sees it
+  // (grown beyond the cloud's edge; 0 without a model).
+  double fit_gap(const SurfaceSample& x, double* field_delta = nullptr) const {
+    double z, u = 0;
     Eigen::Vector3d n;
-    if (!model_ || !model_->eval(x.position.x(), x.position.y(), z, n)) return 0;
+    const bool on = model_ && model_->eval(x.position.x(), x.position.y(), z, n, false, &u);
+    if (field_delta) *field_delta = u;
+    if (!on) return 0;
     const double gap = std::abs(x.position.z() - z) * std::abs(x.normal.z());
     double seen = fit_gap_max_.load(std::memory_order_relaxed);
     while (gap > seen && !fit_gap_max_.compare_exchange_weak(seen, gap)) {
@@ -224,10 +228,10 @@ class Planner {
   double fit_gap_max() const { return fit_gap_max_.load(); }
   Margins margin(const SurfaceSample& x) const { return margins(o_, x.uncertainty); }
   // How far a cloud point may reach into the ball before it is lifted: `fraction` of e, and no
-  // more than the real gouge allows when the point itself may be delta too low (0.9 e - 1.5 delta
-  // as in Margins; negative, i.e. a clearance, where 1.5 delta > 0.9 e).
+  // more than the real gouge allows when the point itself may be delta too low (0.9 e - delta
+  // as in Margins; negative, i.e. a clearance, where delta > 0.9 e).
   double lift_tolerance(double delta, double fraction) const {
-    return std::min(fraction * o_.chord_error, 0.9 * o_.chord_error - 1.5 * delta);
+    return std::min(fraction * o_.chord_error, 0.9 * o_.chord_error - delta);
   }
   // The ball centre over the estimated surface, the stock above it (see Margins).
   Eigen::Vector3d centre(const SurfaceSample& x) const {
@@ -259,8 +263,9 @@ class Planner {
     }
     d.p = x.position;
     d.n = x.normal;
-    d.uncertainty = x.uncertainty;
-    d.fit_gap = fit_gap(x);
+    double field_delta;
+    d.fit_gap = fit_gap(x, &field_delta);
+    d.uncertainty = std::max(x.uncertainty, field_delta);
     return d;
   }
 
@@ -645,11 +650,13 @@ class Planner {
             if (v > gmax) gmax = v, fmax = fm;
           }
         }
-        // on the real surface the scallop may be up to delta higher (and a quarter of delta is
-        // kept for the certificate's own fit, see Margins)
+        // on the real surface the scallop may be up to delta higher, and on the certificate's
+        // height field up to fit_gap (see Margins)
         SurfaceSample w;
         g(fmax, &w);
-        best[i] = gmax + h_ - margins(o_, w.uncertainty, fit_gap(w)).scallop;
+        double field_delta;
+        const double gap = fit_gap(w, &field_delta);
+        best[i] = gmax + h_ - margins(o_, std::max(w.uncertainty, field_delta), gap).scallop;
         where[i] = w.position;
       }
     });
@@ -886,6 +893,20 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
         "the cloud's surface is known only to +-" + fmt(delta_median) + " mm (median; cloud.denoise's "
         "uncertainty), too much of the scallop height " + fmt(o.scallop_height) +
         " mm to promise it: denoise with more neighbours, scan more finely or raise scallop_height");
+  // Where more than a twentieth of the points are too uncertain, nearly every strip crosses some
+  // of them and fails at every side step (measured: a noisy plane, sigma 0.02, h 0.06: 28 % of
+  // its points, all 155 strips, 550 s, a certificate that fails); say so at once, with the
+  // scallop height that 95 % of the points would allow.
+  if (uncertain > deltas.size() / kMostlyCertainDivisor) {
+    const std::size_t p95 = deltas.size() - 1 - deltas.size() / kMostlyCertainDivisor;
+    std::nth_element(deltas.begin(), deltas.begin() + p95, deltas.end());
+    throw std::invalid_argument(
+        fmt(100.0 * double(uncertain) / double(deltas.size())) + " % of the cloud's points are known "
+        "too poorly for the scallop height " + fmt(o.scallop_height) + " mm (95 % of them to +-" +
+        fmt(deltas[p95]) + " mm, cloud.denoise's uncertainty): scallop_height " +
+        fmt(plannable_scallop_height(o, deltas[p95])) + " mm would leave room for that, or denoise "
+        "with more neighbours or scan more finely");
+  }
   const WorkEstimate work = estimate_work(cloud, neighbors, map, o, margins(o, delta_median));
   if (work.passes > o.max_passes)
     throw std::invalid_argument(
@@ -897,7 +918,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   const UVInterpolator interp(cloud.points, cloud.normals, map.uv, domain, o.interpolation_k,
                               cloud.has_uncertainty() ? &cloud.uncertainty : nullptr);
   const BallLifter lifter(cloud.points, o.tool_radius);
-  const HeightFieldModel model(cloud.points, 20);
+  const HeightFieldModel model(cloud.points, 20, cloud.has_uncertainty() ? &cloud.uncertainty : nullptr);
   // The holes: every loop after the outer one, as the polygon of its points' uv.
   Holes holes;
   std::vector<const std::vector<int>*> hole_loops;

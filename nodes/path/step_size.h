@@ -45,6 +45,27 @@ double forward_interval(double chord_error, double curvature);
 // scallop checks did not see). A quarter of the chord error, at least 1 micron.
 inline double part_clearance_tolerance(double chord_error) { return std::max(0.25 * chord_error, 1e-3); }
 
+// How the chord error e (mm) is shared where the surface estimate may lie up to delta (mm) off
+// the real surface, either way (cloud.denoise's uncertainty: an honest bound, noise and shape
+// bias). 90 % of e is the budget; 10 % is left for the difference between two fits of the same
+// cloud (the planner's and the certificate's). The real surface may be delta higher than the
+// estimate, so a ball touching the estimate may cut delta into it: the chord overcut shrinks first
+// (down to e/4, which only costs forward points), and what is still over 0.9 e becomes stock,
+// a lift of the ball above the estimate. Where delta <= 0.65 e: overcut 0.9 e - delta, stock 0;
+// above: overcut e/4, stock delta - 0.65 e. Either way overcut + delta - stock = 0.9 e.
+struct ChordBudget {
+  double overcut;  // mm the ball-centre chord may dip below the offset surface between positions
+  double stock;    // mm the ball is kept above the estimate
+  double reach;    // mm a planned position may reach into the estimate raised by delta: delta - stock
+};
+inline ChordBudget chord_budget(double chord_error, double delta) {
+  ChordBudget b;
+  b.overcut = std::max(0.25 * chord_error, 0.9 * chord_error - delta);
+  b.stock = std::max(0.0, b.overcut + delta - 0.9 * chord_error);
+  b.reach = delta - b.stock;
+  return b;
+}
+
 // True where a ball of radius r cannot reach the bottom of a concave section: normal
 // curvature radius below r (1 + r kappa <= 0).
 bool ball_cannot_reach(double tool_radius, double kappa);

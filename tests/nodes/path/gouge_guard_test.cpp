@@ -1,4 +1,5 @@
 #include "nodes/path/gouge_guard.h"
+#include "nodes/path/step_size.h"
 
 #include <gtest/gtest.h>
 
@@ -173,6 +174,29 @@ TEST(GougeGuard, LiftedBallsClearAnUncertainSurfaceByItsUncertainty) {
   EXPECT_NEAR(res.report["highest_lift"].get<double>(), 0.06 / kPlaneNormal.z(), 1e-6);
   // planned touching the estimate, every ball reaches 0.01 into the band and is lifted
   EXPECT_EQ(guard_gouges(plane_pass(0.5), clearance, {}).report["lifted_positions"], 21);
+
+  // What the planner keeps for delta = e = 0.01 (chord_budget): stock 0.0035, so its balls reach
+  // 0.0065 into the band, and the rest of 0.9 e goes to the chord's overcut. The guard lets them
+  // be, and lifts a ball that reaches in more than e/4 beyond that.
+  const ChordBudget budget = chord_budget(0.01, 0.01);
+  EXPECT_NEAR(budget.stock, 0.0035, 1e-15);
+  EXPECT_NEAR(budget.reach, 0.0065, 1e-15);
+  EXPECT_NEAR(budget.overcut + 0.01 - budget.stock, 0.009, 1e-15);
+  auto with_stock = [&](double stock) {
+    auto path = plane_pass(0.5);
+    for (auto& c : path.passes[0].contact) c += stock * kPlaneNormal;
+    return path;
+  };
+  EXPECT_EQ(guard_gouges(with_stock(budget.stock), clearance, {}).report["lifted_positions"], 0);
+  EXPECT_EQ(guard_gouges(with_stock(budget.stock - 0.0024), clearance, {}).report["lifted_positions"], 0);
+  EXPECT_EQ(guard_gouges(with_stock(budget.stock - 0.0026), clearance, {}).report["lifted_positions"], 21);
+  // a tolerance given is the tolerance everywhere
+  GougeGuardOptions strict;
+  strict.tolerance = 0.001;
+  EXPECT_EQ(guard_gouges(with_stock(budget.stock), clearance, strict).report["lifted_positions"], 21);
+  // on a clean cloud (delta 0) nothing is added to e/4
+  EXPECT_NEAR(chord_budget(0.01, 0).reach, 0, 1e-15);
+  EXPECT_NEAR(chord_budget(0.01, 0).overcut, 0.009, 1e-15);
 }
 
 TEST(GougeGuard, BeyondTheCloudsEdgeTheExtrapolationIsLessCertain) {

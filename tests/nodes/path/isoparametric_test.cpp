@@ -288,11 +288,12 @@ TEST(Isoparametric, WorkOverTheBudgetIsRefusedBeforePlanningWithTheEstimate) {
 
 // A surface known only to +-delta: on a flat patch the margins have closed forms. With r = 3,
 // h = 0.01, e = 0.005 and delta = 0.004: the chord overcut allowed is max(e/4, 0.9 e - delta) =
-// 0.00125, the ball is kept stock = 0.00125 + 1.5 delta - 0.9 e = 0.00275 above the estimate, and
-// the scallop on the estimate (stock included) may reach h - 1.25 delta = 0.005: the passes are
-// exactly the cusp spacing of a scallop of 0.005 - 0.00275 = 0.00225 apart.
+// 0.00125, the ball is kept stock = 0.00125 + delta - 0.9 e = 0.00075 above the estimate (so that
+// overcut + delta - stock = 0.9 e), and the scallop on the estimate (stock included) may reach
+// h - delta = 0.006: the passes are exactly the cusp spacing of a scallop of 0.006 - 0.00075 =
+// 0.00525 apart.
 TEST(Isoparametric, SurfaceUncertaintyIsKeptAsAMargin) {
-  const double delta = 0.004, stock = 0.00275, cusp = 0.00225;
+  const double delta = 0.004, stock = 0.00075, cusp = 0.00525;
   IsoparametricOptions o = fine_options();
   Input from_cloud = flat();
   from_cloud.cloud.uncertainty.assign(from_cloud.cloud.size(), delta);
@@ -313,12 +314,12 @@ TEST(Isoparametric, SurfaceUncertaintyIsKeptAsAMargin) {
     EXPECT_NEAR(r["surface_error"]["median"].get<double>(), delta, 1e-15);
     EXPECT_NEAR(r["surface_error"]["stock_at_median"].get<double>(), stock, 1e-12);
     EXPECT_EQ(r["surface_error"]["too_uncertain_points"], 0);
-    // the predicted scallop is the estimate's plus the margins (1.25 delta)
+    // the predicted scallop is the estimate's plus the stock and delta
     EXPECT_LE(r["predicted"]["scallop_max"].get<double>(), 0.01);
     EXPECT_GE(r["predicted"]["scallop_max"].get<double>(), 0.98 * 0.01);
     EXPECT_LE(r["predicted"]["chord_overcut_max"].get<double>(), 0.00125 + 1e-12);
   }
-  // Known to +-0.006: h - 1.25 delta - stock = 0.0025 - 0.00575 is under a fifth of h.
+  // Known to +-0.006: h - delta - stock = 0.004 - 0.00275 is under a fifth of h.
   Input vague = flat();
   vague.cloud.uncertainty.assign(vague.cloud.size(), 0.006);
   EXPECT_EQ(error_of(vague, o),
@@ -332,6 +333,28 @@ TEST(Isoparametric, SurfaceUncertaintyIsKeptAsAMargin) {
   Input odd = flat();
   odd.cloud.uncertainty.assign(5, 0.001);
   EXPECT_EQ(error_of(odd, o), "the cloud has 2501 points but 5 uncertainties");
+}
+
+// A tenth of the points too uncertain for h (the rest exact): nearly every strip would cross some
+// and fail, so the planner refuses at once, with the h that 95 % of the points allow: known to
+// +-0.006, the stock is 0.00125 + 0.006 - 0.9 e = 0.00275 and h - 0.006 - 0.00275 >= 0.2 h needs
+// h >= 0.0109375, rounded up to 0.011. One in thirty is planned around.
+TEST(Isoparametric, AMostlyUncertainCloudIsRefusedWithTheScallopHeightItAllows) {
+  const IsoparametricOptions o = fine_options();
+  Input tenth = flat();
+  tenth.cloud.uncertainty.assign(tenth.cloud.size(), 0.0);
+  for (std::size_t i = 0; i < tenth.cloud.size(); i += 10) tenth.cloud.uncertainty[i] = 0.006;
+  EXPECT_EQ(error_of(tenth, o),
+            "10.036 % of the cloud's points are known too poorly for the scallop height 0.01 mm (95 % of "
+            "them to +-0.006 mm, cloud.denoise's uncertainty): scallop_height 0.011 mm would leave room "
+            "for that, or denoise with more neighbours or scan more finely");
+  IsoparametricOptions allowed = o;
+  allowed.scallop_height = 0.011;
+  EXPECT_EQ(error_of(tenth, allowed), "no error");
+  Input few = flat();
+  few.cloud.uncertainty.assign(few.cloud.size(), 0.0);
+  for (std::size_t i = 0; i < few.cloud.size(); i += 30) few.cloud.uncertainty[i] = 0.006;
+  EXPECT_EQ(error_of(few, o), "no error");
 }
 
 TEST(Isoparametric, ForwardStepOnACylinderKeepsTheChordDeviation) {
