@@ -40,6 +40,13 @@ for radius in (1, 3, 10):
             EXTRA[name] = surfaces.Surface(
                 name, f"ridge of radius {radius} mm, flank slope {slope}, at {angle} deg",
                 crest(radius, slope, angle), surfaces._rect(100, 60), surfaces._rect_inside(100, 60))
+# The bundled example (examples/make_example.py): z = 4 sin(x/12) cos(y/15) + 0.002 x^2 on
+# 0 <= x <= 80, 0 <= y <= 60, to measure the shipped graphs' programs on it.
+EXTRA["example"] = surfaces.Surface(
+    "example", "the bundled freeform_patch.ply: 4 sin(x/12) cos(y/15) + 0.002 x^2 on 80 x 60",
+    lambda x, y: 4.0 * surfaces.sin(x / 12.0) * surfaces.cos(y / 15.0) + 0.002 * x * x,
+    surfaces._rect(80, 60) + np.array([40.0, 30.0]),
+    lambda x, y: (x >= 0) & (x <= 80) & (y >= 0) & (y <= 60))
 # Steep cap: a sphere of radius 30 cut by an irregular outline rho(theta) = 30 (0.983 + 0.0165
 # sin 3 theta) whose rim slopes range from 75 to 88 degrees (a face-like patch steep at its rim).
 CAP_R = 30.0

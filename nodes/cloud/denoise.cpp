@@ -289,9 +289,10 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
       res.points = P;
       res.normals = N;
       res.skipped = true;
-      // left as they are: each point is known as well as the noise lets it be
-      res.uncertainty.assign(n, std::max(kUncertaintyFloor, uncertainty_factor(o.scales) * res.noise_sigma));
-      summarize_uncertainty(res, o.scales);
+      // left as they are: each point is known as well as the noise lets it be (no fit, so no
+      // bias and no noise shared between scales: the one-scale factor, whatever `scales` says)
+      res.uncertainty.assign(n, std::max(kUncertaintyFloor, uncertainty_factor(1) * res.noise_sigma));
+      summarize_uncertainty(res, 1);
       if (progress) progress(1.0);
       return res;
     }

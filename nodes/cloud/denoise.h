@@ -39,10 +39,11 @@ struct DenoiseOptions {
   bool set_normals = true; // output normals from the quadric's gradient
   bool equalize_rim = true; // refit points whose standard error is above 1.15 times the median
                             // (one-sided neighbourhoods near the rim) from 2 k neighbours
-  int scales = 1;           // fits from k / 2^(scales-1) (at least 16) to k neighbours; each
+  int scales = 5;           // fits from k / 2^(scales-1) (at least 16) to k neighbours; each
                             // point keeps the widest one that agrees with the narrower ones
                             // (a Lepski-type rule, see mls_denoise) and its uncertainty counts
-                            // the bias left; 1: k only, the uncertainty counts noise only
+                            // the bias left; 1: k only, the uncertainty counts noise only (not
+                            // honest where the shape is sharp for the neighbourhood: a crest)
   double ici_gamma = 3.0;   // how many noise spreads two nested fits may differ by and agree
                             // (2 narrowed ~10 % of a noisy plane's points by chance, each then
                             // 2-4 times less certain; the bias bound below does not rely on it)
@@ -86,8 +87,7 @@ struct DenoiseResult {
 // One scale (bias not counted): 4. Measured on 50k-point clouds of the plane, waves, dome,
 // saddle and canopy surfaces with sigma = 0.02 mm (k = 301): the largest |error| / standard error
 // was 3.8 to 4.1 inside, up to 4.4 near the canopy's steep rim; but on a rounded crest (radius
-// 3 mm, flanks of slope 0.7) the wide fit's shape bias reached 2.9 times that bound
-// (path.isoparametric keeps 1.25 and 1.5 times it).
+// 3 mm, flanks of slope 0.7) the wide fit's shape bias reached 2.9 times that bound.
 // Several scales (bias bound added): 6. Noise shared by the nested fits of one point (a cluster
 // of noisy samples) can hide part of a bias, and a point's error is its fit's noise and bias at
 // once, so the factor is above the ~4 noise alone needs. Measured largest |error| / uncertainty

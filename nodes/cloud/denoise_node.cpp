@@ -11,7 +11,7 @@ namespace scallop::cloud_nodes {
 NodeDecl make_denoise_node() {
   NodeDecl d;
   d.type = "cloud.denoise";
-  d.version = 5;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty, a 0.1 um floor
+  d.version = 6;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty, a 0.1 um floor; 6: 5 scales by default
   d.description =
       "moving-least-squares denoising: each point projected along its local normal onto a "
       "weighted quadric fitted to its neighbours, at the widest of several scales (k, k/2, ... "
@@ -49,8 +49,9 @@ NodeDecl make_denoise_node() {
                "fits at k, k/2, ... (down to 16 neighbours); each point keeps the widest that "
                "agrees with the narrower ones, so a crest or crease is not flattened, and its "
                "uncertainty is 6 standard errors plus the bias bound from the other scales "
-               "(honest on crests, about twice the single-scale uncertainty on noisy clouds). "
-               "1: one fit of k; uncertainty 4 standard errors, noise only")
+               "(honest on crests, about twice the single-scale uncertainty on noisy clouds; the "
+               "default). 1: one fit of k; uncertainty 4 standard errors, noise only, which a "
+               "crest or crease sharp for the neighbourhood exceeds")
       .flag("normals", &DenoiseOptions::set_normals,
             "set normals from the fitted quadrics (oriented like the input normals, or "
             "+Z); otherwise the input normals are kept");

@@ -495,17 +495,23 @@ TEST(DenoiseNode, AutomaticModeReports) {
   EXPECT_NEAR(sigma, 0.01, 0.0015);
   EXPECT_EQ(report->data.at("k"), choose_denoise_k(sigma, 0.004));
   EXPECT_GT(report->data.at("moved_rms").get<double>(), 0.007);
-  // every point carries its bound: kUncertaintyFactor standard errors of its fit
+  // every point carries its bound: by default (5 scales) kUncertaintyFactorMultiScale standard
+  // errors of its kept fit plus its bias bound
   auto denoised = std::dynamic_pointer_cast<const PointCloud>(out.at("cloud"));
   ASSERT_TRUE(denoised && denoised->has_uncertainty());
   const auto& u = report->data.at("uncertainty");
-  EXPECT_EQ(u.at("factor"), kUncertaintyFactor);
+  EXPECT_EQ(u.at("factor"), kUncertaintyFactorMultiScale);
   const auto worst = std::max_element(denoised->uncertainty.begin(), denoised->uncertainty.end());
   EXPECT_EQ(u.at("max").get<double>(), *worst);
   const Vector3d at = denoised->points[worst - denoised->uncertainty.begin()];
   EXPECT_EQ(u.at("max_at"), (nlohmann::json{at.x(), at.y(), at.z()}));
   EXPECT_GT(u.at("median").get<double>(), 0.0);
-  EXPECT_LT(u.at("median").get<double>(), kUncertaintyFactor * sigma);
+  EXPECT_LT(u.at("median").get<double>(), kUncertaintyFactorMultiScale * sigma);
+  // one scale: kUncertaintyFactor standard errors
+  out = run_node(d, {{"tolerance", 0.004}, {"scales", 1}}, {{"cloud", noisy}});
+  report = std::dynamic_pointer_cast<const Report>(out.at("report"));
+  EXPECT_EQ(report->data.at("uncertainty").at("factor"), kUncertaintyFactor);
+  EXPECT_EQ(report->data.at("bias_max"), 0.0);
   // explicit k: the noise is still estimated (for the uncertainty)
   out = run_node(d, {{"k", 16}}, {{"cloud", noisy}});
   report = std::dynamic_pointer_cast<const Report>(out.at("report"));
