@@ -133,12 +133,13 @@ class PassGuard {
     return (x.on_surface ? x.uncertainty : 0.0) - x.clearance;
   }
 
-  // Lifts the sample's ball until it only touches that band, when it reaches more than
-  // `allowed` into it (< 0: position_tolerance); true when it was lifted.
-  bool lift_if_needed(Sample& s, double allowed, Tally& t) const {
+  // Lifts the sample's ball until it only touches that band, when it reaches into it more than
+  // position_tolerance (a planned position) or at all (a point inserted into a move); true when
+  // it was lifted.
+  bool lift_if_needed(Sample& s, bool planned_position, Tally& t) const {
     Eigen::Vector3d c = s.contact + r_ * s.normal;
     auto res = clearance_(c, s.contact);
-    if (!(reach(res) > (allowed < 0 ? position_tolerance(res) : allowed))) return false;
+    if (!(reach(res) > (planned_position ? position_tolerance(res) : 0.0))) return false;
     if (reach(res) > t.deepest) t.deepest = reach(res), t.deepest_at = s.contact;
     const Eigen::Vector3d planned = c;
     const double z0 = c.z();
@@ -184,7 +185,7 @@ class PassGuard {
     m.normal = ((1 - at) * a.normal + at * b.normal).normalized();
     m.contact = (1 - at) * ca + at * cb - r_ * m.normal;
     m.uv = (1 - at) * a.uv + at * b.uv;
-    lift_if_needed(m, 0, t);
+    lift_if_needed(m, /*planned_position=*/false, t);
     ++t.inserted;
     refine(a, m, depth + 1, out, t);
     out.push_back(m);
@@ -197,7 +198,7 @@ class PassGuard {
     for (std::size_t i = 0; i < s.size(); ++i) {
       s[i] = {p.contact[i], p.normal[i], has_uv ? p.uv[i] : Eigen::Vector2d::Zero()};
       ++t.positions;
-      lift_if_needed(s[i], -1, t);
+      lift_if_needed(s[i], /*planned_position=*/true, t);
     }
     std::vector<Sample> out;
     out.reserve(s.size());

@@ -177,14 +177,16 @@ Margins margins(const IsoparametricOptions& o, double uncertainty, double fit_ga
   return m;
 }
 // Too uncertain to plan for: less than a fifth of h would be left for the scallop itself.
+constexpr double kLeastScallopShare = 0.2;
 bool too_uncertain(const IsoparametricOptions& o, const Margins& m) {
-  return m.scallop - m.stock < 0.2 * o.scallop_height * o.safety_factor;
+  return m.scallop - m.stock < kLeastScallopShare * o.scallop_height * o.safety_factor;
 }
-// The smallest scallop height (mm) a surface known to +-delta can be planned for: the h with
-// 0.2 h = h - delta - stock (Margins), rounded up to a micron.
+// The smallest scallop height (mm) a surface known to +-delta can be planned for: the h that
+// leaves exactly that share, h - delta - stock (Margins) = 0.2 h, rounded up to a micron.
 double plannable_scallop_height(const IsoparametricOptions& o, double delta) {
   const double d = std::max(o.surface_error, delta);
-  return std::ceil(1000 * (d + chord_budget(o.chord_error, d).stock) / (0.8 * o.safety_factor)) / 1000;
+  return std::ceil(1000 * (d + chord_budget(o.chord_error, d).stock) /
+                   ((1 - kLeastScallopShare) * o.safety_factor)) / 1000;
 }
 // The planner refuses when more than 1 / this of the cloud's points are too uncertain.
 constexpr std::size_t kMostlyCertainDivisor = 100;
