@@ -65,6 +65,10 @@ def main():
     for surface in args.surfaces.split(","):
         extra = not surface in ALL
         r = 2.0 if surface == "bowl" else 4.0
+        # the limits the graph runs with, --set included, are the limits verify.py measures against
+        limits = {"scallop_height": "0.05", "chord_error": "0.01"}
+        limits.update(kv.split("=", 1) for kv in args.set if kv.split("=", 1)[0] in limits)
+        h, e = limits["scallop_height"], limits["chord_error"]
         for noise in args.noise.split(","):
             tag = f"{surface}" + ("" if float(noise) == 0 else f"_noise{noise}")
             cloud = os.path.join(args.work, tag + ".ply")
@@ -80,7 +84,7 @@ def main():
                 t0 = time.time()
                 cmd = [os.path.join(ROOT, "build", "scallop"), "run", graph_with_denoised(graph, args.work),
                        "--input", f"cloud={cloud}", "--no-cache", "-q", "-o", out, "--set", f"tool_radius={r}",
-                       "--set", "scallop_height=0.05", "--set", "chord_error=0.01"]
+                       "--set", f"scallop_height={h}", "--set", f"chord_error={e}"]
                 for s in args.set:
                     cmd += ["--set", s]
                 p = run(cmd)
@@ -97,7 +101,7 @@ def main():
                     rows.append({"surface": surface, "noise": noise, "graph": graph, "error": err, "error_ratio": ratio})
                     continue
                 vj = os.path.join(out, "verify.json")
-                vargs = ["--gcode", gcode, "--tool-radius", str(r), "--scallop", "0.05", "--chord", "0.01",
+                vargs = ["--gcode", gcode, "--tool-radius", str(r), "--scallop", h, "--chord", e,
                          "--json", vj, "--plot", os.path.join(out, "verify.png")]
                 run(([PY, EXTRA, "verify", surface] if extra else [PY, os.path.join(TOOLS, "verify.py"), "--surface", surface]) + vargs)
                 v = json.load(open(vj)) if os.path.exists(vj) else {"error": "no report"}
@@ -107,7 +111,7 @@ def main():
                 guard = json.load(open(guard_path)) if os.path.exists(guard_path) else {}
                 err = error_ratio()
                 # the whole patch: scallop <= 1.01 h everywhere on it, rim included
-                vpass = bool(v.get("pass")) and (v.get("scallop_max") or 0) <= 1.01 * 0.05
+                vpass = bool(v.get("pass")) and (v.get("scallop_max") or 0) <= 1.01 * float(h)
                 row = {"surface": surface, "noise": noise, "graph": graph, "passes": plan.get("passes"),
                        "verify": v, "simulate": sim, "guard": guard, "plan_seconds": plan_s,
                        "error_ratio": err, "verify_whole_pass": vpass}
