@@ -6,6 +6,8 @@ exactly as they measure the catalog.
   bench/extra_surfaces.py cloud  NAME --n N --seed S [--noise SIGMA] -o out.ply
   bench/extra_surfaces.py verify NAME --gcode g.ngc --tool-radius R --scallop H --chord E --json v.json
   bench/extra_surfaces.py error  NAME cloud.ply   # largest |error| / uncertainty of a denoised cloud
+  bench/extra_surfaces.py model-error NAME cloud.ply [--bin build/height_field_error]
+      # the same between the points: the certificate's surface model (HeightFieldModel)
   bench/extra_surfaces.py names
 
 steepcap: a sphere cap with rim slopes from 75 to 88 degrees along an irregular outline.
@@ -108,6 +110,44 @@ def error_ratio(name, path):
             "uncertainty_median": float(np.median(u))}
 
 
+def model_error(name, path, binary):
+    """Largest |error| / uncertainty of the certificate's surface model (HeightFieldModel, run as
+    bench/height_field_error.cpp) between the cloud's points: at 20 000 places jittered off the
+    points (a third of a spacing), and for a crest 12 000 more across its top, rims included."""
+    import subprocess, tempfile
+    from scipy.spatial import cKDTree
+    surf = surfaces.get(name)
+    v = read_ply(path)
+    P = np.column_stack([v["x"], v["y"], v["z"]]).astype(float)
+    u = v["uncertainty"].astype(float) if "uncertainty" in v.dtype.names else np.full(len(P), 1e-4)
+    spacing = float(np.median(cKDTree(P[:, :2]).query(P[:: max(1, len(P) // 5000), :2], 2)[0][:, 1]))
+    rng = np.random.default_rng(0)
+    q = P[rng.choice(len(P), min(20000, len(P)), replace=False), :2]
+    q = q + rng.normal(0, spacing / 3, q.shape)
+    if name.startswith("crest_"):
+        radius, slope, angle = (float(t[1:]) for t in name.split("_")[1:4])
+        t = math.radians(angle)
+        band = max(3.0, 2 * radius)
+        s_ = rng.uniform(-band, band, 12000)
+        w_ = np.r_[rng.uniform(-60, 60, 9000), rng.choice([-1, 1], 3000) * rng.uniform(28, 31, 3000)]
+        q = np.r_[q, np.column_stack([s_ * math.cos(t) - w_ * math.sin(t), s_ * math.sin(t) + w_ * math.cos(t)])]
+    q = q[surf.inside(q[:, 0], q[:, 1])]
+    with tempfile.TemporaryDirectory() as d:
+        np.savetxt(os.path.join(d, "cloud.txt"), np.column_stack([P, u]), fmt="%.10g")
+        out = subprocess.run([binary, os.path.join(d, "cloud.txt")], check=True, capture_output=True,
+                             input="\n".join("%.10g %.10g" % (a, b) for a, b in q).encode()).stdout
+    ans = np.array([l.split() for l in out.decode().split("\n") if l], float)
+    ok = np.isfinite(ans[:, 0])
+    q, z, um = q[ok], ans[ok, 0], ans[ok, 1]
+    zt, n, _, _ = surf.evaluate(q[:, 0], q[:, 1])
+    err = np.abs(z - zt) * n[:, 2]
+    ratio = err / np.maximum(um, 1e-12)
+    i = int(np.argmax(ratio))
+    return {"max_ratio": float(ratio[i]), "at": [float(q[i, 0]), float(q[i, 1])], "error": float(err[i]),
+            "uncertainty": float(um[i]), "error_max": float(err.max()), "places": int(len(q)),
+            "uncertainty_median": float(np.median(um)), "uncertainty_p99": float(np.percentile(um, 99))}
+
+
 def main(argv):
     cmd = argv[0]
     if cmd == "names":
@@ -123,6 +163,12 @@ def main(argv):
     if cmd == "error":
         import json
         print(json.dumps(error_ratio(argv[1], argv[2])))
+        return 0
+    if cmd == "model-error":
+        import json
+        binary = argv[argv.index("--bin") + 1] if "--bin" in argv else os.path.join(
+            os.path.dirname(os.path.abspath(__file__)), "..", "build", "height_field_error")
+        print(json.dumps(model_error(argv[1], argv[2], binary)))
         return 0
     print(__doc__, file=sys.stderr)
     return 2

@@ -25,17 +25,21 @@ class HeightFieldModel {
   // Evaluates at (x, y); false (and nothing evaluated) when (x, y) is outside the patch: no cloud
   // point within 1.5 × the mean cloud spacing, or the fitted neighbours lie to one side (their
   // centroid farther than half their radius from (x, y)), unless `force`.
-  // uncertainty, when given, gets the mean uncertainty of the same neighbours, grown at the edge
-  // where the nearest point is d > spacing / 2 away (a gap z is extrapolated across): by the factor
-  // 1 + (d − spacing / 2) / (2 spacing) beyond the edge, fading to 1 inside it.
+  // uncertainty, when given, gets how far z may be off the real surface: the neighbours'
+  // uncertainties carried through the fit (at least their mean) plus 3 times the fit's misfit
+  // (the largest residual beyond a neighbour's own uncertainty: the quadratic's shape bias,
+  // all of the error on a clean cloud), grown at the edge where the nearest point is
+  // d > spacing / 2 away (a gap z is extrapolated across): by the factor
+  // 1 + (d − spacing / 2) / (2 spacing) beyond the edge, fading to 1 inside it. It is set also
+  // when eval returns false for a place outside the patch (the fit there, extrapolated).
   bool eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force = false,
             double* uncertainty = nullptr) const;
   bool inside(double x, double y) const;
   // How far (x, y) lies beyond the outermost of its 64 nearest points, seen from their centroid
   // (mm; <= 0 among them, e.g. in a gap between the points of a rim).
   double reach_beyond(double x, double y) const;
-  // How far the surface at (x, y) may be off the real one (mm), as eval gives it; 0 without
-  // uncertainties.
+  // How far the surface at (x, y) may be off the real one (mm), as eval gives it (without
+  // per-point uncertainties, the misfit alone).
   double uncertainty(double x, double y) const;
   double uncertainty_max() const { return uncertainty_max_; }
   double spacing() const { return spacing_; }  // mean cloud spacing in xy (mm)

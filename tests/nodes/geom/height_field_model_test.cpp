@@ -1,5 +1,6 @@
 // HeightFieldModel against closed forms: exact on a plane and a quadric, the normals, what lies
-// beyond the cloud, and how the uncertainty grows across a gap beyond the edge.
+// beyond the cloud, how the uncertainty grows across a gap beyond the edge, and that it bounds
+// the fit's own error on an exact crest a quadratic cannot follow.
 #include "nodes/geom/height_field_model.h"
 
 #include <gtest/gtest.h>
@@ -103,6 +104,53 @@ TEST(HeightFieldModel, HolesInsideKeepThePointsUncertainty) {
   const std::vector<double> u(P.size(), 0.01);
   const HeightFieldModel m(P, 20, &u);
   EXPECT_NEAR(m.uncertainty(0, 0), 0.01, 1e-15);
+}
+
+TEST(HeightFieldModel, AQuadricHasNoMisfit) {
+  const auto P = grid([](double x, double y) { return 0.01 * x * x + 0.02 * x * y - 0.015 * y * y + 0.1 * x; });
+  const std::vector<double> u(P.size(), 0.01);
+  const HeightFieldModel m(P, 20, &u);
+  for (const auto& q : kProbes) EXPECT_NEAR(m.uncertainty(q[0], q[1]), 0.01, 1e-12) << q[0] << ", " << q[1];
+}
+
+TEST(HeightFieldModel, AResidualWithinThePointsUncertaintyIsNoBias) {
+  // a plane with one point raised by b: noise its uncertainty covers, or a shape it does not
+  const double b = 0.005;
+  auto P = grid([](double, double) { return 0.0; });
+  for (auto& p : P)
+    if (p.head<2>().norm() < 1e-12) p.z() = b;
+  const std::vector<double> covered(P.size(), 0.01), exact(P.size(), 0.0);
+  EXPECT_DOUBLE_EQ(HeightFieldModel(P, 20, &covered).uncertainty(0.1, 0.2), 0.01);
+  // uncovered: 3 times the largest residual, the raised point's b (1 - l), its weight l < 1/2
+  const double u = HeightFieldModel(P, 20, &exact).uncertainty(0.1, 0.2);
+  EXPECT_GT(u, 3 * 0.5 * b);
+  EXPECT_LE(u, 3 * b);
+}
+
+TEST(HeightFieldModel, UncertaintyBoundsTheFitsErrorOnAnExactCrest) {
+  // z = 20 - a sqrt(x^2 + c^2): a ridge along y of radius c / a = 1 mm at its top, flanks of
+  // slope a, sampled every 0.5 mm without noise (uncertainty 1e-4, the floor cloud.denoise
+  // gives an exact cloud). A quadratic over 20 points flattens the top by far more than that;
+  // the model's uncertainty must still bound its error everywhere, the rim y = +-10 included.
+  const double a = 0.7, c = 0.7;
+  auto f = [&](double x, double) { return 20 - a * std::sqrt(x * x + c * c); };
+  const auto P = grid(f);
+  const std::vector<double> u(P.size(), 1e-4);
+  const HeightFieldModel m(P, 20, &u);
+  double error_max = 0, ratio_max = 0;
+  for (int i = 0; i <= 60; ++i)
+    for (int j = 0; j <= 400; ++j) {
+      const double x = -3 + 0.1 * i + 0.013, y = -10 + 0.05 * j;
+      double z, unc = 0;
+      Eigen::Vector3d n;
+      if (!m.eval(x, y, z, n, false, &unc)) continue;
+      error_max = std::max(error_max, std::abs(z - f(x, y)));
+      ratio_max = std::max(ratio_max, std::abs(z - f(x, y)) / unc);
+    }
+  EXPECT_GT(error_max, 100 * 1e-4);  // the points' own uncertainty alone would not bound it
+  EXPECT_LT(ratio_max, 1.0);
+  EXPECT_GT(m.uncertainty(0.013, 0.0), 0.005);  // counted at the crest's top
+  EXPECT_NEAR(m.uncertainty(7.013, 0.0), 1e-4, 2e-4);  // barely on a flank
 }
 
 TEST(HeightFieldModel, RefusesTooFewPointsAndMismatchedUncertainties) {
