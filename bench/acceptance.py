@@ -55,7 +55,7 @@ def main():
     rows, lines = [], []
     header = ("| surface | noise | graph | passes | verify scallop max: whole (interior) | gouge max | uncut "
               "| certificate scallop bound: whole (interior) | gouge bound | certificate | verify pass "
-              "| agree | max abs(error)/uncertainty | efficiency L*/L | rs274 | rapids through part "
+              "| agree | max abs(error)/uncertainty: points (between) | efficiency L*/L | rs274 | rapids through part "
               "| guard: lifted (highest lift mm) | plan s |")
     def emit(line):
         print(line, flush=True)
@@ -91,14 +91,19 @@ def main():
                 plan_s = time.time() - t0
                 gcode = os.path.join(out, "gcode.ngc")
                 denoised = os.path.join(out, "denoised.ply")
-                def error_ratio():
-                    e = run([PY, EXTRA, "error", surface, denoised]) if os.path.exists(denoised) else None
+                def error_ratio(kind="error"):
+                    e = run([PY, EXTRA, kind, surface, denoised]) if os.path.exists(denoised) else None
                     return json.loads(e.stdout) if e and e.returncode == 0 and e.stdout.strip() else {}
+                def ratios():
+                    """|error| / uncertainty at the points and between them (the certificate's model)"""
+                    a, b = error_ratio(), error_ratio("model-error")
+                    return a, f"{a.get('max_ratio', float('nan')):.2f} ({b.get('max_ratio', float('nan')):.2f})", b
                 if p.returncode not in (0, 3) or not os.path.exists(gcode):
                     err = (p.stderr.strip().splitlines() or ["?"])[-1]
-                    ratio = error_ratio().get("max_ratio", float("nan"))
-                    emit(f"| {surface} | {noise} | {graph} | refused: {err} |||||||||| {ratio:.2f} |||||")
-                    rows.append({"surface": surface, "noise": noise, "graph": graph, "error": err, "error_ratio": ratio})
+                    point, both, between = ratios()
+                    emit(f"| {surface} | {noise} | {graph} | refused: {err} |||||||||| {both} |||||")
+                    rows.append({"surface": surface, "noise": noise, "graph": graph, "error": err,
+                                 "error_ratio": point.get("max_ratio"), "model_error": between})
                     continue
                 vj = os.path.join(out, "verify.json")
                 vargs = ["--gcode", gcode, "--tool-radius", str(r), "--scallop", h, "--chord", e,
@@ -109,19 +114,19 @@ def main():
                 plan = json.load(open(os.path.join(out, "plan_report.json")))
                 guard_path = os.path.join(out, "guard_report.json")
                 guard = json.load(open(guard_path)) if os.path.exists(guard_path) else {}
-                err = error_ratio()
+                err, both, between = ratios()
                 # the whole patch: scallop <= 1.01 h everywhere on it, rim included
                 vpass = bool(v.get("pass")) and (v.get("scallop_max") or 0) <= 1.01 * float(h)
                 row = {"surface": surface, "noise": noise, "graph": graph, "passes": plan.get("passes"),
                        "verify": v, "simulate": sim, "guard": guard, "plan_seconds": plan_s,
-                       "error_ratio": err, "verify_whole_pass": vpass}
+                       "error_ratio": err, "model_error": between, "verify_whole_pass": vpass}
                 rows.append(row)
                 f = lambda x: "-" if x is None else f"{x:.5f}"
                 emit(f"| {surface} | {noise} | {graph} | {plan.get('passes')} "
                      f"| {f(v.get('scallop_max'))} ({f(v.get('scallop_max_interior'))}) | {f(v.get('gouge_max'))} "
                      f"| {v.get('uncut_fraction')} | {f(sim.get('scallop_max'))} ({f(sim.get('scallop_max_interior'))}) "
                      f"| {f(sim.get('gouge_max'))} | {sim.get('pass')} | {vpass} | {verdict(sim.get('pass'), vpass)} "
-                     f"| {err.get('max_ratio', float('nan')):.2f} | {v.get('efficiency', float('nan')):.3f} "
+                     f"| {both} | {v.get('efficiency', float('nan')):.3f} "
                      f"| {v.get('gcode_valid')} | {v.get('rapids_through_part')} "
                      f"| {guard.get('lifted_positions', '-')} ({guard.get('highest_lift', 0):.4f}) | {plan_s:.1f} |")
                 if args.docs and float(noise) == 0:
@@ -160,7 +165,8 @@ def write_catalog(args, table):
           "(the scallop on the denoised cloud plus its uncertainty, see README \"Noisy clouds\"). "
           "\"verify pass\" here asks the whole patch too: scallop <= 1.01 h everywhere, rim included; "
           "\"agree\" says whether the certificate's verdict is verify's or the stricter; the last but "
-          "few column is the largest |error| / uncertainty over the denoised cloud's points.", ""] + table + [""]
+          "few column is the largest |error| / uncertainty over the denoised cloud's points and, in "
+          "brackets, between them: the certificate's surface model (`bench/extra_surfaces.py model-error`).", ""] + table + [""]
     for surface in args.surfaces.split(","):
         md.append(f"## {surface}")
         md.append("")

@@ -368,6 +368,10 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
   rep["rapid_length"] = rapid_length;
   // how far the cloud may be off the real surface: scallop and gouge above include it
   rep["surface_uncertainty_max"] = surf.uncertainty_max();
+  // and the largest the bounds used at a grid sample: the model's, its fit's misfit counted
+  double sampled_uncertainty_max = 0;
+  for (const Raw& s : raw) sampled_uncertainty_max = std::max(sampled_uncertainty_max, s.u);
+  rep["surface_uncertainty_max_sampled"] = sampled_uncertainty_max;
 
   nlohmann::json reasons = nlohmann::json::array();
   char buf[160];

@@ -57,7 +57,9 @@ struct SimulateOptions {
 // Report keys: scallop_max, scallop_max_interior, scallop_p99, scallop_p99_interior,
 // scallop_mean, scallop_mean_interior, gouge_max, uncut_fraction, uncut_fraction_interior,
 // cut_length, rapid_length, samples, samples_interior, samples_refined, spacing, margin,
-// surface_area, surface_uncertainty_max, tool_radius, scallop_limit, chord_limit, pass,
+// surface_area, surface_uncertainty_max (the cloud points' largest uncertainty),
+// surface_uncertainty_max_sampled (the largest the bounds used at a grid sample: the
+// HeightFieldModel's, its fit's misfit counted), tool_radius, scallop_limit, chord_limit, pass,
 // fail_reasons, worst (up to 10
 // places {x, y, z, kind: "gouge" | "uncut" | "scallop", value}, worst first).
 // Throws std::invalid_argument for r ≤ 0, h ≤ 0, an empty path, a non-finite centre, or loops

@@ -155,6 +155,9 @@ TEST(Simulate, UncertainCloudGivesBoundsForTheRealSurface) {
   EXPECT_GT(j["gouge_max"].get<double>(), gouge_interior + 0.2 * delta);
   EXPECT_LT(j["gouge_max"].get<double>(), 1.5 * delta - dz / 1.05 + 1e-6);
   EXPECT_EQ(j["surface_uncertainty_max"].get<double>(), delta);
+  // at the samples: the plane's fit has no misfit; grown beyond the outermost points, < 1.5
+  EXPECT_GT(j["surface_uncertainty_max_sampled"].get<double>(), 1.1 * delta);
+  EXPECT_LT(j["surface_uncertainty_max_sampled"].get<double>(), 1.5 * delta);
   const std::vector<double> short_u(3, 0.0);
   try {
     HeightFieldModel bad(cloud, 20, &short_u);
