@@ -3,25 +3,31 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCore>
 #include <Eigen/UmfPackSupport>
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
 #include <unsupported/Eigen/IterativeSolvers>
 
 #include "nodes/param/boundary_map.h"
+#include "nodes/param/two_level_solver.h"
 
 namespace scallop {
 
 HarmonicSolver parse_harmonic_solver(const std::string& name) {
+  if (name == "two_level") return HarmonicSolver::TwoLevel;
   if (name == "direct") return HarmonicSolver::Direct;
   if (name == "bicgstab") return HarmonicSolver::BiCGSTAB;
   if (name == "gmres") return HarmonicSolver::GMRES;
-  throw std::invalid_argument("unknown solver '" + name + "' (direct, bicgstab, gmres)");
+  throw std::invalid_argument("unknown solver '" + name + "' (two_level, direct, bicgstab, gmres)");
 }
 
 namespace {
 
 constexpr double kMaxResidual = 1e-6;
+// The two-level solver's relative residual: a map as exact as the direct LU's for the planner
+// (tests/nodes/param/harmonic_test.cpp: (u,v) within 1e-8 of the direct solve's on a 1 x 1 domain).
+constexpr double kTwoLevelTolerance = 1e-11;
 const char* kSingular =
     "the harmonic map system is singular: some points are not connected to the outer boundary "
     "through their neighbours (separate clusters? run cloud.clean or raise k)";
@@ -48,17 +54,39 @@ Eigen::MatrixXd solve_iterative(Solver& s, const Eigen::SparseMatrix<double>& A,
 
 namespace {
 
-// The LU factors of an interior system, kept for a second solve with the same unknowns (the
-// band solve fixes the same points twice, with other values).
-struct DirectFactor {
+// The factors of an interior system, kept for a second solve with the same unknowns (the band
+// solve fixes the same points twice, with other values), with the first solve's answer as the
+// second's start.
+struct SystemFactor {
   std::vector<Eigen::Index> unknown;
-  Eigen::SparseMatrix<double> A;
+  Eigen::SparseMatrix<double, Eigen::RowMajor> rows;  // the system, rows in the unknowns' order
+  Eigen::SparseMatrix<double> A;  // column-major copy for UMFPACK and Eigen's solvers
   std::unique_ptr<Eigen::UmfPackLU<Eigen::SparseMatrix<double>>> lu;
+  std::unique_ptr<TwoLevelPreconditioner> two_level;  // built on `rows`
+  bool two_level_failed = false;  // did not converge once: direct from then on
+  Eigen::MatrixXd last;           // the last solution
 };
+
+// X of A X = B by UMFPACK's LU, factorised once per SystemFactor.
+Eigen::MatrixXd solve_direct(const Eigen::SparseMatrix<double, Eigen::RowMajor>& A, const Eigen::MatrixXd& B,
+                             SystemFactor& f) {
+  if (!f.lu) {
+    f.A = A;
+    f.lu = std::make_unique<Eigen::UmfPackLU<Eigen::SparseMatrix<double>>>();
+    f.lu->compute(f.A);
+    if (f.lu->info() != Eigen::Success) {
+      f.lu.reset();
+      throw std::runtime_error(kSingular);
+    }
+  }
+  Eigen::MatrixXd X = f.lu->solve(B);
+  if (f.lu->info() != Eigen::Success || !X.allFinite()) throw std::runtime_error(kSingular);
+  return X;
+}
 
 UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, const UVMap& boundary,
                              HarmonicSolver solver,
-                             const std::vector<std::pair<int, Eigen::Vector2d>>& fixed, DirectFactor* factor) {
+                             const std::vector<std::pair<int, Eigen::Vector2d>>& fixed, SystemFactor* factor) {
   const Eigen::Index n = L.rows();
   if (L.cols() != n) throw std::invalid_argument("the Laplacian is not square");
   const auto& outer = boundary.outer_loop;
@@ -84,17 +112,21 @@ UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>&
     unknown[i] = -1;
     uv[i] = q;
   }
-  Eigen::Index m = 0;
-  for (auto& u : unknown)
-    if (u >= 0) u = m++;
+  // Unknowns numbered breadth first from the outer loop, so that a row's neighbours are near it
+  // in memory whatever order the cloud came in.
+  std::vector<int> point_of;  // #unknowns: the point of each unknown
+  for (int i : breadth_first_order(L, outer))
+    if (unknown[i] >= 0) {
+      unknown[i] = static_cast<Eigen::Index>(point_of.size());
+      point_of.push_back(i);
+    }
+  const Eigen::Index m = static_cast<Eigen::Index>(point_of.size());
 
   // Every unknown must reach the outer loop through its rows' neighbours; otherwise its cluster's
-  // rows (summing to zero) make the system singular, which rounding can hide from the LU.
-  {
-    std::vector<std::vector<Eigen::Index>> depends_on_me(n);
-    for (Eigen::Index i = 0; i < n; ++i)
-      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(L, i); it; ++it)
-        if (it.col() != i && it.value() != 0) depends_on_me[it.col()].push_back(i);
+  // rows (summing to zero) make the system singular, which rounding can hide from the LU. (Checked
+  // once for the same unknowns: the band's second solve.)
+  if (!factor || factor->unknown != unknown) {
+    const Eigen::SparseMatrix<double> by_column = L;  // column j: the rows that depend on point j
     std::vector<char> reached(n, 0);
     std::vector<Eigen::Index> stack;
     for (Eigen::Index i = 0; i < n; ++i)
@@ -102,8 +134,8 @@ UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>&
     while (!stack.empty()) {
       Eigen::Index j = stack.back();
       stack.pop_back();
-      for (Eigen::Index i : depends_on_me[j])
-        if (!reached[i]) reached[i] = 1, stack.push_back(i);
+      for (Eigen::SparseMatrix<double>::InnerIterator it(by_column, j); it; ++it)
+        if (it.row() != j && it.value() != 0 && !reached[it.row()]) reached[it.row()] = 1, stack.push_back(it.row());
     }
     std::size_t cut = 0;
     Eigen::Index first = -1;
@@ -121,58 +153,81 @@ UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>&
   UVMap out = boundary;
   out.residual = 0;
   if (m > 0) {
+    SystemFactor local;
+    SystemFactor& f = factor ? *factor : local;
+    // Same unknowns, same rows of L: the same matrix, so it and its factors can be used again.
+    if (f.unknown != unknown) {
+      f = SystemFactor();
+      f.unknown = unknown;
+    }
     // A X = B: the interior rows of L, boundary columns moved to the right-hand side.
-    std::vector<Eigen::Triplet<double>> trip;
-    trip.reserve(static_cast<std::size_t>(L.nonZeros()));
+    const bool build = f.rows.rows() != m;
+    if (build) {
+      f.rows.resize(m, m);
+      f.rows.reserve(L.nonZeros());
+    }
     Eigen::MatrixXd B = Eigen::MatrixXd::Zero(m, 2);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      if (unknown[i] < 0) continue;
+    std::vector<std::pair<Eigen::Index, double>> row;
+    for (Eigen::Index r = 0; r < m; ++r) {
+      const int i = point_of[r];
+      row.clear();
       for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(L, i); it; ++it) {
         Eigen::Index j = it.col();
-        if (unknown[j] >= 0)
-          trip.emplace_back(unknown[i], unknown[j], it.value());
-        else
-          B.row(unknown[i]) -= it.value() * uv[j].transpose();
+        if (unknown[j] < 0)
+          B.row(r) -= it.value() * uv[j].transpose();
+        else if (build)
+          row.emplace_back(unknown[j], it.value());
       }
+      if (!build) continue;
+      std::sort(row.begin(), row.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      f.rows.startVec(r);
+      for (const auto& [c, v] : row) f.rows.insertBack(r, c) = v;
     }
-    Eigen::SparseMatrix<double> A(m, m);
-    A.setFromTriplets(trip.begin(), trip.end());
-    A.makeCompressed();
-
-    Eigen::MatrixXd X;
-    if (solver == HarmonicSolver::Direct) {
-      DirectFactor local;
-      DirectFactor& f = factor ? *factor : local;
-      // Same unknowns, same rows of L: the same matrix, so its factors can be used again.
-      if (!f.lu || f.unknown != unknown) {
-        f.unknown = unknown;
-        f.A = A;
-        f.lu = std::make_unique<Eigen::UmfPackLU<Eigen::SparseMatrix<double>>>();
-        f.lu->compute(f.A);
-        if (f.lu->info() != Eigen::Success) {
-          f.lu.reset();
-          throw std::runtime_error(kSingular);
-        }
-      }
-      X = f.lu->solve(B);
-      if (f.lu->info() != Eigen::Success || !X.allFinite()) throw std::runtime_error(kSingular);
-    } else {
-      // Start from the mean of the boundary positions: the interior values are averages of them.
+    if (build) {
+      f.rows.finalize();
+      f.rows.makeCompressed();
+    }
+    const Eigen::SparseMatrix<double, Eigen::RowMajor>& A = f.rows;
+    // Start from the last solution, or the mean of the boundary positions (the interior values
+    // are averages of them).
+    Eigen::MatrixXd X0 = f.last;
+    if (X0.rows() != m) {
       Eigen::Vector2d mean = Eigen::Vector2d::Zero();
       for (const auto& q : boundary.boundary_uv) mean += q;
       mean /= static_cast<double>(outer.size());
-      Eigen::MatrixXd X0(m, 2);
+      X0.resize(m, 2);
       X0.col(0).setConstant(mean.x());
       X0.col(1).setConstant(mean.y());
+    }
+    Eigen::MatrixXd X;
+    if (solver == HarmonicSolver::TwoLevel && !f.two_level_failed) {
+      if (!f.two_level) {
+        f.two_level = std::make_unique<TwoLevelPreconditioner>();
+        if (!f.two_level->build(A)) f.two_level_failed = true;
+      }
+      if (!f.two_level_failed) {
+        TwoLevelResult r = solve_two_level(A, *f.two_level, B, X0, kTwoLevelTolerance);
+        if (r.converged && r.X.allFinite())
+          X = std::move(r.X);
+        else
+          f.two_level_failed = true;
+      }
+      if (f.two_level_failed) f.two_level.reset();
+    }
+    if (X.size() == 0 && (solver == HarmonicSolver::Direct || solver == HarmonicSolver::TwoLevel)) {
+      X = solve_direct(A, B, f);
+    } else if (X.size() == 0) {
+      if (f.A.rows() != m) f.A = A;
       if (solver == HarmonicSolver::BiCGSTAB) {
         Eigen::BiCGSTAB<Eigen::SparseMatrix<double>, Eigen::IncompleteLUT<double>> s;
-        X = solve_iterative(s, A, B, X0, "BiCGSTAB");
+        X = solve_iterative(s, f.A, B, X0, "BiCGSTAB");
       } else {
         Eigen::GMRES<Eigen::SparseMatrix<double>, Eigen::IncompleteLUT<double>> s;
         s.set_restart(50);
-        X = solve_iterative(s, A, B, X0, "GMRES");
+        X = solve_iterative(s, f.A, B, X0, "GMRES");
       }
     }
+    f.last = X;
     double bnorm = B.norm();
     out.residual = (A * X - B).norm() / (bnorm > 0 ? bnorm : 1.0);
     if (!(out.residual <= kMaxResidual))
@@ -205,7 +260,7 @@ UVMap solve_harmonic_band(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L,
                                 std::to_string(P.size()) + " points");
   const std::vector<BandPoint> band = outer_band(P, N, is_boundary, loops, boundary.outer_loop, boundary.corners);
   const std::vector<Eigen::Vector2d> zero(boundary.outer_loop.size(), Eigen::Vector2d::Zero());
-  DirectFactor factor;  // both solves usually fix the same points: one LU factorisation
+  SystemFactor factor;  // both solves usually fix the same points: one factorisation
   if (progress)
     progress(0.05, "first solve, the band on the domain's edge (" + std::to_string(L.rows()) +
                        " points; the sparse factorisation takes most of the time)");

@@ -16,12 +16,15 @@
 namespace scallop {
 
 enum class HarmonicSolver {
+  TwoLevel,  // GMRES with a two-level preconditioner (two_level_solver.h): Gauss-Seidel and an
+             // UMFPACK LU of the system summed over aggregates of neighbours; UMFPACK on the whole
+             // system (Direct) when it does not converge
   Direct,    // UMFPACK sparse LU (the matrix is not symmetric)
   BiCGSTAB,  // Eigen BiCGSTAB, incomplete-LUT preconditioner
   GMRES      // Eigen (unsupported) restarted GMRES, incomplete-LUT preconditioner
 };
 
-// "direct", "bicgstab", "gmres"; throws std::invalid_argument otherwise.
+// "two_level", "direct", "bicgstab", "gmres"; throws std::invalid_argument otherwise.
 HarmonicSolver parse_harmonic_solver(const std::string& name);
 
 // L         #P by #P meshless Laplacian (build_laplacian)
@@ -38,7 +41,7 @@ HarmonicSolver parse_harmonic_solver(const std::string& name);
 // (singular system: points not connected to the outer loop through neighbours) or its relative
 // residual exceeds 1e-6.
 UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, const UVMap& boundary,
-                     HarmonicSolver solver = HarmonicSolver::Direct,
+                     HarmonicSolver solver = HarmonicSolver::TwoLevel,
                      const std::vector<std::pair<int, Eigen::Vector2d>>& fixed = {});
 
 // The harmonic map with the whole outer boundary band fixed (boundary_map.h, BandPoint): a first
@@ -53,7 +56,7 @@ UVMap solve_harmonic_band(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L,
                           const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
                           const std::vector<std::uint8_t>& is_boundary,
                           const std::vector<std::vector<int>>& loops, const UVMap& boundary,
-                          HarmonicSolver solver = HarmonicSolver::Direct,
+                          HarmonicSolver solver = HarmonicSolver::TwoLevel,
                           const std::function<void(double, const std::string&)>& progress = {});
 
 }  // namespace scallop

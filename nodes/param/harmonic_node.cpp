@@ -11,15 +11,17 @@ namespace scallop::param_nodes {
 NodeDecl make_harmonic_node() {
   NodeDecl d;
   d.type = "param.harmonic";
-  d.version = 2;
+  d.version = 3;
   d.description = "harmonic (conformal) map: L u = L v = 0 inside, outer boundary band fixed, holes free";
   d.input("laplacian", "Laplacian", "the meshless Laplacian of the cloud")
       .input("map", "UVMap", "the boundary map (param.boundary_map)")
       .input("loops", "Loops", "the boundary loops the map was made from")
       .input("cloud", "Cloud", "the points")
       .output("map", "UVMap", "the map with uv of every point and the solve's relative residual")
-      .param_choice("solver", "direct", {"direct", "bicgstab", "gmres"},
-                    "direct: UMFPACK sparse LU; bicgstab / gmres: Eigen iterative with incomplete LU")
+      .param_choice("solver", "two_level", {"two_level", "direct", "bicgstab", "gmres"},
+                    "two_level: GMRES preconditioned by Gauss-Seidel and a direct solve on aggregates of "
+                    "neighbours, relative residual 1e-11 (direct when it does not converge); direct: UMFPACK "
+                    "sparse LU of the whole system; bicgstab / gmres: Eigen iterative with incomplete LU")
       .param_bool("fix_band", true,
                   "fix the whole outer boundary band at its projection on the smoothed loop and its depth "
                   "inside it, scaled like the map (else only the loop points, on the domain's edge)");
