@@ -10,6 +10,7 @@
 #include <string>
 
 #include "nodes/cloud/knn.h"
+#include "nodes/geom/spatial_order.h"
 
 namespace scallop {
 
@@ -111,6 +112,13 @@ PointCloud clean_cloud(const PointCloud& in, const CleanOptions& opts, CleanStat
 
   s.output = keep.size();
   if (stats) *stats = s;
+  if (opts.spatial_order) {
+    std::vector<Eigen::Vector3d> kept(keep.size());
+    for (std::size_t r = 0; r < keep.size(); ++r) kept[r] = in.points[keep[r]];
+    std::vector<std::size_t> along;
+    for (std::size_t r : scallop::spatial_order(kept)) along.push_back(keep[r]);
+    keep.swap(along);
+  }
   return select(in, keep);
 }
 

@@ -11,6 +11,8 @@ struct CleanOptions {
   bool remove_outliers = false;
   int outlier_k = 16;              // neighbours whose mean distance rates a point
   double outlier_std_ratio = 2.0;  // outlier: mean distance > global mean + ratio * std
+  bool spatial_order = true;       // the points kept along a space-filling curve
+                                   // (geom/spatial_order.h), else in their original order
 };
 
 // Point counts: input = non_finite + duplicates + outliers + output.
@@ -19,7 +21,9 @@ struct CleanStats {
 };
 
 // in  #P points (mm), with or without normals.
-// Returns the points that survive, in their original order, with their normals if `in` has them:
+// Returns the points that survive, with their normals if `in` has them, along a space-filling
+// curve (opts.spatial_order: neighbours near one another in memory, which every later per-point
+// pass over neighbourhoods runs faster for) or in their original order:
 //  1. points with a NaN or infinite coordinate, or a NaN or infinite normal, are dropped;
 //  2. of points with exactly equal coordinates only the first (lowest index) is kept
 //     (lexicographic sort, O(#P log #P));

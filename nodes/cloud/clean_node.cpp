@@ -10,17 +10,21 @@ namespace scallop::cloud_nodes {
 NodeDecl make_clean_node() {
   NodeDecl d;
   d.type = "cloud.clean";
-  d.version = 1;
+  d.version = 2;
   d.description = "drops NaN/Inf points, exact duplicates and (optionally) statistical outliers";
   d.input("cloud", "Cloud", "the raw points")
-      .output("cloud", "Cloud", "the points kept, in their original order");
+      .output("cloud", "Cloud", "the points kept, along a space-filling curve (or in their original order)");
   d.options<CleanOptions>()
       .flag("remove_outliers", &CleanOptions::remove_outliers,
             "drop points whose mean distance to their outlier_k nearest neighbours exceeds "
             "the global mean by outlier_std_ratio standard deviations")
       .integer("outlier_k", &CleanOptions::outlier_k, 2, 256, "", "neighbours used to rate a point as an outlier")
       .number("outlier_std_ratio", &CleanOptions::outlier_std_ratio, 0.1, 100, "",
-              "outlier threshold in standard deviations above the mean distance");
+              "outlier threshold in standard deviations above the mean distance")
+      .flag("spatial_order", &CleanOptions::spatial_order,
+            "put the points along a space-filling curve (Morton order), so that neighbours are near one "
+            "another in memory: every later node reads them faster (a million points in random order: "
+            "the harmonic solve 2 to 3 times slower); false keeps the input's order");
   d.param_int("min_points", 10, 0, 1e9, "", "fewer points than this left is an error");
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");

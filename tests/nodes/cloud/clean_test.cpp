@@ -52,7 +52,9 @@ TEST(Clean, NaNNormalsDropThePointAndNormalsFollowTheirPoints) {
   c.points = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {1, 0, 0}, {3, 0, 0}};
   c.normals = {{0, 0, 1}, {0, kNaN, 1}, {0, 1, 0}, {1, 0, 0}, {0, 0, -1}};
   CleanStats s;
-  const PointCloud out = clean_cloud(c, CleanOptions{}, &s);
+  CleanOptions in_order;
+  in_order.spatial_order = false;
+  const PointCloud out = clean_cloud(c, in_order, &s);
   EXPECT_EQ(s.non_finite, 1u);
   EXPECT_EQ(s.duplicates, 0u);  // point 3 duplicates point 1, which was already dropped
   ASSERT_EQ(out.size(), 4u);
@@ -60,6 +62,21 @@ TEST(Clean, NaNNormalsDropThePointAndNormalsFollowTheirPoints) {
   EXPECT_EQ(out.points[2], Vector3d(1, 0, 0));
   EXPECT_EQ(out.normals[2], Vector3d(1, 0, 0));
   EXPECT_EQ(out.normals[3], Vector3d(0, 0, -1));
+}
+
+TEST(Clean, SpatialOrderKeepsEveryPointWithItsNormal) {
+  // Points of a line given backwards come out along it; each keeps its own normal.
+  PointCloud c;
+  for (int i = 9; i >= 0; --i) {
+    c.points.emplace_back(i, 0, 0);
+    c.normals.emplace_back(0, std::sin(i), std::cos(i));
+  }
+  const PointCloud out = clean_cloud(c, CleanOptions{});
+  ASSERT_EQ(out.size(), 10u);
+  for (int i = 0; i < 10; ++i) {
+    EXPECT_EQ(out.points[i], Vector3d(i, 0, 0));
+    EXPECT_EQ(out.normals[i], Vector3d(0, std::sin(i), std::cos(i)));
+  }
 }
 
 TEST(Clean, NegativeZeroIsADuplicateOfZero) {
@@ -80,6 +97,7 @@ TEST(Clean, OutlierRemovalRemovesFarPoints) {
   opts.remove_outliers = true;
   opts.outlier_k = 8;
   opts.outlier_std_ratio = 2.0;
+  opts.spatial_order = false;
   CleanStats s;
   const PointCloud out = clean_cloud(c, opts, &s);
   EXPECT_EQ(s.outliers, 3u);
@@ -174,7 +192,7 @@ TEST(CleanNode, WarnsHowManyNonFinitePointsItDropped) {
   auto run = [&](std::shared_ptr<PointCloud> c) {
     std::vector<std::string> warnings;
     NodeContext ctx(d, "clean", "part", {{"remove_outliers", false}, {"outlier_k", 16}, {"outlier_std_ratio", 2.0},
-                                         {"min_points", 10}},
+                                         {"spatial_order", true}, {"min_points", 10}},
                     {{"cloud", c}}, nullptr, [&](const std::string& m) { warnings.push_back(m); });
     d.run(ctx);
     return warnings;
