@@ -5,8 +5,10 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "nodes/geom/tangent_frame.h"
 
@@ -48,30 +50,42 @@ Eigen::Vector3d local_pca_normal(const std::vector<Eigen::Vector3d>& P, const Ne
   return es.eigenvectors().col(0);
 }
 
+// Scratch matrices of optimal_weights, kept across the points of one thread's range (a heap
+// allocation per point and matrix cost more than the arithmetic).
+struct WeightScratch {
+  Eigen::MatrixXd D, C, A;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt;
+};
+
 // Optimal weights of one point (see header). w has k entries and sums to 1.
 void optimal_weights(const std::vector<Eigen::Vector3d>& P, const Eigen::Vector3d& n,
-                     const Neighborhoods& nb, std::size_t i, double delta, Eigen::VectorXd& w) {
+                     const Neighborhoods& nb, std::size_t i, double delta, Eigen::VectorXd& w,
+                     WeightScratch& s) {
   const int k = nb.k;
   Eigen::Vector3d t1, t2;
   tangent_frame(n, t1, t2);
-  Eigen::MatrixXd D(2, k);  // tangent-plane components of p_i - p_j' (= of p_i - p_j)
+  Eigen::MatrixXd& D = s.D;  // tangent-plane components of p_i - p_j' (= of p_i - p_j)
+  D.resize(2, k);
   for (int j = 0; j < k; ++j) {
     Eigen::Vector3d d = P[i] - P[nb.index(i, j)];
     D(0, j) = d.dot(t1);
     D(1, j) = d.dot(t2);
   }
-  Eigen::MatrixXd C = D.transpose() * D;
+  Eigen::MatrixXd& C = s.C;
+  C.noalias() = D.transpose() * D;
   double tr = C.trace();
   if (!(tr > 0)) {  // every neighbour coincides with p_i in the tangent plane: no geometry
     w.setConstant(k, 1.0 / k);
     return;
   }
   C.diagonal().array() += delta * tr;
-  w = C.ldlt().solve(Eigen::VectorXd::Ones(k));
+  s.ldlt.compute(C);
+  w = s.ldlt.solve(Eigen::VectorXd::Ones(k));
   w /= w.sum();
   // Least-change projection onto {D w = 0, 1^T w = 1}, in units of the rms distance so that the
   // three constraint rows are commensurate.
-  Eigen::MatrixXd A(3, k);
+  Eigen::MatrixXd& A = s.A;
+  A.resize(3, k);
   A.topRows(2) = D / std::sqrt(tr / k);
   A.row(2).setOnes();
   Eigen::Matrix3d AAt = A * A.transpose();
@@ -118,6 +132,7 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<E
   ParallelProgress done(progress, n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
     Eigen::VectorXd w(k);
+    WeightScratch scratch;
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       switch (scheme) {
         case LaplacianScheme::Uniform: w.setConstant(1.0); break;
@@ -126,7 +141,7 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<E
           break;
         case LaplacianScheme::Optimal: {
           Eigen::Vector3d nrm = N.empty() ? local_pca_normal(P, nbrs, i) : N[i];
-          optimal_weights(P, nrm, nbrs, i, regularization, w);
+          optimal_weights(P, nrm, nbrs, i, regularization, w, scratch);
           break;
         }
       }
@@ -140,20 +155,58 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<E
     done.done(r.size());
   });
 
-  Eigen::SparseMatrix<double, Eigen::RowMajor> L(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
-  L.reserve(Eigen::VectorXi::Constant(static_cast<Eigen::Index>(n), k + 1));
-  for (std::size_t i = 0; i < n; ++i) {
-    // Row weights sum to 1 (up to rounding), so the diagonal is 1; we set it from the row's
-    // own weights so that the row sums to zero to the last bit.
+  // Row i: -w_ij at its neighbours' columns and the weights' sum on the diagonal (1 up to
+  // rounding; so that the row sums to zero to the last bit), columns sorted, written straight
+  // into the compressed arrays: row i's entries are its distinct neighbours other than i, plus i.
+  auto row_entries = [&](std::size_t i, std::vector<std::pair<int, double>>& e) {
+    e.clear();
     double s = 0;
     for (int j = 0; j < k; ++j) {
-      int c = nbrs.index(i, j);
+      const int c = nbrs.index(i, j);
       if (static_cast<std::size_t>(c) == i) continue;  // a self index would cancel out anyway
-      L.coeffRef(static_cast<Eigen::Index>(i), c) -= W[i * k + j];
+      e.emplace_back(c, -W[i * k + j]);
       s += W[i * k + j];
     }
-    L.coeffRef(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i)) += s;
+    e.emplace_back(static_cast<int>(i), 0.0);
+    std::sort(e.begin(), e.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::size_t m = 0;  // merge repeated neighbours
+    for (std::size_t q = 0; q < e.size(); ++q) {
+      if (m > 0 && e[m - 1].first == e[q].first)
+        e[m - 1].second += e[q].second;
+      else
+        e[m++] = e[q];
+    }
+    e.resize(m);
+    for (auto& [c, v] : e)
+      if (static_cast<std::size_t>(c) == i) v += s;
+  };
+  Eigen::SparseMatrix<double, Eigen::RowMajor> L(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  std::vector<int> count(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<std::pair<int, double>> e;
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      row_entries(i, e);
+      count[i] = static_cast<int>(e.size());
+    }
+  });
+  std::size_t nnz = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    L.outerIndexPtr()[i] = static_cast<int>(nnz);
+    nnz += count[i];
   }
+  L.outerIndexPtr()[n] = static_cast<int>(nnz);
+  L.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<std::pair<int, double>> e;
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      row_entries(i, e);
+      std::size_t at = L.outerIndexPtr()[i];
+      for (const auto& [c, v] : e) {
+        L.innerIndexPtr()[at] = c;
+        L.valuePtr()[at++] = v;
+      }
+    }
+  });
   L.makeCompressed();
   return L;
 }
