@@ -11,6 +11,10 @@ NodeDecl make_laplacian_node() {
   NodeDecl d;
   d.type = "param.laplacian";
   d.version = 1;
+  // Cheaper to build again (1.2 s at a million points) than to write and read its #P (k + 1)
+  // entries (200 MB, 7 s of a cold run's disk cache at a million points); only param.harmonic,
+  // whose own map is cached, reads it.
+  d.cache_on_disk = false;
   d.description = "meshless Laplacian on the KNN graph (uniform, heat kernel or optimal weights)";
   d.input("cloud", "Cloud", "the points (normals give the tangent planes of the optimal scheme)")
       .input("neighbors", "Neighbors", "k nearest neighbours of each point")
