@@ -28,6 +28,12 @@ constexpr double kMaxResidual = 1e-6;
 // The two-level solver's relative residual: a map as exact as the direct LU's for the planner
 // (tests/nodes/param/harmonic_test.cpp: (u,v) within 1e-8 of the direct solve's on a 1 x 1 domain).
 constexpr double kTwoLevelTolerance = 1e-11;
+// Below this many unknowns the direct LU is exact and takes under 0.2 s (bench/harmonic_solvers:
+// 30 000 points 0.64 s direct, 0.27 s two-level; 8 000 points 0.12 s, 0.07 s). It stays there so
+// that small clouds keep the map they had: a planner whose certificate sits at its limit can turn
+// on a change of (u,v) of a few 1e-9 mm (the bundled example's gouge bound: 0.00996 direct,
+// 0.01000 two-level, e = 0.01).
+constexpr Eigen::Index kTwoLevelFrom = 50000;
 const char* kSingular =
     "the harmonic map system is singular: some points are not connected to the outer boundary "
     "through their neighbours (separate clusters? run cloud.clean or raise k)";
@@ -200,7 +206,7 @@ UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>&
       X0.col(1).setConstant(mean.y());
     }
     Eigen::MatrixXd X;
-    if (solver == HarmonicSolver::TwoLevel && !f.two_level_failed) {
+    if (solver == HarmonicSolver::TwoLevel && m >= kTwoLevelFrom && !f.two_level_failed) {
       if (!f.two_level) {
         f.two_level = std::make_unique<TwoLevelPreconditioner>();
         if (!f.two_level->build(A)) f.two_level_failed = true;

@@ -16,9 +16,9 @@
 namespace scallop {
 
 enum class HarmonicSolver {
-  TwoLevel,  // GMRES with a two-level preconditioner (two_level_solver.h): Gauss-Seidel and an
-             // UMFPACK LU of the system summed over aggregates of neighbours; UMFPACK on the whole
-             // system (Direct) when it does not converge
+  TwoLevel,  // from 50 000 unknowns: GMRES with a two-level preconditioner (two_level_solver.h):
+             // Gauss-Seidel and an UMFPACK LU of the system summed over aggregates of neighbours;
+             // below that, and when it does not converge, UMFPACK on the whole system (Direct)
   Direct,    // UMFPACK sparse LU (the matrix is not symmetric)
   BiCGSTAB,  // Eigen BiCGSTAB, incomplete-LUT preconditioner
   GMRES      // Eigen (unsupported) restarted GMRES, incomplete-LUT preconditioner

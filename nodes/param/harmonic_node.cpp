@@ -19,8 +19,9 @@ NodeDecl make_harmonic_node() {
       .input("cloud", "Cloud", "the points")
       .output("map", "UVMap", "the map with uv of every point and the solve's relative residual")
       .param_choice("solver", "two_level", {"two_level", "direct", "bicgstab", "gmres"},
-                    "two_level: GMRES preconditioned by Gauss-Seidel and a direct solve on aggregates of "
-                    "neighbours, relative residual 1e-11 (direct when it does not converge); direct: UMFPACK "
+                    "two_level: from 50 000 points, GMRES preconditioned by Gauss-Seidel and a direct solve on "
+                    "aggregates of neighbours, relative residual 1e-11 (direct below, or when it does not "
+                    "converge); direct: UMFPACK "
                     "sparse LU of the whole system; bicgstab / gmres: Eigen iterative with incomplete LU")
       .param_bool("fix_band", true,
                   "fix the whole outer boundary band at its projection on the smoothed loop and its depth "
