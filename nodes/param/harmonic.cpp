@@ -26,7 +26,8 @@ namespace {
 
 constexpr double kMaxResidual = 1e-6;
 // The two-level solver's relative residual: a map as exact as the direct LU's for the planner
-// (tests/nodes/param/harmonic_test.cpp: (u,v) within 1e-8 of the direct solve's on a 1 x 1 domain).
+// (tests/nodes/param/harmonic_test.cpp: (u,v) within 1e-8 of the domain's size of the direct
+// solve's; bench/harmonic_solvers at a million points: 9.8e-8 mm on a 121 x 81 mm domain).
 constexpr double kTwoLevelTolerance = 1e-11;
 // Below this many unknowns the direct LU is exact and takes under 0.2 s (bench/harmonic_solvers:
 // 30 000 points 0.64 s direct, 0.27 s two-level; 8 000 points 0.12 s, 0.07 s). It stays there so

@@ -180,6 +180,8 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<E
     for (auto& [c, v] : e)
       if (static_cast<std::size_t>(c) == i) v += s;
   };
+  // Each row's entries are made twice, to count them and then to write them, rather than kept
+  // between the passes: that would be a second #P (k + 1) array (200 MB at a million points).
   Eigen::SparseMatrix<double, Eigen::RowMajor> L(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
   std::vector<int> count(n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
