@@ -36,11 +36,15 @@ Triangles triangles(const Mesh& m) {
 
 struct MeshDistance::Impl {
   Triangles tris;
+  std::vector<std::size_t> face_of;  // #tris: the polygon each triangle was fanned from
   Tree tree;
 };
 
 MeshDistance::MeshDistance(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
   impl_->tris = triangles(mesh);
+  impl_->face_of.reserve(impl_->tris.size());
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f)
+    for (std::size_t k = 1; k + 1 < mesh.face_size(f); ++k) impl_->face_of.push_back(f);
   if (impl_->tris.empty()) return;
   impl_->tree.insert(impl_->tris.begin(), impl_->tris.end());
   impl_->tree.build();
@@ -63,6 +67,12 @@ Eigen::Vector3d MeshDistance::closest_point(const Eigen::Vector3d& p) const {
   if (impl_->tris.empty()) return p;
   const Kernel::Point_3 q = impl_->tree.closest_point(point(p));
   return {q.x(), q.y(), q.z()};
+}
+
+std::size_t MeshDistance::closest_face(const Eigen::Vector3d& p) const {
+  if (impl_->tris.empty()) return std::numeric_limits<std::size_t>::max();
+  const auto hit = impl_->tree.closest_point_and_primitive(point(p));
+  return impl_->face_of[std::size_t(hit.second - impl_->tris.cbegin())];
 }
 
 double MeshDistance::ray_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& d) const {

@@ -24,6 +24,8 @@ class MeshDistance {
   double operator()(const Eigen::Vector3d& p, const Eigen::Vector3d& hint) const;
   // The nearest point of the faces to p (p itself without faces).
   Eigen::Vector3d closest_point(const Eigen::Vector3d& p) const;
+  // The index of the mesh's face (polygon) that holds the nearest point; SIZE_MAX without faces.
+  std::size_t closest_face(const Eigen::Vector3d& p) const;
   // How far along the ray from p in direction d (unit) the first face lies; +infinity when the
   // ray meets none.
   double ray_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& d) const;

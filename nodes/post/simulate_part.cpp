@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <memory>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -114,7 +115,7 @@ double rapid_clearance(const MeshDistance& part, const Eigen::Vector3d& a, const
 }  // namespace
 
 Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setups, const PartSimulateOptions& o,
-                         const std::function<void(double)>& progress) {
+                         const std::function<void(double)>& progress, const Mesh* outer) {
   const double r = o.tool_radius, H = o.scallop, delta = o.surface_uncertainty;
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
   if (!(H > 0)) throw std::invalid_argument("scallop limit must be > 0");
@@ -158,6 +159,9 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   if (progress) progress(0.05);
 
   const MeshDistance distance(part);
+  if (outer && outer->num_faces() == 0) throw std::invalid_argument("the outer mesh has no face");
+  const std::unique_ptr<const MeshDistance> outer_distance = outer ? std::make_unique<const MeshDistance>(*outer) : nullptr;
+  const MeshDistance& gouge_distance = outer ? *outer_distance : distance;  // what balls must stay off
   const CentreIndex keep_off(edges_to_keep_off(part, tris, o.feature_angle), std::max(spacing, margin / 2));
   std::vector<double> lengths;
   for (const auto& s : feed) lengths.push_back((s.b - s.a).norm());
@@ -285,12 +289,12 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     tbb::parallel_for(std::size_t(0), cut.feed.size(), [&](std::size_t k) {
       Eigen::Vector3d at;
       // r + delta - D: an upper bound within 1e-5 of the truth where it exceeds tol.
-      const double g = r + delta - distance.least_along(cut.feed[k].a, cut.feed[k].b, spacing, r + delta - tol, 1e-5,
+      const double g = r + delta - gouge_distance.least_along(cut.feed[k].a, cut.feed[k].b, spacing, r + delta - tol, 1e-5,
                                                         at, positions.local());
       if (g > g_max.local().first) g_max.local() = {g, at};
     });
     tbb::parallel_for(std::size_t(0), cut.rapid.size(), [&](std::size_t k) {
-      const double c = rapid_clearance(distance, cut.rapid[k].a, cut.rapid[k].b, r, tol);
+      const double c = rapid_clearance(gouge_distance, cut.rapid[k].a, cut.rapid[k].b, r, tol);
       r_min.local() = std::min(r_min.local(), c);
       if (c < -tol) ++through.local();
     });

@@ -72,7 +72,10 @@ struct PartSimulateOptions {
 // one per sqrt(8 r h): interior first, then by excess).
 // Throws std::invalid_argument for r <= 0, h <= 0, h >= r, a mesh without faces, no setup, no
 // feed move at all, or a non-finite centre (naming the setup).
+// outer  where given, gouge and rapids are measured against it instead of `part`: the part's outer
+//        bound when the real part is only known to lie between two meshes (mesh.cloud_envelope:
+//        scallop from the inner one, `part`, gouge against the outer one). Must have faces.
 Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setups, const PartSimulateOptions& options,
-                         const std::function<void(double)>& progress = {});
+                         const std::function<void(double)>& progress = {}, const Mesh* outer = nullptr);
 
 }  // namespace scallop

@@ -20,6 +20,9 @@ NodeDecl make_simulate_part_node() {
       .input("base", "Report",
              "mesh.setup_base's report: faces within base_angle of its base_direction sit on the table and are not "
              "measured; absent: every face is measured", false)
+      .input("outer", "Mesh",
+             "the part's outer bound (mesh.cloud_envelope's outer; then `mesh` is its inner): gouge and rapids are "
+             "measured against it, scallop from `mesh`; absent: both against `mesh`", false)
       .output("report", "Report",
               "pass (verify_part.py's rule: interior scallop <= 1.01 h, gouge <= max(e, 0.001), nothing uncut, no rapid "
               "through the part), fail_reasons, scallop/uncut figures for the whole part and its interior, gouge, "
@@ -74,7 +77,8 @@ NodeDecl make_simulate_part_node() {
       }
     }
     try {
-      Simulation sim = simulate_part(*mesh, cuts, o, [&](double f) { ctx.progress(f, "simulating the part"); });
+      const auto outer = ctx.has_input("outer") ? ctx.input<Mesh>("outer") : nullptr;
+      Simulation sim = simulate_part(*mesh, cuts, o, [&](double f) { ctx.progress(f, "simulating the part"); }, outer.get());
       Report rep;
       rep.data = sim.report;
       ctx.set("report", std::move(rep));

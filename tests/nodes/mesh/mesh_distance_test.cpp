@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "tests/nodes/mesh/mesh_test_util.h"
 
@@ -25,6 +26,16 @@ TEST(MeshDistance, DistancesRaysAndSidesOfTheUnitCube) {
   EXPECT_NEAR(cube.signed_distance(V(2, 2, 2)), std::sqrt(3.0), 1e-12);
   EXPECT_NEAR(cube.signed_distance(V(0.5, 0.5, 0.5)), -0.5, 1e-12);
   EXPECT_TRUE(std::isinf(MeshDistance(Mesh()).signed_distance(V(0, 0, 0))));
+}
+
+TEST(MeshDistance, TheClosestFaceIsThePolygonNotItsFannedTriangle) {
+  // The unit cube as six quads (face 1 the top z = 1, each fanned into two triangles).
+  const Mesh cube = test::unit_cube();
+  const MeshDistance d(cube);
+  EXPECT_EQ(d.closest_face(V(0.2, 0.7, 1.5)), 1u);
+  EXPECT_EQ(d.closest_face(V(0.8, 0.3, 1.5)), 1u);
+  EXPECT_EQ(d.closest_face(V(0.5, 0.5, -0.3)), 0u);
+  EXPECT_EQ(MeshDistance(Mesh()).closest_face(V(0, 0, 0)), std::numeric_limits<std::size_t>::max());
 }
 
 TEST(MeshDistance, TheLeastAlongASegmentIsFoundBetweenItsSamples) {

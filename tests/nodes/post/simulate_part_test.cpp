@@ -94,6 +94,32 @@ TEST(SimulatePart, GougesInsideAndNearAreMeasuredAndARapidThroughThePartIsCounte
   EXPECT_EQ(rep["fail_reasons"][3], "1 rapid(s) through the part");
 }
 
+TEST(SimulatePart, BetweenAnInnerAndAnOuterMeshScallopIsFromTheInnerGougeAgainstTheOuter) {
+  // The real part is only known to lie between the box 10 high (inner) and 10.03 high (outer).
+  // Passes w = 1 apart, their balls touching z = 10.02: the scallop above the inner top is the
+  // closed form + 0.02 (the part may be that low); the outer top is 0.01 into the balls (it may be
+  // that high). Without the outer mesh the balls gouge nothing.
+  const double r = 3, w = 1;
+  const Mesh inner = test::quad_box({1, 1, 1}, V(20, 20, 10)), outer = test::quad_box({1, 1, 1}, V(20, 20, 10.03));
+  std::vector<PartSetupCut> cuts(1);
+  cuts[0].name = "top", cuts[0].feed = top_passes(0, 20, w, r, 10.02);
+  PartSimulateOptions o = options(r, 0.1);
+  o.base_normal = V(0, 0, -1);
+  const auto both = simulate_part(inner, cuts, o, {}, &outer).report;
+  const double closed_form = r - std::sqrt(r * r - 0.25 * w * w) + 0.02;
+  EXPECT_NEAR(both["scallop_max_interior"].get<double>(), closed_form, 1e-5);
+  EXPECT_GE(both["gouge_max"].get<double>(), 0.01 - 1e-12);
+  EXPECT_LE(both["gouge_max"].get<double>(), 0.01 + 1e-5);
+  const auto alone = simulate_part(inner, cuts, o).report;
+  EXPECT_NEAR(alone["scallop_max_interior"].get<double>(), closed_form, 1e-5);
+  EXPECT_LT(alone["gouge_max"].get<double>(), 1e-9);
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] {
+              const Mesh none;
+              simulate_part(inner, cuts, o, {}, &none);
+            }),
+            "the outer mesh has no face");
+}
+
 TEST(SimulatePart, AChannelNarrowerThanTheBallIsUnreachableWithTheRadiusThatWouldReachIt) {
   // An open channel 2 mm wide, walls 10 high, floor at z = 0: a ball of radius 3 reaches none of
   // it. On the floor at x a ball of radius rho stands clear while min(x, 2 - x) >= rho - tol; on
