@@ -17,7 +17,6 @@ std::string fmt(double x) {
   return b;
 }
 
-nlohmann::json xyz(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
 
 }  // namespace
 
@@ -52,8 +51,8 @@ NodeDecl make_trim_steep_node() {
     const std::size_t trimmed = cloud->size() - r.kept.size();
     nlohmann::json regions = nlohmann::json::array();
     for (const TrimmedRegion& g : r.regions)
-      regions.push_back({{"points", g.points}, {"area_mm2", g.area}, {"centroid", xyz(g.centroid)},
-                         {"min", xyz(g.min)}, {"max", xyz(g.max)}, {"max_slope_deg", g.max_slope_deg}});
+      regions.push_back({{"points", g.points}, {"area_mm2", g.area}, {"centroid", json_xyz(g.centroid)},
+                         {"min", json_xyz(g.min)}, {"max", json_xyz(g.max)}, {"max_slope_deg", g.max_slope_deg}});
     Report report;
     report.data = {{"points", cloud->size()},
                    {"kept", r.kept.size()},

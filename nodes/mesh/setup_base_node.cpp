@@ -12,8 +12,6 @@ namespace scallop::mesh_nodes {
 
 namespace {
 
-nlohmann::json xyz(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
-
 // "x,y,z" (brackets and spaces allowed around the numbers) -> the vector.
 Eigen::Vector3d parse_direction(const std::string& text) {
   std::string s = text;
@@ -80,13 +78,13 @@ NodeDecl make_setup_base_node() {
                " on the part's extreme plane: nothing removed");
     nlohmann::json clusters = nlohmann::json::array();
     for (const BaseCluster& c : r.clusters)
-      clusters.push_back({{"centre", xyz(c.similarity * c.direction)}, {"direction", xyz(c.direction)},
+      clusters.push_back({{"centre", json_xyz(c.similarity * c.direction)}, {"direction", json_xyz(c.direction)},
                           {"faces", c.faces}, {"area", c.area},
                           {"similarity", c.similarity}, {"quantity", c.quantity}, {"objective", c.objective},
                           {"flat_direction", {c.flat_direction.x(), c.flat_direction.y(), c.flat_direction.z()}},
                           {"flat_area", c.flat_area}});
     Report report;
-    report.data = {{"base_direction", xyz(r.direction)},
+    report.data = {{"base_direction", json_xyz(r.direction)},
                    {"base_area", r.base_area},
                    {"base_faces", r.base_faces.size()},
                    {"base_fraction", r.base_area / r.area},

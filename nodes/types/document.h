@@ -1,6 +1,7 @@
 // Document values: G-code text, JSON reports and pictures.
 #pragma once
 
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -35,5 +36,8 @@ struct Image final : Value {
   static ValuePtr deserialize(std::istream& in);
   void write_file(const std::string& path) const override;
 };
+
+// A point in a report: [x, y, z].
+inline nlohmann::json json_xyz(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
 
 }  // namespace scallop

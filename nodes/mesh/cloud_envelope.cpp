@@ -1,0 +1,164 @@
+#include "nodes/mesh/cloud_envelope.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "nodes/geom/kd_tree.h"
+#include "nodes/mesh/face_geometry.h"
+#include "nodes/mesh/mesh_distance.h"
+
+namespace scallop {
+
+std::vector<Eigen::Vector3d> vertex_normals(const Mesh& mesh) {
+  const FaceGeometry g = face_geometry(mesh);
+  std::vector<Eigen::Vector3d> n(mesh.num_vertices(), Eigen::Vector3d::Zero());
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
+    const std::size_t m = mesh.face_size(f);
+    const std::uint32_t* c = mesh.face(f);
+    for (std::size_t i = 0; i < m; ++i) {
+      const Eigen::Vector3d& p = mesh.vertices[c[i]];
+      const double angle = angle_deg(mesh.vertices[c[(i + m - 1) % m]] - p, mesh.vertices[c[(i + 1) % m]] - p);
+      n[c[i]] += angle * g.normal[f];
+    }
+  }
+  for (auto& v : n)
+    if (v.norm() > 0) v.normalize();
+  return n;
+}
+
+CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d>& points, int k, double max_gap) {
+  if (mesh.num_faces() == 0) throw std::invalid_argument("the mesh has no face");
+  if (k < 1) throw std::invalid_argument("k must be >= 1");
+  if (points.size() < std::size_t(k) || points.size() < 2)
+    throw std::invalid_argument("the cloud has " + std::to_string(points.size()) + " points, fewer than k = " +
+                                std::to_string(k) + " (and 2)");
+  for (const auto& p : points)
+    if (!p.allFinite()) throw std::invalid_argument("the cloud has a point that is not finite");
+  if (!(max_gap >= 0)) throw std::invalid_argument("max_gap must be >= 0");
+
+  CloudEnvelope e;
+  const MeshDistance distance(mesh);
+  e.residual.resize(points.size());
+  tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t i) { e.residual[i] = distance.signed_distance(points[i]); });
+
+  PointsAdaptor<Eigen::Vector3d> adaptor{points};
+  KdTree<Eigen::Vector3d, 3> tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+
+  // The median spacing of the cloud: from every 16th point to its nearest other point.
+  std::vector<double> nearest;
+  for (std::size_t i = 0; i < points.size(); i += 16) {
+    std::uint32_t idx[2];
+    double d2[2];
+    tree.knnSearch(points[i].data(), 2, idx, d2);
+    nearest.push_back(std::sqrt(d2[1]));
+  }
+  std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
+  e.spacing_median = nearest[nearest.size() / 2];
+  e.max_gap = max_gap > 0 ? max_gap : 4 * e.spacing_median;
+
+  const std::size_t nv = mesh.num_vertices();
+  e.out.assign(nv, 0.0);
+  e.in.assign(nv, 0.0);
+  e.gap.assign(nv, 0.0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<std::uint32_t> idx(k);
+    std::vector<double> d2(k);
+    for (std::size_t v = r.begin(); v < r.end(); ++v) {
+      const std::size_t found = tree.knnSearch(mesh.vertices[v].data(), std::size_t(k), idx.data(), d2.data());
+      e.gap[v] = std::sqrt(d2[0]);
+      for (std::size_t j = 0; j < found; ++j) {
+        e.out[v] = std::max(e.out[v], e.residual[idx[j]]);
+        e.in[v] = std::max(e.in[v], -e.residual[idx[j]]);
+      }
+    }
+  });
+  for (double g : e.gap) e.unsupported += g > e.max_gap;
+
+  // Each vertex moves along its normal far enough that the plane of every face around it moves
+  // by the full amount: by 1 / min_f (n_f . n_v), at most 2 (a cube's edge: sqrt 2, its corner:
+  // sqrt 3, which makes the outer mesh of a cube the cube grown by that amount on every side).
+  const std::vector<Eigen::Vector3d> n = vertex_normals(mesh);
+  const FaceGeometry g = face_geometry(mesh);
+  std::vector<double> least_cos(nv, 1.0);
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f)
+    for (std::size_t c = 0; c < mesh.face_size(f); ++c) {
+      const std::uint32_t v = mesh.face(f)[c];
+      if (g.area[f] > 0) least_cos[v] = std::min(least_cos[v], g.normal[f].dot(n[v]));
+    }
+  // Where the mesh bends, the part may bend sharper between its points: an edge or a corner a
+  // point spacing s from the nearest points sticks out of (or into) the mesh between them by up to
+  // about s sin(theta), theta the largest angle between n_v and the faces within 3 s of v (a
+  // reconstruction rounds a corner over several faces, so the faces around v alone see too little).
+  {
+    PointsAdaptor<Eigen::Vector3d> centroids{g.centroid};
+    KdTree<Eigen::Vector3d, 3> faces(3, centroids, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    faces.buildIndex();
+    const double reach = 3 * e.spacing_median;
+    std::vector<double> bend(nv, 0.0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+      std::vector<std::pair<std::uint32_t, double>> hits;
+      for (std::size_t v = r.begin(); v < r.end(); ++v) {
+        double c = least_cos[v];
+        faces.radiusSearch(mesh.vertices[v].data(), reach * reach, hits, nanoflann::SearchParams(32, 0, false));
+        for (const auto& [f, d2] : hits)
+          if (g.area[f] > 0) c = std::min(c, g.normal[f].dot(n[v]));
+        c = std::clamp(c, 0.0, 1.0);  // beyond 90 degrees: s at most
+        bend[v] = e.spacing_median * std::sqrt(1 - c * c);
+      }
+    });
+    for (std::size_t v = 0; v < nv; ++v) {
+      e.bend_allowance_max = std::max(e.bend_allowance_max, bend[v]);
+      e.out[v] += bend[v];
+      e.in[v] += bend[v];
+    }
+  }
+  e.outer = mesh;
+  e.inner = mesh;
+  e.outer.normals.clear();
+  e.inner.normals.clear();
+  auto place = [&] {
+    for (std::size_t v = 0; v < nv; ++v) {
+      const double stretch = 1 / std::max(0.5, least_cos[v]);
+      e.outer.vertices[v] = mesh.vertices[v] + stretch * e.out[v] * n[v];
+      e.inner.vertices[v] = mesh.vertices[v] - stretch * e.in[v] * n[v];
+    }
+  };
+  place();
+  // Every point inside the outer mesh and outside the inner one: a point left beyond moves the
+  // corners of its nearest face farther by its excess, for a few rounds.
+  constexpr double kCovered = 1e-6;  // mm
+  for (e.rounds = 0; e.rounds < 8; ++e.rounds) {
+    const MeshDistance outer_distance(e.outer), inner_distance(e.inner);
+    std::vector<double> raise_out(nv, 0.0), raise_in(nv, 0.0);
+    std::vector<std::pair<std::size_t, double>> beyond_out(points.size(), {0, 0.0}), beyond_in(points.size(), {0, 0.0});
+    tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t i) {
+      const double so = outer_distance.signed_distance(points[i]);
+      if (so > kCovered) beyond_out[i] = {outer_distance.closest_face(points[i]), so};
+      const double si = inner_distance.signed_distance(points[i]);
+      if (si < -kCovered) beyond_in[i] = {inner_distance.closest_face(points[i]), -si};
+    });
+    std::size_t left = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      for (auto [bey, raise] : {std::pair{&beyond_out[i], &raise_out}, std::pair{&beyond_in[i], &raise_in}}) {
+        if (bey->second <= 0) continue;
+        ++left;
+        for (std::size_t c = 0; c < mesh.face_size(bey->first); ++c) {
+          const std::uint32_t v = mesh.face(bey->first)[c];
+          (*raise)[v] = std::max((*raise)[v], bey->second);
+        }
+      }
+    }
+    if (e.rounds == 0) e.points_beyond = left;
+    if (left == 0) break;
+    for (std::size_t v = 0; v < nv; ++v) e.out[v] += raise_out[v], e.in[v] += raise_in[v];
+    place();
+  }
+  return e;
+}
+
+}  // namespace scallop

@@ -1,0 +1,100 @@
+#include <algorithm>
+#include <cstdio>
+#include <stdexcept>
+
+#include "engine/node.h"
+#include "nodes/mesh/cloud_envelope.h"
+#include "nodes/types/cloud.h"
+#include "nodes/types/document.h"
+#include "nodes/types/mesh.h"
+
+namespace scallop::mesh_nodes {
+
+namespace {
+
+// The value below which a fraction q of xs lies (xs copied).
+double quantile(std::vector<double> xs, double q) {
+  if (xs.empty()) return 0;
+  const std::size_t i = std::min(xs.size() - 1, std::size_t(q * double(xs.size())));
+  std::nth_element(xs.begin(), xs.begin() + i, xs.end());
+  return xs[i];
+}
+
+
+}  // namespace
+
+NodeDecl make_cloud_envelope_node() {
+  NodeDecl d;
+  d.type = "mesh.cloud_envelope";
+  d.version = 1;
+  d.description =
+      "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
+      "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "
+      "kept off and gouge is measured against) and in (what scallop is measured from) by it until every point lies "
+      "between the two";
+  d.input("mesh", "Mesh", "the mesh made from the cloud, faces outward (closed: inside and outside are clear)")
+      .input("cloud", "Cloud", "the points the mesh was made from (after cloud.clean)")
+      .output("outer", "Mesh", "the mesh, each vertex moved out along its normal by the farthest of its points outside")
+      .output("inner", "Mesh", "the mesh, each vertex moved in by the farthest of its points inside")
+      .output("report", "Report",
+              "{points, vertices, neighbours, spacing_median, max_gap, outward_max, outward_p99, outward_median, "
+              "outward_max_at, inward_max, inward_p99, inward_median, inward_max_at, surface_uncertainty (the larger "
+              "maximum), residual_min, residual_max (the points' signed distances), bend_allowance_max (spacing x "
+              "the sine of the largest angle to the faces within 3 spacings), points_beyond_first and cover_rounds (points the first meshes left out, rounds to cover "
+              "them), unsupported_vertices, unsupported_at}")
+      .param_int("neighbours", 16, 1, 1000, "", "points per vertex (the largest of their deviations bounds the part there)")
+      .param_float("max_gap", 0, 0, 1000, "mm",
+                   "a vertex farther than this from every point is unsupported (reported); 0: 4 times the median "
+                   "point spacing");
+  d.run = [](NodeContext& ctx) {
+    auto mesh = ctx.input<Mesh>("mesh");
+    auto cloud = ctx.input<PointCloud>("cloud");
+    CloudEnvelope e;
+    try {
+      e = cloud_envelope(*mesh, cloud->points, int(ctx.integer("neighbours")), ctx.number("max_gap"));
+    } catch (const std::invalid_argument& ex) {
+      throw NodeError(std::string("mesh.cloud_envelope: ") + ex.what());
+    }
+    const std::size_t at_out = std::max_element(e.out.begin(), e.out.end()) - e.out.begin();
+    const std::size_t at_in = std::max_element(e.in.begin(), e.in.end()) - e.in.begin();
+    const std::size_t at_gap = std::max_element(e.gap.begin(), e.gap.end()) - e.gap.begin();
+    const auto [rmin, rmax] = std::minmax_element(e.residual.begin(), e.residual.end());
+    Report report;
+    report.data = {{"points", cloud->size()},
+                   {"vertices", mesh->num_vertices()},
+                   {"neighbours", ctx.integer("neighbours")},
+                   {"spacing_median", e.spacing_median},
+                   {"max_gap", e.max_gap},
+                   {"outward_max", e.out[at_out]},
+                   {"outward_p99", quantile(e.out, 0.99)},
+                   {"outward_median", quantile(e.out, 0.5)},
+                   {"outward_max_at", json_xyz(mesh->vertices[at_out])},
+                   {"inward_max", e.in[at_in]},
+                   {"inward_p99", quantile(e.in, 0.99)},
+                   {"inward_median", quantile(e.in, 0.5)},
+                   {"inward_max_at", json_xyz(mesh->vertices[at_in])},
+                   {"surface_uncertainty", std::max(e.out[at_out], e.in[at_in])},
+                   {"residual_min", *rmin},
+                   {"residual_max", *rmax},
+                   {"bend_allowance_max", e.bend_allowance_max},
+                   {"points_beyond_first", e.points_beyond},
+                   {"cover_rounds", e.rounds},
+                   {"unsupported_vertices", e.unsupported},
+                   {"unsupported_at", e.unsupported ? json_xyz(mesh->vertices[at_gap]) : nlohmann::json()}};
+    if (e.unsupported > 0) {
+      char text[300];
+      std::snprintf(text, sizeof text,
+                    "%zu vertices lie farther than %.3g mm from every point (up to %.3g mm, at %.2f %.2f %.2f): the "
+                    "mesh there is not measured by the cloud (a filled hole?), its bounds there are a guess",
+                    e.unsupported, e.max_gap, e.gap[at_gap], mesh->vertices[at_gap].x(), mesh->vertices[at_gap].y(),
+                    mesh->vertices[at_gap].z());
+      ctx.warn(text);
+    }
+    ctx.set("report", std::move(report));
+    ctx.set("outer", std::move(e.outer));
+    ctx.set("inner", std::move(e.inner));
+  };
+  return d;
+}
+
+}  // namespace scallop::mesh_nodes

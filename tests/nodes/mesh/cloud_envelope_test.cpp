@@ -1,0 +1,190 @@
+#include "nodes/mesh/cloud_envelope.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "engine/node.h"
+#include "nodes/mesh/mesh_distance.h"
+#include "nodes/types/cloud.h"
+#include "nodes/types/document.h"
+#include "tests/nodes/mesh/mesh_test_util.h"
+#include "tests/test_support.h"
+
+namespace scallop {
+namespace mesh_nodes {
+NodeDecl make_cloud_envelope_node();
+}  // namespace mesh_nodes
+namespace {
+
+using V = Eigen::Vector3d;
+
+// Points on the six sides of the box [lo, hi]^3 on a grid `step` apart, keeping off its edges by
+// `keep_off` (then every point's nearest place on a smaller concentric cube is inside a side).
+std::vector<V> box_side_points(double lo, double hi, double step, double keep_off) {
+  std::vector<V> pts;
+  const int n = int(std::round((hi - lo) / step));
+  for (int axis = 0; axis < 3; ++axis)
+    for (double side : {lo, hi})
+      for (int i = 0; i <= n; ++i)
+        for (int j = 0; j <= n; ++j) {
+          const double a = lo + i * step, b = lo + j * step;
+          if (a < lo + keep_off || a > hi - keep_off || b < lo + keep_off || b > hi - keep_off) continue;
+          V p;
+          p[axis] = side;
+          p[(axis + 1) % 3] = a;
+          p[(axis + 2) % 3] = b;
+          pts.push_back(p);
+        }
+  return pts;
+}
+
+// The outward normals of the sides of [0, 10]^3 that p lies on, summed: one on a side, two on an
+// edge, three at a corner.
+V sides_sum(const V& p) {
+  V n = V::Zero();
+  for (int k = 0; k < 3; ++k) n[k] = p[k] < 1e-9 ? -1 : p[k] > 10 - 1e-9 ? 1 : 0;
+  return n;
+}
+
+// The bend allowance at a vertex of the cube on `sides` sides, points s apart: s sin(theta/2),
+// the sine between the vertex normal and its faces' (0 on a side, sin 45 on an edge, sqrt(2/3)
+// at a corner).
+double bend(double s, int sides) { return s * std::sqrt(1 - 1.0 / sides); }
+
+TEST(CloudEnvelope, PointsOnTheMeshGiveTheMeshItselfBesidesItsEdges) {
+  // Points 0.5 apart on the cube's sides: nothing between the two meshes on the sides; along the
+  // edges and at the corners the part may still bend sharper between its points.
+  const Mesh cube = test::cube_mesh(4, 10);
+  const CloudEnvelope e = cloud_envelope(cube, box_side_points(0, 10, 0.5, 0), 16);
+  for (std::size_t v = 0; v < cube.num_vertices(); ++v) {
+    const V sides = sides_sum(cube.vertices[v]);
+    const double b = bend(0.5, int(sides.lpNorm<1>()));
+    EXPECT_NEAR(e.out[v], b, 1e-12);
+    EXPECT_NEAR(e.in[v], b, 1e-12);
+    EXPECT_LT((e.outer.vertices[v] - (cube.vertices[v] + b * sides)).norm(), 1e-11);
+    EXPECT_LT((e.inner.vertices[v] - (cube.vertices[v] - b * sides)).norm(), 1e-11);
+  }
+  EXPECT_EQ(e.points_beyond, 0u);
+  EXPECT_EQ(e.rounds, 0);
+  EXPECT_NEAR(e.bend_allowance_max, bend(0.5, 3), 1e-12);
+  EXPECT_NEAR(e.spacing_median, 0.5, 1e-12);
+  EXPECT_DOUBLE_EQ(e.max_gap, 2.0);
+  EXPECT_EQ(e.unsupported, 0u);
+}
+
+TEST(CloudEnvelope, AMeshInsideThePartIsGrownByTheDistanceOnEverySideEdgeAndCorner) {
+  // The part is the cube [-a, 10 + a]^3, the mesh the cube [0, 10]^3: every point lies a outside.
+  // The outer mesh is the cube grown by a (and the bend allowance) on every side, to rounding:
+  // faces, edges (along the bisector) and corners (along the diagonal) alike.
+  const double a = 0.05;
+  const Mesh cube = test::cube_mesh(4, 10);
+  const CloudEnvelope e = cloud_envelope(cube, box_side_points(-a, 10 + a, 0.25, 0.3), 16);
+  for (std::size_t v = 0; v < cube.num_vertices(); ++v) {
+    const V sides = sides_sum(cube.vertices[v]);
+    const double b = bend(0.25, int(sides.lpNorm<1>()));
+    EXPECT_NEAR(e.out[v], a + b, 1e-12);
+    EXPECT_NEAR(e.in[v], b, 1e-12);
+    EXPECT_LT((e.outer.vertices[v] - (cube.vertices[v] + (a + b) * sides)).norm(), 1e-9) << "vertex " << v;
+  }
+  for (double r : e.residual) EXPECT_NEAR(r, a, 1e-12);
+  EXPECT_EQ(e.points_beyond, 0u);
+}
+
+TEST(CloudEnvelope, ABevelledEdgeIsCoveredByTheOuterMesh) {
+  // The mesh: the cube [0, 10]^3 with the edge y = z = 10 cut off by the plane y + z = 20 - t
+  // (a bevel c = t / sqrt 2 deep), its sides fine triangles as a reconstruction makes them. The
+  // part: the whole cube, sampled 0.2 apart, its edges included. The points on that edge lie
+  // outside the bevel; every point of the part must lie between the two meshes (to 1e-3 c), and
+  // a place of the edge between the points too.
+  const double c = 0.1, t = c * std::sqrt(2.0);
+  Mesh m = test::cube_mesh(20, 10);
+  for (auto& p : m.vertices) {
+    const double over = p.y() + p.z() - (20 - t);
+    if (over > 0) p -= over / 2 * V(0, 1, 1);  // onto the bevel's plane
+  }
+  const std::vector<V> part = box_side_points(0, 10, 0.2, 0);
+  const CloudEnvelope e = cloud_envelope(m, part, 16);
+  const MeshDistance outer(e.outer), inner(e.inner);
+  double worst = -INFINITY, worst_inner = INFINITY;
+  for (const V& p : part) {
+    worst = std::max(worst, outer.signed_distance(p));
+    worst_inner = std::min(worst_inner, inner.signed_distance(p));
+  }
+  EXPECT_LE(worst, 1e-3 * c);
+  EXPECT_GE(worst_inner, -1e-3 * c);
+  for (double x = 0.1; x < 10; x += 0.2) EXPECT_LE(outer.signed_distance(V(x, 10, 10)), 1e-3 * c) << x;
+}
+
+TEST(CloudEnvelope, NoiseOnBothSidesBoundsBothWays) {
+  // Points alternately a above and a below the cube's sides: out = in = a at every vertex (and the
+  // bend allowance at its edges and corners).
+  const double a = 0.02;
+  const Mesh cube = test::cube_mesh(4, 10);
+  std::vector<V> pts = box_side_points(0, 10, 0.25, 0.3);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const V& p = pts[i];
+    pts[i] += (i % 2 ? a : -a) * sides_sum(p);
+  }
+  const CloudEnvelope e = cloud_envelope(cube, pts, 16);
+  const double s = std::hypot(0.25, 2 * a);  // neighbours on the grid, one above, one below
+  EXPECT_NEAR(e.spacing_median, s, 1e-12);
+  for (std::size_t v = 0; v < cube.num_vertices(); ++v) {
+    const double b = bend(s, int(sides_sum(cube.vertices[v]).lpNorm<1>()));
+    EXPECT_NEAR(e.out[v], a + b, 1e-12);
+    EXPECT_NEAR(e.in[v], a + b, 1e-12);
+  }
+}
+
+TEST(CloudEnvelope, AVertexFarFromThePointsIsUnsupported) {
+  // Only the bottom side is sampled: the top's vertices are 10 from every point.
+  const Mesh cube = test::cube_mesh(2, 10);
+  std::vector<V> pts;
+  for (const V& p : box_side_points(0, 10, 0.5, 0))
+    if (p.z() == 0) pts.push_back(p);
+  const CloudEnvelope e = cloud_envelope(cube, pts, 8);
+  std::size_t far = 0;
+  for (const V& p : cube.vertices) far += p.z() > 2;
+  EXPECT_EQ(e.unsupported, far);
+  EXPECT_DOUBLE_EQ(e.max_gap, 2.0);
+}
+
+TEST(CloudEnvelope, BadInputIsRefused) {
+  const Mesh cube = test::cube_mesh(2, 10);
+  const std::vector<V> pts = box_side_points(0, 10, 2, 0);
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cloud_envelope(Mesh(), pts, 4); }), "the mesh has no face");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cloud_envelope(cube, pts, 0); }), "k must be >= 1");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cloud_envelope(cube, {V(0, 0, 0)}, 1); }),
+            "the cloud has 1 points, fewer than k = 1 (and 2)");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cloud_envelope(cube, {V(0, 0, 0), V(NAN, 0, 0)}, 1); }),
+            "the cloud has a point that is not finite");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cloud_envelope(cube, pts, 4, -1); }), "max_gap must be >= 0");
+}
+
+TEST(CloudEnvelopeNode, ReportsTheBoundsAndWarnsOfUnsupportedVertices) {
+  const NodeDecl d = mesh_nodes::make_cloud_envelope_node();
+  EXPECT_EQ(d.type, "mesh.cloud_envelope");
+  auto cloud = std::make_shared<PointCloud>();
+  cloud->points = box_side_points(-0.05, 10.05, 0.25, 0.3);
+  auto out = test::run_node(d, {}, {{"mesh", std::make_shared<Mesh>(test::cube_mesh(4, 10))}, {"cloud", cloud}});
+  const auto& j = std::dynamic_pointer_cast<const Report>(out.at("report"))->data;
+  EXPECT_NEAR(j.at("outward_max").get<double>(), 0.05 + bend(0.25, 3), 1e-12);  // at a corner
+  EXPECT_NEAR(j.at("outward_median").get<double>(), 0.05, 1e-12);                 // inside a side
+  EXPECT_NEAR(j.at("inward_max").get<double>(), bend(0.25, 3), 1e-12);
+  EXPECT_NEAR(j.at("surface_uncertainty").get<double>(), 0.05 + bend(0.25, 3), 1e-12);
+  EXPECT_NEAR(j.at("bend_allowance_max").get<double>(), bend(0.25, 3), 1e-12);
+  EXPECT_EQ(j.at("points_beyond_first"), 0);
+  EXPECT_EQ(j.at("unsupported_vertices"), 0);
+  EXPECT_EQ(j.at("points"), cloud->size());
+  ASSERT_TRUE(std::dynamic_pointer_cast<const Mesh>(out.at("outer")));
+  ASSERT_TRUE(std::dynamic_pointer_cast<const Mesh>(out.at("inner")));
+  auto few = std::make_shared<PointCloud>();
+  few->points = {V(0, 0, 0)};
+  EXPECT_EQ(test::error_of<NodeError>([&] {
+              test::run_node(d, {}, {{"mesh", std::make_shared<Mesh>(test::cube_mesh(2, 10))}, {"cloud", few}});
+            }),
+            "mesh.cloud_envelope: the cloud has 1 points, fewer than k = 16 (and 2)");
+}
+
+}  // namespace
+}  // namespace scallop
