@@ -11,9 +11,8 @@
 // normal and the faces within 3 s of v: an edge or a corner of the part between its points may
 // stick out of the mesh by about that much. The outer
 // mesh moves v along its normal until the plane of every face around v has moved by out_v (v
-// moves at most 2 out_v), the inner by in_v inward. Then every point is checked: one left outside
-// the outer mesh (inside the inner) moves the corners of its nearest face farther by its excess,
-// in rounds until none is (at most 8). Where the cloud samples
+// moves at most 2 out_v), the inner by in_v inward. The points the two meshes still leave out
+// (a fold of the mesh) are counted, with the farthest. Where the cloud samples
 // the part densely and its noise is bounded by what k points show, the part lies between the two
 // (a bevelled edge: the points at the true edge lie outside the bevel by its depth; noise: the
 // largest of k deviations, about 2-3 sigma for k = 16). Vertices farther than `max_gap` from every
@@ -38,8 +37,8 @@ struct CloudEnvelope {
   double max_gap = 0;              // the gap above which a vertex is unsupported (mm)
   std::size_t unsupported = 0;     // vertices with gap > max_gap
   double bend_allowance_max = 0;   // the largest s sin(theta_v) added (mm)
-  std::size_t points_beyond = 0;   // points outside the first outer mesh or inside the first inner one
-  int rounds = 0;                  // rounds that moved corners until every point was covered (at most 8)
+  std::size_t points_beyond = 0;   // points farther than 1e-6 mm outside the outer mesh or inside the inner one
+  double beyond_max = 0;           // the farthest of them (mm)
 };
 
 // mesh    faces outward (corners counter-clockwise seen from outside), any polygons; closed for a

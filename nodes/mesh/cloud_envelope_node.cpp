@@ -30,8 +30,7 @@ NodeDecl make_cloud_envelope_node() {
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "
-      "kept off and gouge is measured against) and in (what scallop is measured from) by it until every point lies "
-      "between the two";
+      "kept off and gouge is measured against) and in (what scallop is measured from) by it";
   d.input("mesh", "Mesh", "the mesh made from the cloud, faces outward (closed: inside and outside are clear)")
       .input("cloud", "Cloud", "the points the mesh was made from (after cloud.clean)")
       .output("outer", "Mesh", "the mesh, each vertex moved out along its normal by the farthest of its points outside")
@@ -40,8 +39,8 @@ NodeDecl make_cloud_envelope_node() {
               "{points, vertices, neighbours, spacing_median, max_gap, outward_max, outward_p99, outward_median, "
               "outward_max_at, inward_max, inward_p99, inward_median, inward_max_at, surface_uncertainty (the larger "
               "maximum), residual_min, residual_max (the points' signed distances), bend_allowance_max (spacing x "
-              "the sine of the largest angle to the faces within 3 spacings), points_beyond_first and cover_rounds (points the first meshes left out, rounds to cover "
-              "them), unsupported_vertices, unsupported_at}")
+              "the sine of the largest angle to the faces within 3 spacings), points_beyond and beyond_max (points outside the outer mesh or inside the "
+              "inner one, the farthest), unsupported_vertices, unsupported_at}")
       .param_int("neighbours", 16, 1, 1000, "", "points per vertex (the largest of their deviations bounds the part there)")
       .param_float("max_gap", 0, 0, 1000, "mm",
                    "a vertex farther than this from every point is unsupported (reported); 0: 4 times the median "
@@ -77,8 +76,8 @@ NodeDecl make_cloud_envelope_node() {
                    {"residual_min", *rmin},
                    {"residual_max", *rmax},
                    {"bend_allowance_max", e.bend_allowance_max},
-                   {"points_beyond_first", e.points_beyond},
-                   {"cover_rounds", e.rounds},
+                   {"points_beyond", e.points_beyond},
+                   {"beyond_max", e.beyond_max},
                    {"unsupported_vertices", e.unsupported},
                    {"unsupported_at", e.unsupported ? json_xyz(mesh->vertices[at_gap]) : nlohmann::json()}};
     if (e.unsupported > 0) {
