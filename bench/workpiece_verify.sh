@@ -4,6 +4,10 @@
 # ../shared/tools/verify_part.py on the programs and setups.json it wrote (with the base the graph
 # found), its figures printed beside the certificate's (report.json, post.simulate_part).
 #   bench/workpiece_verify.sh [MESH] [SCALE] [OUT]   (default: the fandisk x 50 into /tmp/scallop-workpiece)
+# With CLOUD_POINTS=N (and NOISE=sigma in mm, default 0) the part is first sampled into a cloud of
+# N points (../shared/tools/sample_mesh.py, seed 1) and the cloud runs through
+# bench/workpiece-contour-cloud.json (reconstruction, mesh.cloud_envelope, then the same chain);
+# the judge still measures against the true mesh. EXTRA holds more --set items for the graph.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mesh=${1:-../shared/data/fandisk/fandisk.off}
@@ -11,8 +15,17 @@ scale=${2:-50}
 out=${3:-/tmp/scallop-workpiece}
 r=3 h=0.05 e=0.01
 rm -rf "$out"
-/usr/bin/time -f "scallop run: %e s, peak %M KB" ./build/scallop run graphs/mesh-workpiece-contour.json \
-  --input mesh="$mesh" --set read.scale="$scale" --set tool_radius=$r --set scallop_height=$h --set chord_error=$e \
+if [ -n "${CLOUD_POINTS:-}" ]; then
+  mkdir -p "$out"
+  /usr/bin/python3 ../shared/tools/sample_mesh.py --mesh "$mesh" --scale "$scale" --n "$CLOUD_POINTS" --seed 1 \
+    --noise "${NOISE:-0}" -o "$out/cloud.ply"
+  graph=(bench/workpiece-contour-cloud.json --input cloud="$out/cloud.ply")
+else
+  graph=(graphs/mesh-workpiece-contour.json --input mesh="$mesh" --set read.scale="$scale")
+fi
+# shellcheck disable=SC2086
+/usr/bin/time -f "scallop run: %e s, peak %M KB" ./build/scallop run "${graph[@]}" \
+  --set tool_radius=$r --set scallop_height=$h --set chord_error=$e ${EXTRA:-} \
   -o "$out" --no-cache || test $? -eq 3  # 3: a certificate failed, measured below all the same
 base=$(/usr/bin/python3 -c 'import json,sys; print(",".join(map(str, json.load(open(sys.argv[1]))["base_direction"])))' "$out/base_report.json")
 /usr/bin/python3 ../shared/tools/verify_part.py --mesh "$mesh" --scale "$scale" --setups "$out/setups.json" --base-normal="$base" \
