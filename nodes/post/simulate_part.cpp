@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <memory>
 #include <atomic>
 #include <cmath>
@@ -28,13 +29,25 @@ constexpr double kPi = 3.14159265358979323846;
 struct Triangle {
   Eigen::Vector3d a, b, c, n;  // n: outward unit normal
   std::uint32_t face;
+  std::array<std::uint32_t, 3> corner;  // a, b, c's vertex indices
 };
+
+// The point of another mesh with the same faces (moved vertices V) at p's place in t: the same
+// barycentric coordinates.
+Eigen::Vector3d same_place(const Triangle& t, const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& V) {
+  const Eigen::Vector3d e1 = t.b - t.a, e2 = t.c - t.a, q = p - t.a;
+  const double d11 = e1.dot(e1), d12 = e1.dot(e2), d22 = e2.dot(e2), q1 = q.dot(e1), q2 = q.dot(e2);
+  const double det = d11 * d22 - d12 * d12;
+  const double u = (d22 * q1 - d12 * q2) / det, v = (d11 * q2 - d12 * q1) / det;
+  return (1 - u - v) * V[t.corner[0]] + u * V[t.corner[1]] + v * V[t.corner[2]];
+}
 
 std::vector<Triangle> triangles_of(const Mesh& m) {
   std::vector<Triangle> out;
   for (std::size_t f = 0; f < m.num_faces(); ++f)
     for (std::size_t k = 1; k + 1 < m.face_size(f); ++k) {
-      Triangle t{m.vertices[m.face(f)[0]], m.vertices[m.face(f)[k]], m.vertices[m.face(f)[k + 1]], {}, std::uint32_t(f)};
+      Triangle t{m.vertices[m.face(f)[0]], m.vertices[m.face(f)[k]], m.vertices[m.face(f)[k + 1]], {}, std::uint32_t(f),
+                 {m.face(f)[0], m.face(f)[k], m.face(f)[k + 1]}};
       const Eigen::Vector3d n = (t.b - t.a).cross(t.c - t.a);
       if (!(n.norm() > 0)) continue;  // a degenerate triangle stands for no area
       t.n = n.normalized();
@@ -115,7 +128,7 @@ double rapid_clearance(const MeshDistance& part, const Eigen::Vector3d& a, const
 }  // namespace
 
 Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setups, const PartSimulateOptions& o,
-                         const std::function<void(double)>& progress, const Mesh* outer) {
+                         const std::function<void(double)>& progress, const Mesh* outer, const Mesh* inner_mesh) {
   const double r = o.tool_radius, H = o.scallop, delta = o.surface_uncertainty;
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
   if (!(H > 0)) throw std::invalid_argument("scallop limit must be > 0");
@@ -160,6 +173,9 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
 
   const MeshDistance distance(part);
   if (outer && outer->num_faces() == 0) throw std::invalid_argument("the outer mesh has no face");
+  if (inner_mesh && (inner_mesh->vertices.size() != part.vertices.size() || inner_mesh->face_start != part.face_start ||
+                     inner_mesh->face_vertices != part.face_vertices))
+    throw std::invalid_argument("the inner mesh is not the part's mesh with its vertices moved (its faces differ)");
   const std::unique_ptr<const MeshDistance> outer_distance = outer ? std::make_unique<const MeshDistance>(*outer) : nullptr;
   const MeshDistance& gouge_distance = outer ? *outer_distance : distance;  // what balls must stay off
   const CentreIndex keep_off(edges_to_keep_off(part, tris, o.feature_angle), std::max(spacing, margin / 2));
@@ -201,10 +217,11 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
       out.reach = lo;
       return;
     }
-    centres.trace(s.p, n, r, T, delta, out.gouge, out.scallop, cand);
+    const Eigen::Vector3d from = inner_mesh ? same_place(tris[s.tri], s.p, inner_mesh->vertices) : s.p;
+    centres.trace(from, n, r, T, delta, out.gouge, out.scallop, cand);
     out.interior = !std::isfinite(keep_off.distance(s.p, margin, cand));
     if (!std::isnan(out.scallop)) {
-      const std::uint32_t piece_at = centres.nearest(s.p + std::max(0.0, out.scallop - delta) * n, r + spacing, cand);
+      const std::uint32_t piece_at = centres.nearest(from + std::max(0.0, out.scallop - delta) * n, r + spacing, cand);
       if (piece_at != std::numeric_limits<std::uint32_t>::max()) out.finisher = feed_setup[centres.segment_of(piece_at)];
     }
   };

@@ -73,9 +73,14 @@ struct PartSimulateOptions {
 // Throws std::invalid_argument for r <= 0, h <= 0, h >= r, a mesh without faces, no setup, no
 // feed move at all, or a non-finite centre (naming the setup).
 // outer  where given, gouge and rapids are measured against it instead of `part`: the part's outer
-//        bound when the real part is only known to lie between two meshes (mesh.cloud_envelope:
-//        scallop from the inner one, `part`, gouge against the outer one). Must have faces.
+//        bound when the real part is only known to lie between two meshes (mesh.cloud_envelope).
+//        Must have faces.
+// inner  where given, `part` with its vertices moved (the same faces): the part's inner bound. Each
+//        sample is still placed, classified (base, reach, interior) and reported on `part`, but
+//        its scallop is traced from the same place of the inner mesh (same face, same barycentric
+//        coordinates) along part's normal: the material left above the lowest the part may be.
 Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setups, const PartSimulateOptions& options,
-                         const std::function<void(double)>& progress = {}, const Mesh* outer = nullptr);
+                         const std::function<void(double)>& progress = {}, const Mesh* outer = nullptr,
+                         const Mesh* inner = nullptr);
 
 }  // namespace scallop

@@ -21,8 +21,11 @@ NodeDecl make_simulate_part_node() {
              "mesh.setup_base's report: faces within base_angle of its base_direction sit on the table and are not "
              "measured; absent: every face is measured", false)
       .input("outer", "Mesh",
-             "the part's outer bound (mesh.cloud_envelope's outer; then `mesh` is its inner): gouge and rapids are "
-             "measured against it, scallop from `mesh`; absent: both against `mesh`", false)
+             "the part's outer bound (mesh.cloud_envelope's outer): gouge and rapids are measured against it; "
+             "absent: against `mesh`", false)
+      .input("inner", "Mesh",
+             "the part's inner bound, `mesh` with its vertices moved (mesh.cloud_envelope's inner): each sample's "
+             "scallop is traced from its place there; samples are still placed and classified on `mesh`", false)
       .output("report", "Report",
               "pass (verify_part.py's rule: interior scallop <= 1.01 h, gouge <= max(e, 0.001), nothing uncut, no rapid "
               "through the part), fail_reasons, scallop/uncut figures for the whole part and its interior, gouge, "
@@ -78,7 +81,9 @@ NodeDecl make_simulate_part_node() {
     }
     try {
       const auto outer = ctx.has_input("outer") ? ctx.input<Mesh>("outer") : nullptr;
-      Simulation sim = simulate_part(*mesh, cuts, o, [&](double f) { ctx.progress(f, "simulating the part"); }, outer.get());
+      const auto inner = ctx.has_input("inner") ? ctx.input<Mesh>("inner") : nullptr;
+      Simulation sim = simulate_part(*mesh, cuts, o, [&](double f) { ctx.progress(f, "simulating the part"); }, outer.get(),
+                                     inner.get());
       Report rep;
       rep.data = sim.report;
       ctx.set("report", std::move(rep));

@@ -113,6 +113,16 @@ TEST(SimulatePart, BetweenAnInnerAndAnOuterMeshScallopIsFromTheInnerGougeAgainst
   const auto alone = simulate_part(inner, cuts, o).report;
   EXPECT_NEAR(alone["scallop_max_interior"].get<double>(), closed_form, 1e-5);
   EXPECT_LT(alone["gouge_max"].get<double>(), 1e-9);
+  // Samples on the reconstruction (10.01 high), scallop traced from the same places of the inner
+  // box: as from the inner box itself; from the reconstruction alone, 0.01 less.
+  const Mesh made = test::quad_box({1, 1, 1}, V(20, 20, 10.01));
+  const auto three = simulate_part(made, cuts, o, {}, &outer, &inner).report;
+  EXPECT_NEAR(three["scallop_max_interior"].get<double>(), closed_form, 1e-5);
+  EXPECT_NEAR(three["surface_area"].get<double>(), 2 * 400 + 4 * 20 * 10.01, 1e-7);  // the reconstruction's
+  EXPECT_NEAR(simulate_part(made, cuts, o).report["scallop_max_interior"].get<double>(), closed_form - 0.01, 1e-5);
+  const Mesh other = test::cube_mesh(2);
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { simulate_part(made, cuts, o, {}, nullptr, &other); }),
+            "the inner mesh is not the part's mesh with its vertices moved (its faces differ)");
   EXPECT_EQ(test::error_of<std::invalid_argument>([&] {
               const Mesh none;
               simulate_part(inner, cuts, o, {}, &none);
