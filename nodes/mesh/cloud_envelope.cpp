@@ -13,23 +13,6 @@
 
 namespace scallop {
 
-std::vector<Eigen::Vector3d> vertex_normals(const Mesh& mesh) {
-  const FaceGeometry g = face_geometry(mesh);
-  std::vector<Eigen::Vector3d> n(mesh.num_vertices(), Eigen::Vector3d::Zero());
-  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
-    const std::size_t m = mesh.face_size(f);
-    const std::uint32_t* c = mesh.face(f);
-    for (std::size_t i = 0; i < m; ++i) {
-      const Eigen::Vector3d& p = mesh.vertices[c[i]];
-      const double angle = angle_deg(mesh.vertices[c[(i + m - 1) % m]] - p, mesh.vertices[c[(i + 1) % m]] - p);
-      n[c[i]] += angle * g.normal[f];
-    }
-  }
-  for (auto& v : n)
-    if (v.norm() > 0) v.normalize();
-  return n;
-}
-
 CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d>& points, int k, double max_gap) {
   if (mesh.num_faces() == 0) throw std::invalid_argument("the mesh has no face");
   if (k < 1) throw std::invalid_argument("k must be >= 1");

@@ -49,8 +49,4 @@ struct CloudEnvelope {
 // point, or max_gap < 0.
 CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d>& points, int k, double max_gap = 0);
 
-// Unit vertex normals weighted by the faces' corner angles (a cube's edge: the bisector, its corner:
-// the diagonal), zero at a vertex without a face of any area.
-std::vector<Eigen::Vector3d> vertex_normals(const Mesh& mesh);
-
 }  // namespace scallop

@@ -1,4 +1,4 @@
-// Per-face geometry of a polygon mesh: unit normals, areas, centroids; and the angle between two
+// Per-face geometry of a polygon mesh: unit normals, areas, centroids; vertex normals; and the angle between two
 // directions. What the mesh filters (mesh.denoise) and mesh.sharp_edges measure faces with.
 #pragma once
 
@@ -23,6 +23,10 @@ struct FaceGeometry {
 FaceGeometry face_geometry(const Mesh& mesh);
 // The same for the mesh's faces at other vertex positions V (#V by 3).
 FaceGeometry face_geometry(const Mesh& mesh, const std::vector<Eigen::Vector3d>& V);
+
+// Unit vertex normals weighted by the faces' corner angles (a cube's edge: the bisector, its corner:
+// the diagonal), zero at a vertex without a face of any area.
+std::vector<Eigen::Vector3d> vertex_normals(const Mesh& mesh);
 
 // Angle between a and b in degrees, in [0, 180]; atan2(|a x b|, a . b), accurate also near 0 and 180.
 // 0 when either is zero.
