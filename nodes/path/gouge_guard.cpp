@@ -20,20 +20,21 @@ struct BallClearance::Impl {
   const HeightFieldModel& surface;
   const std::vector<Eigen::Vector3d>& points;
   double r;
+  const Outline* outline;
   PointsAdaptor<Eigen::Vector3d> adaptor{points};
   KdTree<Eigen::Vector3d, 2> tree{2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
-  Impl(const HeightFieldModel& s, const std::vector<Eigen::Vector3d>& p, double radius)
-      : surface(s), points(p), r(radius) {
+  Impl(const HeightFieldModel& s, const std::vector<Eigen::Vector3d>& p, double radius, const Outline* o)
+      : surface(s), points(p), r(radius), outline(o) {
     tree.buildIndex();
   }
 };
 
 BallClearance::BallClearance(const HeightFieldModel& surface, const std::vector<Eigen::Vector3d>& points,
-                             double r)
+                             double r, const Outline* outline)
     : impl_(nullptr) {
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
   if (points.empty()) throw std::invalid_argument("the cloud has no points");
-  impl_ = new Impl(surface, points, r);
+  impl_ = new Impl(surface, points, r, outline);
 }
 
 BallClearance::~BallClearance() { delete impl_; }
@@ -71,7 +72,8 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     const double q[3] = {s.x(), s.y(), 0};
     impl_->tree.findNeighbors(one, q, nanoflann::SearchParams(32, 0, false));
     const double sp = impl_->surface.spacing();
-    const bool in_band = d2 <= sp * sp || (d2 <= 4 * sp * sp && impl_->surface.reach_beyond(s.x(), s.y()) <= 0.5 * sp);
+    const bool in_band = (impl_->outline && impl_->outline->contains(s)) || d2 <= sp * sp ||
+                         (d2 <= 4 * sp * sp && impl_->surface.reach_beyond(s.x(), s.y()) <= 0.5 * sp);
     // (the uncertainty does not depend on force: the first eval below has set it)
     return in_band && impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/true);
   };
@@ -236,7 +238,7 @@ GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearan
   path.check_passes();
   const double r = path.tool_radius, e = path.chord_error;
   const double tol = o.tolerance;  // <= 0: per position (PassGuard::position_tolerance)
-  const double chord_tol = o.chord_tolerance > 0 ? o.chord_tolerance : 0.95 * e;
+  const double chord_tol = o.chord_tolerance > 0 ? o.chord_tolerance : 0.9 * e;
   if (o.max_splits < 0) throw std::invalid_argument("max_splits must be >= 0");
 
   GougeGuardResult res;

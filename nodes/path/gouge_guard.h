@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "nodes/geom/height_field_model.h"
+#include "nodes/geom/outline.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
@@ -34,8 +35,12 @@ namespace scallop {
 // Clearance of a ball of radius r against a cloud's surface.
 class BallClearance {
  public:
-  // surface  the height field of `points`; points  the cloud (mm). Both must outlive this.
-  BallClearance(const HeightFieldModel& surface, const std::vector<Eigen::Vector3d>& points, double r);
+  // surface  the height field of `points`; points  the cloud (mm); outline  optional: the patch's
+  // outline in xy (post.simulate's, from the boundary loops): a foot point inside it is on the
+  // surface however far from the points (a gap between rim points that the certificate counts).
+  // All must outlive this.
+  BallClearance(const HeightFieldModel& surface, const std::vector<Eigen::Vector3d>& points, double r,
+                const Outline* outline = nullptr);
   ~BallClearance();
   BallClearance(const BallClearance&) = delete;
   BallClearance& operator=(const BallClearance&) = delete;
@@ -44,8 +49,9 @@ class BallClearance {
     double clearance = INFINITY;  // mm: distance from the centre to the surface − r (< 0: gouge)
     Eigen::Vector3d foot;         // nearest surface point found (valid when on_surface)
     Eigen::Vector3d normal;       // its upward unit normal (valid when on_surface)
-    bool on_surface = false;      // the foot point lies on the patch, or in the band beyond
-                                  // its outermost points where the part's edge lies
+    bool on_surface = false;      // the foot point lies on the patch, in the band beyond its
+                                  // outermost points where the part's edge lies, or inside
+                                  // the outline
     double uncertainty = 0;       // mm the surface there may be off the real one (on_surface)
   };
   // centre  ball centre; hint  a surface point near the contact (where the foot search starts).
@@ -60,7 +66,7 @@ class BallClearance {
 struct GougeGuardOptions {
   double tolerance = 0;        // mm a planned position may reach in before it is lifted;
                                // <= 0: e/4 + chord_budget(e, δ).reach
-  double chord_tolerance = 0;  // mm a move may reach in before a point is inserted; <= 0: 0.95 e
+  double chord_tolerance = 0;  // mm a move may reach in before a point is inserted; <= 0: 0.9 e (the planner's chord budget)
   int max_splits = 3;          // how often a move may be halved
   std::function<void(double)> progress;
 };

@@ -5,6 +5,7 @@
 #include "nodes/path/gouge_guard.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
+#include "nodes/types/param.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop::path_nodes {
@@ -12,7 +13,7 @@ namespace scallop::path_nodes {
 NodeDecl make_gouge_guard_node() {
   NodeDecl d;
   d.type = "path.gouge_guard";
-  d.version = 5;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge; 4: a position may reach in by what the planner meant (chord budget) + e/4; 5: the height field's uncertainty counts its fit's misfit
+  d.version = 6;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge; 4: a position may reach in by what the planner meant (chord budget) + e/4; 5: the height field's uncertainty counts its fit's misfit; 6: optional loops
                   // 3: fails where a ball would have to be lifted by more than 3 tool radii
   d.description =
       "checks every planned ball position and the middle of every move against the cloud's "
@@ -20,6 +21,9 @@ NodeDecl make_gouge_guard_node() {
       "denoised cloud: come closer than the surface's uncertainty) and reports where and by how much";
   d.input("path", "Toolpath", "the planned passes")
       .input("cloud", "Cloud", "the surface the passes must not cut into (seen from +z); with per-point uncertainty, balls clear it by that much (more at gaps beyond its edge)")
+      .input("loops", "Loops", "optional: the patch's boundary loops (indices into 'cloud'); the surface is "
+             "then checked everywhere inside their outline, as post.simulate does, also in gaps between "
+             "rim points farther than the band kept without them", false)
       .output("toolpath", "Toolpath", "the passes, lifted where needed (lifted contact points are the ball's new touching points)")
       .output("report", "Report",
               "positions and moves checked, lifted and inserted positions, the deepest cut-in "
@@ -32,7 +36,7 @@ NodeDecl make_gouge_guard_node() {
               "it keeps for the uncertainty covers only the rest of it)")
       .number("chord_tolerance", &GougeGuardOptions::chord_tolerance, 0, 10, "mm",
               "how far the surface (raised by its uncertainty) may come inside the ball in the middle "
-              "of a move before a lifted point is inserted; 0: 0.95 of the path's chord error")
+              "of a move before a lifted point is inserted; 0: 0.9 of the path's chord error (what the planner's chord budget lets the surface, raised by its uncertainty, reach in anywhere)")
       .integer("max_splits", &GougeGuardOptions::max_splits, 0, 10, "", "how often a move may be halved");
   d.run = [](NodeContext& ctx) {
     auto path = ctx.input<Toolpath>("path");
@@ -41,7 +45,10 @@ NodeDecl make_gouge_guard_node() {
     o.progress = [&ctx](double f) { ctx.progress(f, "checking the ball against the surface"); };
     try {
       HeightFieldModel surface(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
-      BallClearance clearance(surface, cloud->points, path->tool_radius);
+      const Outline outline(ctx.has_input("loops")
+                                ? loop_polygons_xy(*ctx.input<BoundaryLoops>("loops"), cloud->points)
+                                : std::vector<std::vector<Eigen::Vector2d>>{});
+      BallClearance clearance(surface, cloud->points, path->tool_radius, outline.empty() ? nullptr : &outline);
       auto res = guard_gouges(*path, clearance, o);
       for (const auto& w : res.report["warnings"]) ctx.warn(w.get<std::string>());  // lifts, in one line each
       Report report;

@@ -16,6 +16,7 @@
 
 #include "nodes/geom/height_field_model.h"
 #include "nodes/path/step_size.h"
+#include "nodes/geom/outline.h"
 #include "nodes/path/uv_interpolation.h"
 #include "nodes/geom/kd_tree.h"
 
@@ -68,31 +69,8 @@ struct Pass {
 // The patch's holes in uv: a point of the domain is over a hole when it lies inside the polygon
 // of a hole loop's uv images (the map leaves no cloud point there; the interpolant would only
 // extrapolate). Passes are not cut there: the tool lifts over the hole (post.link).
-class Holes {
- public:
-  void add(std::vector<Eigen::Vector2d> polygon) {
-    if (polygon.size() < 3) return;
-    Eigen::AlignedBox2d box;
-    for (const auto& q : polygon) box.extend(q);
-    polygons_.push_back({std::move(polygon), box});
-  }
-  bool empty() const { return polygons_.empty(); }
-  bool contains(const Eigen::Vector2d& q) const {
-    for (const auto& [poly, box] : polygons_) {
-      if (!box.contains(q)) continue;
-      bool in = false;  // even-odd rule
-      for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
-        if ((poly[i].y() > q.y()) != (poly[j].y() > q.y()) &&
-            q.x() < (poly[j].x() - poly[i].x()) * (q.y() - poly[i].y()) / (poly[j].y() - poly[i].y()) + poly[i].x())
-          in = !in;
-      if (in) return true;
-    }
-    return false;
-  }
-
- private:
-  std::vector<std::pair<std::vector<Eigen::Vector2d>, Eigen::AlignedBox2d>> polygons_;
-};
+// (an Outline of the hole loops, tested as their union)
+using Holes = Outline;
 
 // Local geometry at a vertex of a pass, and the side step it allows.
 struct VertexInfo {
@@ -206,7 +184,7 @@ class Planner {
   int forward_floor_hits = 0;
 
   SurfaceSample at(double s, double t) const { return f_(co_.uv(s, t)); }
-  bool over_hole(double s, double t) const { return !holes_.empty() && holes_.contains(co_.uv(s, t)); }
+  bool over_hole(double s, double t) const { return !holes_.empty() && holes_.any_contains(co_.uv(s, t)); }
   // How far the planner's fit lies from the cloud's height field (the certificate's model) at x,
   // along the normal; 0 off the field. Where the two disagree the surface is known no better
   // than that: the scallop limit keeps the gap as a margin (Margins). It grows where a fit over
@@ -923,7 +901,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   const BallLifter lifter(cloud.points, o.tool_radius);
   const HeightFieldModel model(cloud.points, 20, cloud.has_uncertainty() ? &cloud.uncertainty : nullptr);
   // The holes: every loop after the outer one, as the polygon of its points' uv.
-  Holes holes;
+  std::vector<std::vector<Eigen::Vector2d>> hole_polygons;
   std::vector<const std::vector<int>*> hole_loops;
   if (loops)
     for (std::size_t h = 1; h < loops->loops.size(); ++h) {
@@ -936,8 +914,9 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
         poly.push_back(map.uv[i]);
       }
       if (poly.size() >= 3) hole_loops.push_back(&loops->loops[h]);
-      holes.add(std::move(poly));
+      hole_polygons.push_back(std::move(poly));
     }
+  const Holes holes(std::move(hole_polygons));
   Planner planner(interp, lifter, &model, co, o, holes);
   std::vector<double> nn;
   for (std::size_t i = 0; i < neighbors.size(); i += std::max<std::size_t>(1, neighbors.size() / 4096))

@@ -54,21 +54,8 @@ NodeDecl make_simulate_node() {
     o.tool_radius = r;
     o.scallop = ctx.number("scallop") > 0 ? ctx.number("scallop") : h;
     o.chord = ctx.number("chord") >= 0 ? ctx.number("chord") : e;
-    if (ctx.has_input("loops")) {
-      auto loops = ctx.input<BoundaryLoops>("loops");
-      if (loops->loops.empty()) throw NodeError("the input 'loops' has no loop");
-      const int n = static_cast<int>(cloud->points.size());
-      for (const auto& L : loops->loops) {
-        auto& poly = o.loops.emplace_back();
-        for (int i : L) {
-          if (i < 0 || i >= n)
-            throw NodeError("a loop refers to point " + std::to_string(i) + " but the cloud has " + std::to_string(n) +
-                            " points; give 'loops' computed on the same cloud");
-          poly.emplace_back(cloud->points[i].x(), cloud->points[i].y());
-        }
-      }
-    }
     try {
+      if (ctx.has_input("loops")) o.loops = loop_polygons_xy(*ctx.input<BoundaryLoops>("loops"), cloud->points);
       HeightFieldModel surf(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
       Simulation sim = simulate_cut(surf, feed, rapid, o, [&](double f) { ctx.progress(f, "simulating"); });
       Report rep;

@@ -1,6 +1,7 @@
 #include "nodes/types/param.h"
 
 #include <stdexcept>
+#include <string>
 
 namespace scallop {
 
@@ -81,6 +82,23 @@ ValuePtr UVMap::deserialize(std::istream& in) {
   m->corners = bin::read_vector<int>(in);
   m->residual = bin::read_f64(in);
   return m;
+}
+
+std::vector<std::vector<Eigen::Vector2d>> loop_polygons_xy(const BoundaryLoops& loops,
+                                                           const std::vector<Eigen::Vector3d>& points) {
+  if (loops.loops.empty()) throw std::invalid_argument("the input 'loops' has no loop");
+  const int n = static_cast<int>(points.size());
+  std::vector<std::vector<Eigen::Vector2d>> polygons;
+  for (const auto& L : loops.loops) {
+    auto& poly = polygons.emplace_back();
+    for (int i : L) {
+      if (i < 0 || i >= n)
+        throw std::invalid_argument("a loop refers to point " + std::to_string(i) + " but the cloud has " +
+                                    std::to_string(n) + " points; give 'loops' computed on the same cloud");
+      poly.emplace_back(points[i].x(), points[i].y());
+    }
+  }
+  return polygons;
 }
 
 }  // namespace scallop

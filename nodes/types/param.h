@@ -22,6 +22,11 @@ struct BoundaryLoops final : Value {
   static ValuePtr deserialize(std::istream& in);
 };
 
+// The loops as closed polygons of their points' (x, y) (the patch's outline seen from +z).
+// Throws std::invalid_argument when there is no loop or a loop refers to a point `points` lacks.
+std::vector<std::vector<Eigen::Vector2d>> loop_polygons_xy(const BoundaryLoops& loops,
+                                                           const std::vector<Eigen::Vector3d>& points);
+
 // A meshless Laplacian: L is #P by #P, row i is the operator at point i
 // ((L f)_i = sum_j w_ij (f_i - f_j), rows sum to zero).
 struct Laplacian final : Value {
