@@ -97,8 +97,6 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
   using Mat6 = Eigen::Matrix<double, 6, 6>;
   Mat6 M = Mat6::Zero();
   Eigen::Matrix<double, 6, 6> rhs = Mat6::Zero();
-  Eigen::Matrix3d M3 = Eigen::Matrix3d::Zero();
-  Eigen::Matrix<double, 3, 6> rhs3 = Eigen::Matrix<double, 3, 6>::Zero();
   int used = 0;
   // A soft maximum of the neighbours' uncertainty: the weighted power mean of order 8 leans on
   // the largest values yet stays continuous in uv (the weights vanish at D), so a stock taken
@@ -113,17 +111,17 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
     ++used;
     if (impl_->U && uscale > 0) {
       uw += w;
-      usum += w * std::pow((*impl_->U)[idx[j]] / uscale, 8);
+      const double x2 = (*impl_->U)[idx[j]] / uscale * ((*impl_->U)[idx[j]] / uscale);
+      const double x4 = x2 * x2;
+      usum += w * (x4 * x4);
     }
     const Eigen::Vector2d o = (impl_->adaptor.pts[idx[j]] - q) * inv_D;
     Eigen::Matrix<double, 6, 1> b;
     b << 1, o.x(), o.y(), o.x() * o.x(), o.x() * o.y(), o.y() * o.y();
     Eigen::Matrix<double, 1, 6> f;
     f << impl_->P[idx[j]].transpose(), impl_->N[idx[j]].transpose();
-    M.noalias() += w * b * b.transpose();
-    rhs.noalias() += w * b * f;
-    M3.noalias() += w * b.head<3>() * b.head<3>().transpose();
-    rhs3.noalias() += w * b.head<3>() * f;
+    M.selfadjointView<Eigen::Lower>().rankUpdate(b, w);
+    rhs.noalias() += (w * b) * f;
   }
   Eigen::Matrix<double, 1, 6> value;
   // Tangents of the fitted position (per unit of the scaled offsets): their cross product is
@@ -133,7 +131,7 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
   Eigen::Vector3d tu = Eigen::Vector3d::Zero(), tv = Eigen::Vector3d::Zero();
   bool ok = false;
   if (used >= 6) {
-    Eigen::LDLT<Mat6> ldlt(M);
+    Eigen::LDLT<Mat6, Eigen::Lower> ldlt(M);
     const auto dg = ldlt.vectorD().cwiseAbs();
     if (ldlt.info() == Eigen::Success && dg.minCoeff() > 1e-9 * dg.maxCoeff()) {
       const Mat6 c = ldlt.solve(rhs);
@@ -144,8 +142,11 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
     }
   }
   if (!ok && used >= 3) {
-    // Too few or collinear neighbours for a quadric: a plane still has linear precision.
-    Eigen::LDLT<Eigen::Matrix3d> ldlt(M3);
+    // Too few or collinear neighbours for a quadric: a plane still has linear precision (the
+    // linear basis's equations are the quadric's first three rows and columns).
+    const Eigen::Matrix3d M3 = M.topLeftCorner<3, 3>();
+    const Eigen::Matrix<double, 3, 6> rhs3 = rhs.topRows<3>();
+    Eigen::LDLT<Eigen::Matrix3d, Eigen::Lower> ldlt(M3);
     const auto dg = ldlt.vectorD().cwiseAbs();
     if (ldlt.info() == Eigen::Success && dg.minCoeff() > 1e-9 * dg.maxCoeff()) {
       const Eigen::Matrix<double, 3, 6> c = ldlt.solve(rhs3);
@@ -159,7 +160,7 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
     value << impl_->P[idx[0]].transpose(), impl_->N[idx[0]].transpose();
   }
   SurfaceSample s;
-  if (impl_->U) s.uncertainty = uw > 0 ? uscale * std::pow(usum / uw, 1.0 / 8) : (*impl_->U)[idx[0]];
+  if (impl_->U) s.uncertainty = uw > 0 ? uscale * std::sqrt(std::sqrt(std::sqrt(usum / uw))) : (*impl_->U)[idx[0]];
   s.position = value.head<3>().transpose();
   Eigen::Vector3d n = value.tail<3>().transpose();
   const double nn = n.norm();
