@@ -597,43 +597,57 @@ class Planner {
           return hits_at(A, B, sA + f * (sB - sA), t, w);
         };
         // Coarse scan across the strip; the cusp is where the first hit passes from A's balls
-        // to B's, found by bisection on hit_A - hit_B.
+        // to B's, a root of hit_A - hit_B (smooth across the strip) found by regula falsi with
+        // the Illinois modification (superlinear, and the root stays bracketed).
         constexpr int kScan = 8;
-        double gmax = 0, fmax = 0.5;
-        double f_lo = -1, f_hi = -1;
+        double gmax = 0;
+        SurfaceSample w, x;
+        double f_lo = -1, f_hi = -1, d_lo = 0, d_hi = 0;
         double prev_f = 0, prev_d = -kInf;  // at f = 0 the point touches A's ball
-        for (int j = 1; j < kScan; ++j) {
-          const double f = double(j) / kScan;
-          const Eigen::Vector2d h = g(f, nullptr);
+        auto consider = [&](const Eigen::Vector2d& h) {  // false where a ray misses: uncut
           const double v = std::min(h[0], h[1]);
           if (!std::isfinite(v)) {
-            gmax = kUncut, fmax = f;
-            break;
+            gmax = kUncut, w = x;
+            return false;
           }
-          if (v > gmax) gmax = v, fmax = f;
+          if (v > gmax) gmax = v, w = x;
+          return true;
+        };
+        bool cut = true;
+        for (int j = 1; j < kScan && cut; ++j) {
+          const double f = double(j) / kScan;
+          const Eigen::Vector2d h = g(f, &x);
+          if (j == 1) w = x;
+          cut = consider(h);
           const double d = h[0] - h[1];
-          if (f_lo < 0 && prev_d <= 0 && d > 0) f_lo = prev_f, f_hi = f;
+          if (cut && f_lo < 0 && prev_d <= 0 && d > 0) f_lo = prev_f, f_hi = f, d_lo = prev_d, d_hi = d;
           prev_f = f, prev_d = d;
         }
-        if (gmax < kUncut && f_lo < 0 && prev_d <= 0) f_lo = prev_f, f_hi = 1;  // crossing next to B
-        if (gmax < kUncut && f_lo >= 0) {
-          for (int it = 0; it < 14; ++it) {
-            const double fm = 0.5 * (f_lo + f_hi);
-            const Eigen::Vector2d h = g(fm, nullptr);
-            if (h[0] - h[1] <= 0) f_lo = fm;
-            else f_hi = fm;
-            const double v = std::min(h[0], h[1]);
-            if (!std::isfinite(v)) {
-              gmax = kUncut, fmax = fm;
-              break;
+        if (cut && f_lo < 0 && prev_d <= 0) f_lo = prev_f, f_hi = 1, d_lo = prev_d, d_hi = kInf;  // crossing next to B
+        if (cut && f_lo >= 0) {
+          // to a 2^-17 of the strip (the cusp's height is then within a micron of a micron)
+          int side = 0;
+          for (int it = 0; it < 24 && f_hi - f_lo > 0x1p-17; ++it) {
+            double fm = 0.5 * (f_lo + f_hi);  // bisection where an end is not finite
+            if (std::isfinite(d_lo) && std::isfinite(d_hi) && d_hi > d_lo)
+              fm = std::clamp(f_lo - d_lo * (f_hi - f_lo) / (d_hi - d_lo), f_lo + 0.01 * (f_hi - f_lo),
+                              f_hi - 0.01 * (f_hi - f_lo));
+            const Eigen::Vector2d h = g(fm, &x);
+            if (!consider(h)) break;
+            const double d = h[0] - h[1];
+            if (d <= 0) {
+              f_lo = fm, d_lo = d;
+              if (side == -1) d_hi *= 0.5;  // Illinois: the end kept twice has its value halved
+              side = -1;
+            } else {
+              f_hi = fm, d_hi = d;
+              if (side == 1) d_lo *= 0.5;
+              side = 1;
             }
-            if (v > gmax) gmax = v, fmax = fm;
           }
         }
         // on the real surface the scallop may be up to delta higher, and on the certificate's
         // height field up to fit_gap (see Margins)
-        SurfaceSample w;
-        g(fmax, &w);
         double field_delta;
         const double gap = fit_gap(w, &field_delta);
         best[i] = gmax + h_ - margins(o_, std::max(w.uncertainty, field_delta), gap).scallop;
