@@ -11,6 +11,7 @@
 
 #include "nodes/param/boundary_map.h"
 #include "nodes/param/two_level_solver.h"
+#include "nodes/param/umfpack_lock.h"
 
 namespace scallop {
 
@@ -77,6 +78,7 @@ struct SystemFactor {
 // X of A X = B by UMFPACK's LU, factorised once per SystemFactor.
 Eigen::MatrixXd solve_direct(const Eigen::SparseMatrix<double, Eigen::RowMajor>& A, const Eigen::MatrixXd& B,
                              SystemFactor& f) {
+  std::lock_guard lock(umfpack_mutex());
   if (!f.lu) {
     f.A = A;
     f.lu = std::make_unique<Eigen::UmfPackLU<Eigen::SparseMatrix<double>>>();

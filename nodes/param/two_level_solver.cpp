@@ -1,4 +1,5 @@
 #include "nodes/param/two_level_solver.h"
+#include "nodes/param/umfpack_lock.h"
 
 #include <umfpack.h>
 #include <tbb/parallel_for.h>
@@ -129,6 +130,7 @@ bool TwoLevelPreconditioner::build(const RowMatrix& A, int sweeps) {
   const double* Ax = coarse->Ac.valuePtr();
   void* symbolic = nullptr;
   double info[UMFPACK_INFO];
+  std::lock_guard lock(umfpack_mutex());
   if (umfpack_di_symbolic(nc, nc, Ap, Ai, Ax, &symbolic, coarse->control, info) != UMFPACK_OK) {
     if (symbolic) umfpack_di_free_symbolic(&symbolic);
     return false;
@@ -160,8 +162,11 @@ Eigen::VectorXd TwoLevelPreconditioner::apply(const Eigen::VectorXd& r) const {
   const Eigen::VectorXd res = r - A * z;
   for (Eigen::Index i = 0; i < n; ++i) rc[aggregate_[i]] += res[i];
   double info[UMFPACK_INFO];
-  umfpack_di_solve(UMFPACK_A, coarse_->Ac.outerIndexPtr(), coarse_->Ac.innerIndexPtr(), coarse_->Ac.valuePtr(),
-                   zc.data(), rc.data(), coarse_->numeric, coarse_->control, info);
+  {
+    std::lock_guard lock(umfpack_mutex());
+    umfpack_di_solve(UMFPACK_A, coarse_->Ac.outerIndexPtr(), coarse_->Ac.innerIndexPtr(), coarse_->Ac.valuePtr(),
+                     zc.data(), rc.data(), coarse_->numeric, coarse_->control, info);
+  }
   for (Eigen::Index i = 0; i < n; ++i) z[i] += zc[aggregate_[i]];
   for (int s = 0; s < sweeps_; ++s)
     for (Eigen::Index i = n - 1; i >= 0; --i) relax(i);
