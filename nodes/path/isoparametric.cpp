@@ -967,6 +967,8 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     bool accepted = false;
     Pass B;
     StripCheck chk;
+    double ds_prev = 0, scallop_prev = 0;
+    int no_gain = 0;  // tries in a row whose smaller step did not lower the scallop
     for (int iter = 0; iter < 30; ++iter) {
       const bool last = s + ds >= co.S * (1 - 1e-12);
       const double s_next = last ? co.S : s + ds;
@@ -979,8 +981,26 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
       }
       if (iter == 0) ++shrunk;
       if (ds <= 1e-3 * ds0) break;
-      // scallop ~ ds^2: aim just under the limit, never shrink by more than a factor 4 at once
-      ds *= std::clamp(0.995 * std::sqrt(hlim / chk.scallop_max), 0.25, 0.995);
+      // where a smaller step leaves as much (a rim or a place the ball cannot reach, not the
+      // cusp), shrinking on only creeps: six such tries in a row end it (the scallop may rise
+      // for a few tries before it falls: measured on the bundled example's second ring)
+      no_gain = iter > 0 && chk.scallop_max >= scallop_prev ? no_gain + 1 : 0;
+      if (no_gain >= 6) break;
+      // The next step, aimed just under the limit and never less than a quarter of this one.
+      // The strip's scallop is the cusp's (~ ds^2) plus margins that do not shrink with the
+      // step (the surface's uncertainty, the fit gap): after the first try, the secant through
+      // the last two tries finds that step in a try or two where scaling by sqrt(h / scallop)
+      // alone took up to 18 (the bundled example: 449 strip checks for 128 passes).
+      const double target = 0.999 * hlim;
+      double next = ds * 0.995 * std::sqrt(hlim / chk.scallop_max);
+      if (iter > 0 && chk.scallop_max < scallop_prev && ds < ds_prev) {
+        // (in ds^2, in which the cusp's part is linear)
+        const double a2 = ds * ds, b2 = ds_prev * ds_prev;
+        const double secant2 = a2 - (chk.scallop_max - target) * (b2 - a2) / (scallop_prev - chk.scallop_max);
+        if (std::isfinite(secant2) && secant2 > 0) next = std::sqrt(secant2);
+      }
+      ds_prev = ds, scallop_prev = chk.scallop_max;
+      ds = std::clamp(next, 0.25 * ds, 0.995 * ds);
     }
     if (!accepted) {
       // No step keeps the limit here (a concave place the ball cannot reach, a kink): take the
