@@ -45,6 +45,12 @@ for line in open(sys.argv[1]):
 floors = {l.split()[1]: float(l.split()[2]) for l in open(sys.argv[2]) if l.startswith("floor")}
 wall = float(open(sys.argv[3]).read())
 print(f'   whole cold run / library floors: {wall:.2f} / {floors["sum"]:.2f} = {wall / floors["sum"]:.1f}x')
+# issue 15's goal: the run is at most 2x the floors plus the planner, guard and simulation
+own = sum(json.loads(l)["seconds"] for l in open(sys.argv[1])
+          if json.loads(l)["event"] == "node_finish"
+          and json.loads(l)["type"] in ("path.isoparametric", "path.gouge_guard", "post.simulate"))
+print(f'   without planner, guard and simulation ({own:.2f} s): {wall - own:.2f} / {floors["sum"]:.2f} = '
+      f'{(wall - own) / floors["sum"]:.1f}x (goal <= 2x)')
 PY
   run warm
   run scallop_height=0.04 --set scallop_height=0.04
