@@ -58,7 +58,7 @@ TrimSteepResult trim_steep(const std::vector<Eigen::Vector3d>& P, const TrimStee
   if (P.size() <= static_cast<std::size_t>(o.k))
     throw std::invalid_argument("the cloud has " + std::to_string(P.size()) +
                                 " points; trimming needs more than k = " + std::to_string(o.k));
-  const Neighborhoods nbrs = compute_knn(P, o.k);
+  Neighborhoods nbrs = compute_knn(P, o.k);
   // A line's normals tilt any way around it: it would be "trimmed as steep", not named.
   if (auto line = one_dimensional_problem(principal_extents(P), median_spacing(nbrs)); !line.empty())
     throw std::invalid_argument(line);
@@ -115,6 +115,13 @@ TrimSteepResult trim_steep(const std::vector<Eigen::Vector3d>& P, const TrimStee
             [](const TrimmedRegion& a, const TrimmedRegion& b) { return a.area > b.area; });
   if (regions.size() > 10) regions.resize(10);
   r.regions = std::move(regions);
+  if (r.kept.size() == n) {
+    r.neighbors = std::move(nbrs);
+  } else if (r.kept.size() > static_cast<std::size_t>(o.k)) {
+    std::vector<Eigen::Vector3d> kept(r.kept.size());
+    for (std::size_t j = 0; j < kept.size(); ++j) kept[j] = P[r.kept[j]];
+    r.neighbors = compute_knn(kept, o.k);
+  }
   return r;
 }
 

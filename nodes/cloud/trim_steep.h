@@ -39,6 +39,10 @@ struct TrimSteepResult {
   double trimmed_area = 0;        // mm², of the points not kept
   double max_slope_kept_deg = 0;
   std::vector<TrimmedRegion> regions;  // pieces of the points not kept, largest area first (<= 10)
+  // The k nearest neighbours of each kept point among the kept points, nearest first (what
+  // cloud.knn computes on the trimmed cloud): the ones found for the trim when every point is
+  // kept, computed again on the kept points otherwise.
+  Neighborhoods neighbors;
 };
 
 // P  #P by 3 positions (mm), finite, #P > k.

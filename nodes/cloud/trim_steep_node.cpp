@@ -23,12 +23,16 @@ std::string fmt(double x) {
 NodeDecl make_trim_steep_node() {
   NodeDecl d;
   d.type = "cloud.trim_steep";
-  d.version = 1;
+  d.version = 2;  // 2: the kept cloud's k nearest neighbours as an output
   d.description =
       "trims a patch's steep rim (points steeper than max_slope, and what that cuts off) so the "
       "rest can be planned and certified; the trimmed band is reported as not machined";
   d.input("cloud", "Cloud", "the points")
       .output("cloud", "Cloud", "the largest connected piece of the points not steeper than max_slope, in their order")
+      .output("neighbors", "Neighbors",
+              "k nearest neighbours of each kept point among the kept points, nearest first, as "
+              "cloud.knn gives them (the trim's own when every point is kept: a graph need not "
+              "search them twice)")
       .output("report", "Report",
               "{points, kept, steep (steeper than max_slope), cut_off (gentle points in smaller "
               "pieces), area_mm2, trimmed_area_mm2, trimmed_fraction (of the area), "
@@ -38,7 +42,8 @@ NodeDecl make_trim_steep_node() {
       .number("max_slope", &TrimSteepOptions::max_slope_deg, 1, 90, "deg",
               "points whose tangent plane is steeper than this to the xy plane are not "
               "machined (90: nothing is trimmed)")
-      .integer("k", &TrimSteepOptions::k, 3, 256, "", "neighbours of the slope estimate and of the connectivity");
+      .integer("k", &TrimSteepOptions::k, 3, 256, "",
+               "neighbours of the slope estimate, of the connectivity and of the output 'neighbors'");
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");
     const TrimSteepOptions o = ctx.options<TrimSteepOptions>();
@@ -85,8 +90,12 @@ NodeDecl make_trim_steep_node() {
       if (cloud->has_normals()) out.normals.push_back(cloud->normals[i]);
       if (cloud->has_uncertainty()) out.uncertainty.push_back(cloud->uncertainty[i]);
     }
+    if (r.neighbors.size() != out.size())
+      throw NodeError("only " + std::to_string(out.size()) + " points are kept: the " + std::to_string(o.k) +
+                      " nearest neighbours of each need more (raise max_slope or lower k)");
     ctx.set("report", std::move(report));
     ctx.set("cloud", std::move(out));
+    ctx.set("neighbors", std::move(r.neighbors));
   };
   return d;
 }

@@ -1,4 +1,5 @@
 #include "nodes/cloud/trim_steep.h"
+#include "nodes/cloud/knn.h"
 
 #include <gtest/gtest.h>
 
@@ -160,6 +161,43 @@ TEST(TrimSteepNode, SaysWhatIsNotMachinedAndKeepsTheRest) {
             0u)
       << said[0];
   EXPECT_NE(said[0].find("steeper than 70 degrees or cut off by them, in 1 pieces"), std::string::npos) << said[0];
+
+  // its neighbours are cloud.knn's on the kept points: whether some were trimmed (computed
+  // again on them) or none (the trim's own, handed on)
+  auto nbrs = std::dynamic_pointer_cast<const Neighborhoods>(out.at("neighbors"));
+  ASSERT_TRUE(nbrs);
+  const Neighborhoods expect = compute_knn(cloud->points, 16);
+  EXPECT_EQ(nbrs->k, 16);
+  EXPECT_EQ(nbrs->indices, expect.indices);
+  EXPECT_EQ(nbrs->sq_dists, expect.sq_dists);
+  params["max_slope"] = 90.0;
+  NodeContext all(d, "trim", "cap", params, {{"cloud", std::make_shared<const PointCloud>(pc)}}, nullptr);
+  d.run(all);
+  auto all_out = all.take_outputs();
+  auto all_cloud = std::dynamic_pointer_cast<const PointCloud>(all_out.at("cloud"));
+  auto all_nbrs = std::dynamic_pointer_cast<const Neighborhoods>(all_out.at("neighbors"));
+  ASSERT_EQ(all_cloud->size(), pc.size());
+  const Neighborhoods all_expect = compute_knn(pc.points, 16);
+  EXPECT_EQ(all_nbrs->indices, all_expect.indices);
+  EXPECT_EQ(all_nbrs->sq_dists, all_expect.sq_dists);
+
+  // fewer points kept than neighbours asked for each: a clear error, not an empty graph
+  PointCloud few;
+  few.points = sphere_cap(30, 84, 300, 5);
+  params["max_slope"] = 20.0;  // keeps 21 of these 300 points
+  params["k"] = 64;
+  NodeContext thin(d, "trim", "cap", params, {{"cloud", std::make_shared<const PointCloud>(few)}}, nullptr);
+  try {
+    d.run(thin);
+    FAIL() << "no error";
+  } catch (const NodeError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.rfind("only ", 0), 0u) << m;
+    EXPECT_NE(m.find(" points are kept: the 64 nearest neighbours of each need more (raise max_slope or lower k)"),
+              std::string::npos)
+        << m;
+  }
+  params["k"] = 16;
 
   params["max_slope"] = 1.0;
   NodeContext none(d, "trim", "cap", params, {{"cloud", std::make_shared<const PointCloud>(pc)}}, nullptr);
