@@ -496,7 +496,7 @@ TEST(Cli, AFailingNodeNamesTheSetThatGaveItsParameters) {
             std::string::npos) << out;
   // refused before running: the --set is named first
   EXPECT_EQ(test::run_command(kScallop + " validate " + kZigzag + " --set scallop_height=-1", &out), 2) << out;
-  EXPECT_NE(out.find("error: --set scallop_height=-1 (nodes[13].params.scallop_height): node 'plan': parameter "
+  EXPECT_NE(out.find("error: --set scallop_height=-1 (nodes[12].params.scallop_height): node 'plan': parameter "
                      "'scallop_height' = -1 is out of range; expected 1e-06 .. 100 mm\n"),
             std::string::npos) << out;
 }
