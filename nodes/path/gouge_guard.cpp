@@ -64,7 +64,9 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
   // away in a gap the sample left between the points of a rim (no farther out than half a
   // spacing past them). The field's extrapolation there, with its grown uncertainty, is the
   // best estimate of the part.
-  auto near_cloud = [&] {
+  // Given the outline, everywhere inside it as well (no point search needed there).
+  auto in_band = [&] {
+    if (impl_->outline && impl_->outline->contains(s)) return true;
     std::uint32_t j;
     double d2;
     nanoflann::KNNResultSet<double, std::uint32_t> one(1);
@@ -72,10 +74,11 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     const double q[3] = {s.x(), s.y(), 0};
     impl_->tree.findNeighbors(one, q, nanoflann::SearchParams(32, 0, false));
     const double sp = impl_->surface.spacing();
-    const bool in_band = (impl_->outline && impl_->outline->contains(s)) || d2 <= sp * sp ||
-                         (d2 <= 4 * sp * sp && impl_->surface.reach_beyond(s.x(), s.y()) <= 0.5 * sp);
+    return d2 <= sp * sp || (d2 <= 4 * sp * sp && impl_->surface.reach_beyond(s.x(), s.y()) <= 0.5 * sp);
+  };
+  auto near_cloud = [&] {
     // (the uncertainty does not depend on force: the first eval below has set it)
-    return in_band && impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/true);
+    return in_band() && impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/true);
   };
   if (found && (impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/false, &res.uncertainty) || near_cloud())) {
     res.on_surface = true;

@@ -25,6 +25,14 @@ std::vector<Eigen::Vector3d> plane_cloud() {
   return c;
 }
 
+// The plane cloud with a gap at its rim: no points within `radius` of (10, 0).
+std::vector<Eigen::Vector3d> plane_cloud_with_rim_gap(double radius) {
+  std::vector<Eigen::Vector3d> c;
+  for (const auto& p : plane_cloud())
+    if (std::hypot(p.x() - 10, p.y()) > radius) c.push_back(p);
+  return c;
+}
+
 // The sphere of radius R about (0, 0, -R + 5), its upper cap sampled over [-10, 10]^2.
 constexpr double kR = 30;
 double cap_z(double x, double y) { return std::sqrt(kR * kR - x * x - y * y) - kR + 5; }
@@ -91,10 +99,7 @@ TEST(BallClearance, CoversTheEdgeBandAndGapsAtTheRim) {
   // on the surface (the field extrapolated), one farther out is not. A foot in a gap the sample
   // left at the rim (here no points within 0.45 mm of (10, 0)) is on the surface up to two
   // spacings from the nearest point, as long as it is not past the rim's other points.
-  auto full = plane_cloud();
-  std::vector<Eigen::Vector3d> cloud;
-  for (const auto& p : full)
-    if (std::hypot(p.x() - 10, p.y()) > 0.45) cloud.push_back(p);
+  const auto cloud = plane_cloud_with_rim_gap(0.45);
   HeightFieldModel surface(cloud);
   const double s = surface.spacing();
   BallClearance clearance(surface, cloud, 2.0);
@@ -118,10 +123,7 @@ TEST(BallClearance, WithAnOutlineCoversEveryGapInsideIt) {
   // (10, 0): a foot at (9.4, 0) is 0.6 mm > 2 spacings from the nearest point). post.simulate
   // certifies everything inside the boundary loops' outline, so given that outline the guard
   // checks the (extrapolated) field there too; past the outline it still does not.
-  auto full = plane_cloud();
-  std::vector<Eigen::Vector3d> cloud;
-  for (const auto& p : full)
-    if (std::hypot(p.x() - 10, p.y()) > 1.2) cloud.push_back(p);
+  const auto cloud = plane_cloud_with_rim_gap(1.2);
   HeightFieldModel surface(cloud);
   ASSERT_LT(2 * surface.spacing(), 0.6);
   const Outline outline({{{-10, -10}, {10, -10}, {10, 10}, {-10, 10}}});
