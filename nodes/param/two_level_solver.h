@@ -60,7 +60,15 @@ class TwoLevelPreconditioner {
  private:
   struct Coarse;
   const Eigen::SparseMatrix<double, Eigen::RowMajor>* A_ = nullptr;
-  std::vector<double> inv_diag_;
+  Eigen::SparseMatrix<double, Eigen::RowMajor> compressed_;  // A's copy when A was not compressed
+  const int* row_start_ = nullptr;  // #n + 1, A's compressed rows ...
+  const int* column_ = nullptr;     // #nonzeros
+  // ... and its values in single precision for the sweeps: they stream the whole matrix three
+  // times per application, bound by memory bandwidth, and 8 bytes per entry instead of 12 make
+  // them faster (measured at a million points); the operator stays a fixed linear one, and GMRES
+  // measures the residual with A itself.
+  std::vector<float> value_;
+  std::vector<double> inv_diag_;  // 1 / the single-precision diagonal
   std::vector<int> aggregate_;
   std::unique_ptr<Coarse> coarse_;
   int sweeps_ = 1;

@@ -93,6 +93,26 @@ TEST(TwoLevelSolver, SolvesAGridLaplacianExactly) {
   EXPECT_LT(r.iterations, 40);
 }
 
+TEST(TwoLevelSolver, AMatrixNotCompressedGivesTheSameOperator) {
+  // The sweeps read the compressed rows; a matrix with room left in its rows (inserted entry by
+  // entry) must give the same preconditioner as its compressed copy, bit for bit.
+  const int n = 40;
+  RowMatrix compressed;
+  Eigen::VectorXd b;
+  grid_laplacian(n, [](int x, int y) { return double(x) * y; }, compressed, b);
+  RowMatrix loose(compressed.rows(), compressed.cols());
+  loose.reserve(Eigen::VectorXi::Constant(compressed.rows(), 8));
+  for (Eigen::Index i = 0; i < compressed.rows(); ++i)
+    for (RowMatrix::InnerIterator it(compressed, i); it; ++it) loose.insert(i, it.col()) = it.value();
+  ASSERT_FALSE(loose.isCompressed());
+  TwoLevelPreconditioner from_compressed, from_loose;
+  ASSERT_TRUE(from_compressed.build(compressed));
+  ASSERT_TRUE(from_loose.build(loose));
+  const Eigen::VectorXd z1 = from_compressed.apply(b), z2 = from_loose.apply(b);
+  EXPECT_EQ(z1, z2);
+  EXPECT_GT(z1.norm(), 0);
+}
+
 TEST(TwoLevelSolver, AgreesWithSparseLUOnANonSymmetricSystem) {
   // Random-walk rows with unequal, partly negative weights (as the optimal weights have), two
   // right-hand sides solved at once.
