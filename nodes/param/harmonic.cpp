@@ -8,6 +8,8 @@
 #include <memory>
 #include <stdexcept>
 #include <unsupported/Eigen/IterativeSolvers>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "nodes/param/boundary_map.h"
 #include "nodes/param/two_level_solver.h"
@@ -135,16 +137,28 @@ UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>&
   // rows (summing to zero) make the system singular, which rounding can hide from the LU. (Checked
   // once for the same unknowns: the band's second solve.)
   if (!factor || factor->unknown != unknown) {
-    const Eigen::SparseMatrix<double> by_column = L;  // column j: the rows that depend on point j
-    std::vector<char> reached(n, 0);
-    std::vector<Eigen::Index> stack;
+    // The rows that depend on each point j (L's nonzero pattern transposed, indices only).
+    std::vector<int> start(n + 1, 0), dependent;
     for (Eigen::Index i = 0; i < n; ++i)
-      if (unknown[i] < 0) reached[i] = 1, stack.push_back(i);
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(L, i); it; ++it)
+        if (it.col() != i && it.value() != 0) ++start[it.col() + 1];
+    for (Eigen::Index j = 0; j < n; ++j) start[j + 1] += start[j];
+    dependent.resize(start[n]);
+    {
+      std::vector<int> next(start.begin(), start.end() - 1);
+      for (Eigen::Index i = 0; i < n; ++i)
+        for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(L, i); it; ++it)
+          if (it.col() != i && it.value() != 0) dependent[next[it.col()]++] = static_cast<int>(i);
+    }
+    std::vector<char> reached(n, 0);
+    std::vector<int> stack;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (unknown[i] < 0) reached[i] = 1, stack.push_back(static_cast<int>(i));
     while (!stack.empty()) {
-      Eigen::Index j = stack.back();
+      const int j = stack.back();
       stack.pop_back();
-      for (Eigen::SparseMatrix<double>::InnerIterator it(by_column, j); it; ++it)
-        if (it.row() != j && it.value() != 0 && !reached[it.row()]) reached[it.row()] = 1, stack.push_back(it.row());
+      for (int e = start[j]; e < start[j + 1]; ++e)
+        if (!reached[dependent[e]]) reached[dependent[e]] = 1, stack.push_back(dependent[e]);
     }
     std::size_t cut = 0;
     Eigen::Index first = -1;
@@ -169,33 +183,40 @@ UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>&
       f = SystemFactor();
       f.unknown = unknown;
     }
-    // A X = B: the interior rows of L, boundary columns moved to the right-hand side.
+    // A X = B: the interior rows of L, boundary columns moved to the right-hand side; written
+    // straight into the compressed rows, the rows in parallel (each row's sums in L's order, as
+    // one after the other would give).
     const bool build = f.rows.rows() != m;
+    using RowIt = Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator;
     if (build) {
-      f.rows.resize(m, m);
-      f.rows.reserve(L.nonZeros());
+      f.rows.resize(m, m);  // compressed, no entries
+      int* outer = f.rows.outerIndexPtr();
+      tbb::parallel_for(Eigen::Index(0), m, [&](Eigen::Index r) {
+        int count = 0;
+        for (RowIt it(L, point_of[r]); it; ++it) count += unknown[it.col()] >= 0;
+        outer[r + 1] = count;
+      });
+      for (Eigen::Index r = 0; r < m; ++r) outer[r + 1] += outer[r];
+      f.rows.resizeNonZeros(outer[m]);
     }
     Eigen::MatrixXd B = Eigen::MatrixXd::Zero(m, 2);
-    std::vector<std::pair<Eigen::Index, double>> row;
-    for (Eigen::Index r = 0; r < m; ++r) {
-      const int i = point_of[r];
-      row.clear();
-      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(L, i); it; ++it) {
-        Eigen::Index j = it.col();
-        if (unknown[j] < 0)
-          B.row(r) -= it.value() * uv[j].transpose();
-        else if (build)
-          row.emplace_back(unknown[j], it.value());
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, m, 1024), [&](const auto& range) {
+      std::vector<std::pair<int, double>> row;
+      for (Eigen::Index r = range.begin(); r != range.end(); ++r) {
+        row.clear();
+        for (RowIt it(L, point_of[r]); it; ++it) {
+          const Eigen::Index j = it.col();
+          if (unknown[j] < 0)
+            B.row(r) -= it.value() * uv[j].transpose();
+          else if (build)
+            row.emplace_back(static_cast<int>(unknown[j]), it.value());
+        }
+        if (!build) continue;
+        std::sort(row.begin(), row.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+        int e = f.rows.outerIndexPtr()[r];
+        for (const auto& [c, v] : row) f.rows.innerIndexPtr()[e] = c, f.rows.valuePtr()[e++] = v;
       }
-      if (!build) continue;
-      std::sort(row.begin(), row.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-      f.rows.startVec(r);
-      for (const auto& [c, v] : row) f.rows.insertBack(r, c) = v;
-    }
-    if (build) {
-      f.rows.finalize();
-      f.rows.makeCompressed();
-    }
+    });
     const Eigen::SparseMatrix<double, Eigen::RowMajor>& A = f.rows;
     // Start from the last solution, or the mean of the boundary positions (the interior values
     // are averages of them).
