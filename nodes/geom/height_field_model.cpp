@@ -122,6 +122,15 @@ bool HeightFieldModel::Impl::local_fit(double x, double y, const std::uint32_t* 
     }
     c /= wsum;
     for (std::size_t j = 0; j < got_xy; ++j) C += w[j] * (p[idx_xy[j]] - c) * (p[idx_xy[j]] - c).transpose();
+    // Gentle almost everywhere: skip the eigensolver when a bound already puts the normal within
+    // 37 degrees of +z (the answer below would be the same). For the least-variance direction n
+    // at an angle t from +z: sin^2 t <= C_zz / (mu - C_zz), mu the smaller eigenvalue of C's xy
+    // block (Rayleigh quotients and Cauchy interlacing); sin^2 t < 0.3 gives n_z > 0.83 > 0.8.
+    {
+      const double half_trace = 0.5 * (C(0, 0) + C(1, 1));
+      const double mu = half_trace - std::hypot(0.5 * (C(0, 0) - C(1, 1)), C(0, 1));
+      if (mu > C(2, 2) && C(2, 2) < 0.3 * (mu - C(2, 2))) return false;
+    }
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
     Eigen::Vector3d n = es.eigenvectors().col(0);
     if (n.z() < 0) n = -n;
