@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -179,20 +180,21 @@ class CountingBuffer : public std::streambuf {
   std::uint64_t count_ = 0;
 };
 
-// Streams a value's serialize() into an AtomicWriter through a 1 MiB buffer: a payload of a
-// million points (tens of MB) is never held a second time, nor grown by doubling (measured at
-// 1M points: building each payload in a string and copying it out was about a tenth of a cold
-// run's CPU time, most of it page faults of the fresh buffers).
+// Streams a value's serialize() into an AtomicWriter through the caller's buffer (up to 1 MiB):
+// a payload of a million points (tens of MB) is never held a second time, nor grown by doubling
+// (measured at 1M points: building each payload in a string and copying it out was about a tenth
+// of a cold run's CPU time, most of it page faults of the fresh buffers).
 template <class Writer>
 class WriterBuffer : public std::streambuf {
  public:
-  explicit WriterBuffer(Writer& w) : w_(w), buffer_(1 << 20) { setp(buffer_.data(), buffer_.data() + buffer_.size()); }
-  ~WriterBuffer() override = default;
+  WriterBuffer(Writer& w, char* buffer, std::size_t size) : w_(w), begin_(buffer), end_(buffer + size) {
+    setp(begin_, end_);
+  }
   void flush_to_writer() {
     const std::ptrdiff_t n = pptr() - pbase();
     if (n > 0) w_.put(pbase(), static_cast<std::size_t>(n));
     written_ += static_cast<std::uint64_t>(n);
-    setp(buffer_.data(), buffer_.data() + buffer_.size());
+    setp(begin_, end_);
   }
   std::uint64_t written() const { return written_ + static_cast<std::uint64_t>(pptr() - pbase()); }
 
@@ -206,7 +208,7 @@ class WriterBuffer : public std::streambuf {
     return traits_type::not_eof(c);
   }
   std::streamsize xsputn(const char* p, std::streamsize n) override {
-    if (n >= static_cast<std::streamsize>(buffer_.size())) {  // large arrays: straight through
+    if (n >= end_ - begin_) {  // large arrays: straight through
       flush_to_writer();
       w_.put(p, static_cast<std::size_t>(n));
       written_ += static_cast<std::uint64_t>(n);
@@ -220,7 +222,8 @@ class WriterBuffer : public std::streambuf {
 
  private:
   Writer& w_;
-  std::vector<char> buffer_;
+  char* begin_;
+  char* end_;
   std::uint64_t written_ = 0;
 };
 
@@ -320,12 +323,18 @@ void DiskCache::store(const std::string& key, const std::map<std::string, ValueP
   w.put(encoded_string(key));
   w.put(encoded_u64(outputs.size()));
   if (after_partial_write) after_partial_write(w.temp_path());
+  // One buffer for the entry, as large as its largest payload up to 1 MiB, not zero-filled (an
+  // entry of many small outputs must not pay for a megabyte each).
+  std::unique_ptr<char[]> buffer;
+  std::size_t capacity = 0;
   for (const auto& [port, value] : outputs) {
     CountingBuffer counter;
     std::ostream counting(&counter);
     value->serialize(counting);
     w.put(encoded_string(port) + encoded_string(value->type_name()) + encoded_u64(counter.count()));
-    WriterBuffer<AtomicWriter> to_file(w);
+    const std::size_t wanted = static_cast<std::size_t>(std::clamp<std::uint64_t>(counter.count(), 1, 1 << 20));
+    if (capacity < wanted) buffer.reset(new char[capacity = wanted]);
+    WriterBuffer<AtomicWriter> to_file(w, buffer.get(), capacity);
     std::ostream out(&to_file);
     value->serialize(out);
     to_file.flush_to_writer();
