@@ -17,7 +17,6 @@
 #include <random>
 #include <sstream>
 #include <stdexcept>
-#include <vector>
 
 #include <xxhash.h>
 
