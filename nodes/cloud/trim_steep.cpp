@@ -9,41 +9,33 @@
 #include "nodes/cloud/knn.h"
 #include "nodes/cloud/principal_extents.h"
 #include "nodes/cloud/normals.h"
+#include "nodes/geom/union_find.h"
 
 namespace scallop {
 
 namespace {
 
 // Components of the symmetric k-nearest-neighbour graph restricted to the points with mask[i].
-// Returns the label of every masked point (-1 elsewhere), numbered in order of discovery.
+// Returns the label of every masked point (-1 elsewhere), numbered in order of each component's
+// smallest index. Joined in a union-find rather than walked over adjacency lists: a million
+// points' lists cost more in allocation than the whole walk.
 std::vector<int> masked_components(const Neighborhoods& nbrs, const std::vector<char>& mask, int& count) {
   const std::size_t n = nbrs.size();
-  std::vector<std::vector<int>> adj(n);
+  UnionFind sets(n);
   for (std::size_t i = 0; i < n; ++i) {
     if (!mask[i]) continue;
     for (int j = 0; j < nbrs.k; ++j) {
       const int o = nbrs.index(i, j);
-      if (o < 0 || !mask[o]) continue;
-      adj[i].push_back(o);
-      adj[o].push_back(static_cast<int>(i));
+      if (o >= 0 && mask[o]) sets.join(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(o));
     }
   }
-  std::vector<int> label(n, -1), stack;
+  // A set's root is its smallest index, so the first masked index of each set is its root.
+  std::vector<int> label(n, -1);
   count = 0;
-  for (std::size_t s = 0; s < n; ++s) {
-    if (!mask[s] || label[s] >= 0) continue;
-    label[s] = count;
-    stack.assign(1, static_cast<int>(s));
-    while (!stack.empty()) {
-      const int i = stack.back();
-      stack.pop_back();
-      for (int o : adj[i])
-        if (label[o] < 0) {
-          label[o] = count;
-          stack.push_back(o);
-        }
-    }
-    ++count;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!mask[i]) continue;
+    const std::uint32_t r = sets.root(static_cast<std::uint32_t>(i));
+    label[i] = r == i ? count++ : label[r];
   }
   return label;
 }
