@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <random>
 
 #include "nodes/geom/kd_tree.h"
 
@@ -40,6 +41,18 @@ CloudScale measure_scale(const std::vector<Eigen::Vector3d>& P, bool spacing) {
   s.extent = (hi - lo).maxCoeff();
   if (!spacing) return s;
 
+  // Over kSubset points the tree is built on a random subset of kSubset, and its spacing scaled
+  // by sqrt(kSubset / #F), as a surface's spacing scales with its density: a units warning needs
+  // an order of magnitude, and a million-point tree costs half a second.
+  double density_scale = 1;
+  constexpr std::size_t kSubset = 200000;
+  if (F.size() > kSubset) {
+    std::mt19937_64 rng(1);
+    for (std::size_t i = 0; i < kSubset; ++i)
+      std::swap(F[i], F[i + std::uniform_int_distribution<std::size_t>(0, F.size() - 1 - i)(rng)]);
+    density_scale = std::sqrt(static_cast<double>(kSubset) / static_cast<double>(F.size()));
+    F.resize(kSubset);
+  }
   const PointsAdaptor<Eigen::Vector3d> adaptor{F};
   KdTree<Eigen::Vector3d, 3> tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
   tree.buildIndex();
@@ -61,7 +74,7 @@ CloudScale measure_scale(const std::vector<Eigen::Vector3d>& P, bool spacing) {
   if (!nearest.empty()) {
     auto mid = nearest.begin() + nearest.size() / 2;
     std::nth_element(nearest.begin(), mid, nearest.end());
-    s.spacing = *mid;
+    s.spacing = *mid * density_scale;
   }
   return s;
 }
