@@ -50,49 +50,51 @@ Eigen::Vector3d local_pca_normal(const std::vector<Eigen::Vector3d>& P, const Ne
   return es.eigenvectors().col(0);
 }
 
-// Scratch matrices of optimal_weights, kept across the points of one thread's range (a heap
-// allocation per point and matrix cost more than the arithmetic).
-struct WeightScratch {
-  Eigen::MatrixXd D, C, A;
-  Eigen::LDLT<Eigen::MatrixXd> ldlt;
-};
-
 // Optimal weights of one point (see header). w has k entries and sums to 1.
+// C = D^T D has rank 2 (D: the k offsets' tangent-plane components, 2 x k), so the k x k system
+// (C + eps I) w = 1 is solved through its 2 x 2 form (Sherman-Morrison-Woodbury):
+// (eps I + D^T D)^-1 1 = (1 - D^T (eps I + D D^T)^-1 D 1) / eps; the 1 / eps goes with the
+// normalisation to sum 1. The same weights as a k x k factorisation, in O(k) instead of O(k^3).
 void optimal_weights(const std::vector<Eigen::Vector3d>& P, const Eigen::Vector3d& n,
                      const Neighborhoods& nb, std::size_t i, double delta, Eigen::VectorXd& w,
-                     WeightScratch& s) {
+                     Eigen::Matrix2Xd& D) {
   const int k = nb.k;
   Eigen::Vector3d t1, t2;
   tangent_frame(n, t1, t2);
-  Eigen::MatrixXd& D = s.D;  // tangent-plane components of p_i - p_j' (= of p_i - p_j)
-  D.resize(2, k);
+  D.resize(2, k);  // tangent-plane components of p_i - p_j' (= of p_i - p_j)
   for (int j = 0; j < k; ++j) {
     Eigen::Vector3d d = P[i] - P[nb.index(i, j)];
     D(0, j) = d.dot(t1);
     D(1, j) = d.dot(t2);
   }
-  Eigen::MatrixXd& C = s.C;
-  C.noalias() = D.transpose() * D;
-  double tr = C.trace();
+  const Eigen::Matrix2d DDt = D * D.transpose();
+  const double tr = DDt.trace();  // = trace(D^T D)
   if (!(tr > 0)) {  // every neighbour coincides with p_i in the tangent plane: no geometry
     w.setConstant(k, 1.0 / k);
     return;
   }
-  C.diagonal().array() += delta * tr;
-  s.ldlt.compute(C);
-  w = s.ldlt.solve(Eigen::VectorXd::Ones(k));
+  const Eigen::Vector2d s = D.rowwise().sum();
+  const Eigen::Vector2d y = (DDt + delta * tr * Eigen::Matrix2d::Identity()).llt().solve(s);
+  w.resize(k);
+  w = (1.0 - (D.transpose() * y).array()).matrix();
   w /= w.sum();
   // Least-change projection onto {D w = 0, 1^T w = 1}, in units of the rms distance so that the
-  // three constraint rows are commensurate.
-  Eigen::MatrixXd& A = s.A;
-  A.resize(3, k);
-  A.topRows(2) = D / std::sqrt(tr / k);
-  A.row(2).setOnes();
-  Eigen::Matrix3d AAt = A * A.transpose();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(AAt);
+  // three constraint rows are commensurate: A = [D / rho; 1^T], rho^2 = trace / k.
+  const double rho = std::sqrt(tr / k);
+  Eigen::Matrix3d AAt;
+  AAt.topLeftCorner<2, 2>() = DDt / (rho * rho);
+  AAt.topRightCorner<2, 1>() = s / rho;
+  AAt.bottomLeftCorner<1, 2>() = s.transpose() / rho;
+  AAt(2, 2) = k;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+  es.computeDirect(AAt, Eigen::EigenvaluesOnly);
   if (es.eigenvalues()(0) <= 1e-10 * es.eigenvalues()(2)) return;  // collinear neighbours
-  Eigen::Vector3d r = A * w - Eigen::Vector3d(0, 0, 1);
-  w -= A.transpose() * AAt.ldlt().solve(r);
+  Eigen::Vector3d r;
+  r.head<2>() = D * w / rho;
+  r(2) = w.sum() - 1;
+  const Eigen::Vector3d z = AAt.ldlt().solve(r);
+  w -= (D.transpose() * z.head<2>() / rho).array().matrix();
+  w.array() -= z(2);
 }
 
 }  // namespace
@@ -128,67 +130,20 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<E
   if (scheme == LaplacianScheme::Heat && !(t > 0)) t = mean_sq_neighbor_distance(nbrs);
   if (scheme == LaplacianScheme::Heat && !(t > 0)) t = 1.0;  // all points coincide: any t works
 
-  std::vector<double> W(n * static_cast<std::size_t>(k));
-  ParallelProgress done(progress, n);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
-    Eigen::VectorXd w(k);
-    WeightScratch scratch;
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      switch (scheme) {
-        case LaplacianScheme::Uniform: w.setConstant(1.0); break;
-        case LaplacianScheme::Heat:
-          for (int j = 0; j < k; ++j) w(j) = std::exp(-nbrs.sq_dist(i, j) / t);
-          break;
-        case LaplacianScheme::Optimal: {
-          Eigen::Vector3d nrm = N.empty() ? local_pca_normal(P, nbrs, i) : N[i];
-          optimal_weights(P, nrm, nbrs, i, regularization, w, scratch);
-          break;
-        }
-      }
-      double s = w.sum();
-      if (!(std::abs(s) > 0)) {  // heat kernel underflow: every neighbour is far beyond sqrt(t)
-        w.setConstant(1.0);
-        s = k;
-      }
-      for (int j = 0; j < k; ++j) W[i * k + j] = w(j) / s;
-    }
-    done.done(r.size());
-  });
-
   // Row i: -w_ij at its neighbours' columns and the weights' sum on the diagonal (1 up to
   // rounding; so that the row sums to zero to the last bit), columns sorted, written straight
   // into the compressed arrays: row i's entries are its distinct neighbours other than i, plus i.
-  auto row_entries = [&](std::size_t i, std::vector<std::pair<int, double>>& e) {
-    e.clear();
-    double s = 0;
-    for (int j = 0; j < k; ++j) {
-      const int c = nbrs.index(i, j);
-      if (static_cast<std::size_t>(c) == i) continue;  // a self index would cancel out anyway
-      e.emplace_back(c, -W[i * k + j]);
-      s += W[i * k + j];
-    }
-    e.emplace_back(static_cast<int>(i), 0.0);
-    std::sort(e.begin(), e.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-    std::size_t m = 0;  // merge repeated neighbours
-    for (std::size_t q = 0; q < e.size(); ++q) {
-      if (m > 0 && e[m - 1].first == e[q].first)
-        e[m - 1].second += e[q].second;
-      else
-        e[m++] = e[q];
-    }
-    e.resize(m);
-    for (auto& [c, v] : e)
-      if (static_cast<std::size_t>(c) == i) v += s;
-  };
-  // Each row's entries are made twice, to count them and then to write them, rather than kept
-  // between the passes: that would be a second #P (k + 1) array (200 MB at a million points).
+  // A first pass counts them (from the indices alone), the second computes each row's weights and
+  // writes them where the counts put the row: no #P k array of weights between the two.
   Eigen::SparseMatrix<double, Eigen::RowMajor> L(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
   std::vector<int> count(n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<std::pair<int, double>> e;
+    std::vector<int> cols;
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      row_entries(i, e);
-      count[i] = static_cast<int>(e.size());
+      cols.assign(nbrs.indices.begin() + i * k, nbrs.indices.begin() + (i + 1) * k);
+      cols.push_back(static_cast<int>(i));
+      std::sort(cols.begin(), cols.end());
+      count[i] = static_cast<int>(std::unique(cols.begin(), cols.end()) - cols.begin());
     }
   });
   std::size_t nnz = 0;
@@ -198,16 +153,50 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<E
   }
   L.outerIndexPtr()[n] = static_cast<int>(nnz);
   L.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+  ParallelProgress done(progress, n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+    Eigen::VectorXd w(k);
+    Eigen::Matrix2Xd D;
     std::vector<std::pair<int, double>> e;
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      row_entries(i, e);
+      switch (scheme) {
+        case LaplacianScheme::Uniform: w.setConstant(1.0); break;
+        case LaplacianScheme::Heat:
+          for (int j = 0; j < k; ++j) w(j) = std::exp(-nbrs.sq_dist(i, j) / t);
+          break;
+        case LaplacianScheme::Optimal: {
+          Eigen::Vector3d nrm = N.empty() ? local_pca_normal(P, nbrs, i) : N[i];
+          optimal_weights(P, nrm, nbrs, i, regularization, w, D);
+          break;
+        }
+      }
+      double sum = w.sum();
+      if (!(std::abs(sum) > 0)) {  // heat kernel underflow: every neighbour is far beyond sqrt(t)
+        w.setConstant(1.0);
+        sum = k;
+      }
+      e.clear();
+      double s = 0;
+      for (int j = 0; j < k; ++j) {
+        const int c = nbrs.index(i, j);
+        if (static_cast<std::size_t>(c) == i) continue;  // a self index would cancel out anyway
+        const double wij = w(j) / sum;
+        e.emplace_back(c, -wij);
+        s += wij;
+      }
+      e.emplace_back(static_cast<int>(i), 0.0);
+      std::sort(e.begin(), e.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
       std::size_t at = L.outerIndexPtr()[i];
-      for (const auto& [c, v] : e) {
-        L.innerIndexPtr()[at] = c;
-        L.valuePtr()[at++] = v;
+      for (std::size_t q = 0; q < e.size(); ++q) {
+        if (q > 0 && e[q - 1].first == e[q].first) {  // a repeated neighbour: merged
+          L.valuePtr()[at - 1] += e[q].second;
+          continue;
+        }
+        L.innerIndexPtr()[at] = e[q].first;
+        L.valuePtr()[at++] = e[q].second + (static_cast<std::size_t>(e[q].first) == i ? s : 0.0);
       }
     }
+    done.done(r.size());
   });
   L.makeCompressed();
   return L;

@@ -83,6 +83,37 @@ TEST(Laplacian, OptimalWeightsReproducePlanarPoints) {
   EXPECT_LT((L2 * P).cwiseAbs().maxCoeff(), 1e-9);
 }
 
+TEST(Laplacian, OptimalWeightsSolveTheRegularizedKByKSystem) {
+  // The node solves the rank-2 system through its 2 x 2 form; here the k x k system of the
+  // header, (C + delta tr(C) I) w = 1 with c_jl = d_j . d_l, is factorised whole, scaled to sum 1
+  // and projected onto {sum_j w_j d_j = 0, sum_j w_j = 1} (least change): the same weights.
+  PointCloud c = wavy_cloud(800, 6);
+  const int k = 12;
+  const double delta = 1e-3;
+  Neighborhoods nb = compute_knn(c.points, k);
+  auto L = build_laplacian(c.points, c.normals, nb, LaplacianScheme::Optimal, 0, delta);
+  double worst = 0;
+  for (std::size_t i = 0; i < c.size(); i += 7) {
+    const Eigen::Vector3d n = c.normals[i];
+    const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);  // any tangent basis
+    Eigen::MatrixXd D(2, k);
+    for (int j = 0; j < k; ++j) {
+      const Eigen::Vector3d d = c.points[i] - c.points[nb.index(i, j)];
+      D.col(j) << d.dot(t1), d.dot(t2);
+    }
+    Eigen::MatrixXd C = D.transpose() * D;
+    C.diagonal().array() += delta * C.trace();
+    Eigen::VectorXd w = C.ldlt().solve(Eigen::VectorXd::Ones(k));
+    w /= w.sum();
+    Eigen::MatrixXd A(3, k);
+    A.topRows(2) = D;
+    A.row(2).setOnes();
+    w -= A.transpose() * (A * A.transpose()).ldlt().solve(A * w - Eigen::Vector3d(0, 0, 1));
+    for (int j = 0; j < k; ++j) worst = std::max(worst, std::abs(-L.coeff(i, nb.index(i, j)) - w(j)));
+  }
+  EXPECT_LT(worst, 1e-12);
+}
+
 TEST(Laplacian, Errors) {
   PointCloud c = wavy_cloud(50, 5);
   Neighborhoods nb2 = compute_knn(c.points, 2);
