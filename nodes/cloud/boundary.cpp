@@ -2,6 +2,7 @@
 #include "engine/parallel_progress.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -10,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "nodes/geom/angular_gap.h"
 #include "nodes/geom/tangent_frame.h"
 
 namespace scallop {
@@ -18,19 +20,13 @@ double largest_angular_gap(const std::vector<Eigen::Vector3d>& P, const Eigen::V
                            std::size_t i, const std::vector<int>& around) {
   Eigen::Vector3d t1, t2;
   tangent_frame(normal, t1, t2);
-  thread_local std::vector<double> a;
-  a.clear();
+  thread_local std::vector<Eigen::Vector2d> d;
+  d.clear();
   for (int j : around) {
-    Eigen::Vector3d d = P[j] - P[i];
-    double x = d.dot(t1), y = d.dot(t2);
-    if (x == 0 && y == 0) continue;  // duplicate or straight above: no direction
-    a.push_back(std::atan2(y, x));
+    const Eigen::Vector3d e = P[j] - P[i];
+    d.emplace_back(e.dot(t1), e.dot(t2));  // a duplicate or a point straight above: no direction
   }
-  if (a.empty()) return 2 * std::numbers::pi;
-  std::sort(a.begin(), a.end());
-  double gap = a.front() + 2 * std::numbers::pi - a.back();  // wrap-around gap
-  for (std::size_t j = 1; j < a.size(); ++j) gap = std::max(gap, a[j] - a[j - 1]);
-  return gap;
+  return largest_angular_gap(d.data(), d.size());
 }
 
 std::vector<std::uint8_t> detect_boundary(const std::vector<Eigen::Vector3d>& P,
@@ -54,18 +50,23 @@ std::vector<std::uint8_t> detect_boundary(const std::vector<Eigen::Vector3d>& P,
 
   std::vector<std::uint8_t> b(n, 0);
   ParallelProgress done(progress, n);
+  tbb::enumerable_thread_specific<std::vector<std::size_t>> seen_by_thread;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
     std::vector<int> ring;
+    std::vector<std::size_t>& seen = seen_by_thread.local();  // seen[q] == i + 1: q is in i's ring
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       ring.assign(nbrs.indices.begin() + i * nbrs.k, nbrs.indices.begin() + (i + 1) * nbrs.k);
       if (largest_angular_gap(P, N[i], i, ring) <= angle) continue;
+      if (seen.empty()) seen.assign(n, 0);
+      seen[i] = i + 1;
+      for (int q : ring) seen[q] = i + 1;
       for (int j = 0; j < nbrs.k; ++j) {
         int q = nbrs.index(i, j);
-        for (int m = 0; m < nbrs.k; ++m) ring.push_back(nbrs.index(q, m));
+        for (int m = 0; m < nbrs.k; ++m) {
+          const int o = nbrs.index(q, m);
+          if (seen[o] != i + 1) seen[o] = i + 1, ring.push_back(o);
+        }
       }
-      std::sort(ring.begin(), ring.end());
-      ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-      ring.erase(std::remove(ring.begin(), ring.end(), static_cast<int>(i)), ring.end());
       b[i] = largest_angular_gap(P, N[i], i, ring) > angle ? 1 : 0;
     }
     done.done(r.size());  // the cleaning pass below is quick

@@ -11,6 +11,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "nodes/geom/angular_gap.h"
 #include "nodes/geom/tangent_frame.h"
 
 namespace scallop {
@@ -36,7 +37,7 @@ MapCheck check_map(const std::vector<Eigen::Vector3d>& P, const std::vector<Eige
   c.folded.assign(n, 0);
   std::vector<int> flipped_triangles(n, 0);
   const int k = nbrs.k;
-  const double lo = 10 * std::numbers::pi / 180, hi = 170 * std::numbers::pi / 180;
+  const double cos_lo = std::cos(10 * std::numbers::pi / 180), cos_hi = std::cos(170 * std::numbers::pi / 180);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
     Eigen::MatrixXd X(2, k), Y(2, k);
     std::vector<std::pair<double, int>> ang(k);
@@ -49,7 +50,7 @@ MapCheck check_map(const std::vector<Eigen::Vector3d>& P, const std::vector<Eige
         X(0, j) = d.dot(t1);
         X(1, j) = d.dot(t2);
         Y.col(j) = uv[q] - uv[i];
-        ang[j] = {std::atan2(X(1, j), X(0, j)), j};
+        ang[j] = {pseudo_angle(X(0, j), X(1, j)), j};
       }
       // Angle distortion from the least-squares Jacobian J = Y X^T (X X^T)^-1.
       Eigen::Matrix2d XXt = X * X.transpose();
@@ -63,14 +64,15 @@ MapCheck check_map(const std::vector<Eigen::Vector3d>& P, const std::vector<Eige
         if (s2 > 0) ratio = s1 / s2;
       }
       c.distortion[i] = ratio;
-      // Fold-overs: orientation of the fan triangles.
+      // Fold-overs: orientation of the fan triangles between angularly consecutive neighbours
+      // whose directions are 10 to 170 degrees apart (cross >= 0 and the cosine between them).
       std::sort(ang.begin(), ang.end());
       int tri = 0, flipped = 0;
       for (int j = 0; j < k; ++j) {
-        auto [aa, a] = ang[j];
-        auto [ab, b] = ang[(j + 1) % k];
-        double span = j + 1 < k ? ab - aa : ab + 2 * std::numbers::pi - aa;
-        if (span < lo || span > hi) continue;
+        const int a = ang[j].second, b = ang[(j + 1) % k].second;
+        const double cross = X(0, a) * X(1, b) - X(1, a) * X(0, b), dot = X.col(a).dot(X.col(b));
+        const double lengths = X.col(a).norm() * X.col(b).norm();
+        if (a == b || !(lengths > 0) || cross < 0 || dot > cos_lo * lengths || dot < cos_hi * lengths) continue;
         ++tri;
         if (Y(0, a) * Y(1, b) - Y(1, a) * Y(0, b) < 0) ++flipped;
       }

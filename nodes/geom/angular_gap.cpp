@@ -1,0 +1,44 @@
+#include "nodes/geom/angular_gap.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+namespace scallop {
+
+double largest_angular_gap(const Eigen::Vector2d* d, std::size_t count) {
+  constexpr double kTwoPi = 2 * std::numbers::pi;
+  struct Direction {
+    double key;
+    Eigen::Vector2d v;
+  };
+  thread_local std::vector<Direction> dir;
+  dir.clear();
+  for (std::size_t j = 0; j < count; ++j)
+    if (!d[j].isZero()) dir.push_back({pseudo_angle(d[j].x(), d[j].y()), d[j]});
+  const std::size_t m = dir.size();
+  if (m < 2) return kTwoPi;
+  std::sort(dir.begin(), dir.end(), [](const Direction& a, const Direction& b) { return a.key < b.key; });
+  // Every direction within 1e-9 of one another (in pseudo_angle, below 2e-9 rad): the gap from
+  // the last round to the first is the whole turn, which the cross product's sign cannot tell.
+  if (dir[m - 1].key - dir[0].key < 1e-9) return kTwoPi;
+  // pseudo_angle grows at 1/2 to 1 times the angle's rate (1 / (|sin| + |cos|)^2), so a gap whose
+  // pseudo_angle difference is below half the largest difference is narrower than the gap with
+  // that largest difference: only the others are measured, by atan2 of their cross and dot
+  // products (exact also where rounding gave nearly equal directions the same pseudo_angle).
+  auto key_gap = [&](std::size_t j) { return j + 1 < m ? dir[j + 1].key - dir[j].key : 4 - dir[j].key + dir[0].key; };
+  double widest_key = 0;
+  for (std::size_t j = 0; j < m; ++j) widest_key = std::max(widest_key, key_gap(j));
+  double widest = 0;
+  for (std::size_t j = 0; j < m; ++j) {
+    if (key_gap(j) < 0.5 * widest_key - 1e-12) continue;
+    const Eigen::Vector2d& a = dir[j].v;
+    const Eigen::Vector2d& b = dir[(j + 1) % m].v;
+    const double angle = std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+    widest = std::max(widest, angle < 0 ? angle + kTwoPi : angle);
+  }
+  return widest;
+}
+
+}  // namespace scallop

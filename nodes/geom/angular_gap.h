@@ -1,0 +1,29 @@
+// The widest gap between the directions from a point to its neighbours, as boundary detection,
+// the map check and the certificate's surface model use it (a point on a patch's edge sees
+// its neighbours within a half-plane: a gap of at least pi).
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <cstddef>
+
+namespace scallop {
+
+// A monotone stand-in for the angle of (x, y): in [0, 4), increasing with the angle measured
+// counter-clockwise from +x over [0, 2 pi); 0 for (0, 0). Orders directions as atan2 does (up to
+// where the circle starts) with one division.
+inline double pseudo_angle(double x, double y) {
+  const double s = std::abs(x) + std::abs(y);
+  if (s == 0) return 0;
+  const double t = y / s;  // in [-1, 1]
+  return x >= 0 ? (y >= 0 ? t : 4 + t) : 2 - t;
+}
+
+// d  `count` directions in a plane (any lengths); zero vectors have no direction and are skipped,
+//    repeated directions make gaps of 0.
+// Returns the largest angle (radians, in [0, 2 pi]) between circularly consecutive directions;
+// 2 pi when fewer than two directions remain or all point the same way. Sorted by pseudo_angle;
+// only the gaps that may be the widest are measured (atan2 of their cross and dot products).
+double largest_angular_gap(const Eigen::Vector2d* d, std::size_t count);
+
+}  // namespace scallop

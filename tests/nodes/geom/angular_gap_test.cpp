@@ -1,0 +1,99 @@
+#include "nodes/geom/angular_gap.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+namespace scallop {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+Eigen::Vector2d at(double angle, double length = 1) { return length * Eigen::Vector2d(std::cos(angle), std::sin(angle)); }
+
+TEST(AngularGap, PseudoAngleOrdersDirectionsAsTheAngleDoes) {
+  std::vector<double> angles;
+  for (int j = 0; j < 720; ++j) angles.push_back(j * kPi / 360);
+  for (std::size_t j = 1; j < angles.size(); ++j)
+    EXPECT_LT(pseudo_angle(at(angles[j - 1]).x(), at(angles[j - 1]).y()), pseudo_angle(at(angles[j]).x(), at(angles[j]).y()))
+        << angles[j];
+  EXPECT_EQ(pseudo_angle(1, 0), 0);
+  EXPECT_EQ(pseudo_angle(0, 2), 1);
+  EXPECT_EQ(pseudo_angle(-3, 0), 2);
+  EXPECT_EQ(pseudo_angle(0, -1), 3);
+  EXPECT_EQ(pseudo_angle(0, 0), 0);
+}
+
+TEST(AngularGap, HalfPlaneAndRegularFan) {
+  // Directions over [0, pi] (an edge point's neighbours): the gap is the other half turn.
+  std::vector<Eigen::Vector2d> half;
+  for (int j = 0; j <= 8; ++j) half.push_back(at(j * kPi / 8, 1 + j));
+  EXPECT_NEAR(largest_angular_gap(half.data(), half.size()), kPi, 1e-14);
+  // Twelve directions 30 degrees apart, shuffled, one repeated and one zero vector: 30 degrees.
+  std::vector<Eigen::Vector2d> fan;
+  for (int j = 0; j < 12; ++j) fan.push_back(at(0.3 + j * kPi / 6, 0.5 + 0.1 * j));
+  fan.push_back(fan[4] * 3);
+  fan.push_back(Eigen::Vector2d::Zero());
+  std::shuffle(fan.begin(), fan.end(), std::mt19937(4));
+  EXPECT_NEAR(largest_angular_gap(fan.data(), fan.size()), kPi / 6, 1e-14);
+  // The widest gap straddling +x (where pseudo_angle starts again).
+  std::vector<Eigen::Vector2d> straddle = {at(1), at(2), at(3), at(4.5)};
+  EXPECT_NEAR(largest_angular_gap(straddle.data(), straddle.size()), 2 * kPi - 4.5 + 1, 1e-14);
+}
+
+TEST(AngularGap, FewerThanTwoDirectionsIsTheWholeTurn) {
+  std::vector<Eigen::Vector2d> none = {Eigen::Vector2d::Zero()};
+  EXPECT_EQ(largest_angular_gap(none.data(), 0), 2 * kPi);
+  EXPECT_EQ(largest_angular_gap(none.data(), 1), 2 * kPi);
+  std::vector<Eigen::Vector2d> one_way = {at(1), at(1, 3), Eigen::Vector2d::Zero(), at(1, 0.2)};
+  EXPECT_EQ(largest_angular_gap(one_way.data(), one_way.size()), 2 * kPi);
+  // Two directions nearly together: nearly the whole turn, whichever side of +x they lie.
+  for (double base : {0.0, 1.0, kPi, -1e-3}) {
+    std::vector<Eigen::Vector2d> two = {at(base), at(base + 1e-6)};
+    EXPECT_NEAR(largest_angular_gap(two.data(), two.size()), 2 * kPi - 1e-6, 1e-12) << base;
+  }
+}
+
+TEST(AngularGap, RoundingThatTiesNearlyEqualDirectionsIsNoFullTurn) {
+  // A grid seen from a query 1e-16 off its row: the directions along the row get the same
+  // pseudo_angle in either order, and their cross product says "almost a whole turn" when the
+  // order is the wrong one; the widest gap is the grid's own (the measured regression: 2 pi).
+  // (In this order the first version of the function gave 2 pi.)
+  const double e = -2.2204460492503131e-16;
+  std::vector<Eigen::Vector2d> d;
+  for (double x : {0.125, -0.125, 0.375, -0.375, 0.625, -0.625}) d.emplace_back(x, e);
+  for (double x : {0.125, -0.125, 0.375, -0.375})
+    for (double y : {0.25 + e, -0.25 + e, 0.5 + e, -0.5 + e}) d.emplace_back(x, y);
+  double expected = 0;
+  std::vector<double> a;
+  for (const auto& v : d) a.push_back(std::atan2(v.y(), v.x()));
+  std::sort(a.begin(), a.end());
+  expected = a.front() + 2 * kPi - a.back();
+  for (std::size_t j = 1; j < a.size(); ++j) expected = std::max(expected, a[j] - a[j - 1]);
+  EXPECT_NEAR(largest_angular_gap(d.data(), d.size()), expected, 1e-13);
+  EXPECT_LT(expected, 1);
+}
+
+TEST(AngularGap, MatchesSortedAtan2OnRandomDirections) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<Eigen::Vector2d> d(3 + trial % 40);
+    std::vector<double> a;
+    for (auto& v : d) {
+      v = Eigen::Vector2d(u(rng), u(rng));
+      a.push_back(std::atan2(v.y(), v.x()));
+    }
+    std::sort(a.begin(), a.end());
+    double expected = a.front() + 2 * kPi - a.back();
+    for (std::size_t j = 1; j < a.size(); ++j) expected = std::max(expected, a[j] - a[j - 1]);
+    EXPECT_NEAR(largest_angular_gap(d.data(), d.size()), expected, 1e-13) << trial;
+  }
+}
+
+}  // namespace
+}  // namespace scallop
