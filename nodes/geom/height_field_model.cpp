@@ -5,10 +5,12 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <mutex>
 #include <nanoflann.hpp>
 #include <stdexcept>
 #include <string>
 
+#include "nodes/geom/angular_gap.h"
 #include "nodes/geom/kd_tree.h"
 
 namespace scallop {
@@ -39,7 +41,18 @@ struct HeightFieldModel::Impl {
   std::unique_ptr<PointsAdaptor<Eigen::Vector2d>> adaptor;
   std::unique_ptr<KdTree<Eigen::Vector2d, 2>> tree;
   std::unique_ptr<PointsAdaptor<Eigen::Vector3d>> adaptor3;
-  std::unique_ptr<KdTree<Eigen::Vector3d, 3>> tree3;
+  // The 3-D tree of the steep fits, built on their first use: a patch gentle everywhere never
+  // needs it, and the planner, guard, certificate and preview each build their own model (half a
+  // second per million points, single-threaded).
+  mutable std::once_flag tree3_built;
+  mutable std::unique_ptr<KdTree<Eigen::Vector3d, 3>> tree3;
+  const KdTree<Eigen::Vector3d, 3>& steep_tree() const {
+    std::call_once(tree3_built, [this] {
+      tree3 = std::make_unique<KdTree<Eigen::Vector3d, 3>>(3, *adaptor3, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+      tree3->buildIndex();
+    });
+    return *tree3;
+  }
   std::vector<double> uncertainty;  // per point (mm), or empty
 
   double point_uncertainty(std::uint32_t i) const { return uncertainty.empty() ? 0.0 : uncertainty[i]; }
@@ -143,7 +156,7 @@ bool HeightFieldModel::Impl::local_fit(double x, double y, const std::uint32_t* 
   double d2[64];
   const int kk = std::min(k, 64);
   for (int round = 0; round < 3; ++round) {
-    const std::size_t got = tree3->knnSearch(o.data(), kk, idx, d2);
+    const std::size_t got = steep_tree().knnSearch(o.data(), kk, idx, d2);
     if (got < 6) return false;
     const double h = std::sqrt(d2[got - 1]) + 1e-12;
     if (!local_plane(p, idx, got, o, 2 * h, m, F)) return false;
@@ -244,8 +257,6 @@ HeightFieldModel::HeightFieldModel(const std::vector<Eigen::Vector3d>& P, int k,
   impl_->tree = std::make_unique<KdTree<Eigen::Vector2d, 2>>(2, *impl_->adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   impl_->tree->buildIndex();
   impl_->adaptor3 = std::make_unique<PointsAdaptor<Eigen::Vector3d>>(PointsAdaptor<Eigen::Vector3d>{impl_->p});
-  impl_->tree3 = std::make_unique<KdTree<Eigen::Vector3d, 3>>(3, *impl_->adaptor3, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  impl_->tree3->buildIndex();
   // Mean spacing from the 8th-neighbour distance: in a uniform sample of density ρ, π ρ r₈² ≈ 8.
   const std::size_t n = P.size(), stride = std::max<std::size_t>(1, n / 2000);
   std::vector<double> r8;
@@ -276,12 +287,9 @@ Eigen::Vector2d HeightFieldModel::Impl::centroid(const std::uint32_t* idx, std::
 }
 
 double HeightFieldModel::Impl::widest_gap(double x, double y, const std::uint32_t* idx, std::size_t got) const {
-  std::array<double, 64> angle;
-  for (std::size_t j = 0; j < got; ++j) angle[j] = std::atan2(xy[idx[j]].y() - y, xy[idx[j]].x() - x);
-  std::sort(angle.begin(), angle.begin() + got);
-  double widest = angle[0] + 2 * kPi - angle[got - 1];
-  for (std::size_t j = 1; j < got; ++j) widest = std::max(widest, angle[j] - angle[j - 1]);
-  return widest;
+  std::array<Eigen::Vector2d, 64> d;
+  for (std::size_t j = 0; j < got; ++j) d[j] = xy[idx[j]] - Eigen::Vector2d(x, y);
+  return largest_angular_gap(d.data(), got);
 }
 
 double HeightFieldModel::Impl::beyond_edge(double x, double y, const std::uint32_t* idx, std::size_t got) const {
