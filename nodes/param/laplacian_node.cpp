@@ -10,7 +10,7 @@ namespace scallop::param_nodes {
 NodeDecl make_laplacian_node() {
   NodeDecl d;
   d.type = "param.laplacian";
-  d.version = 1;
+  d.version = 2;  // 2: optimal weights through the 2 x 2 form (the same weights, other rounding)
   // Cheaper to build again (1.2 s at a million points) than to write and read its #P (k + 1)
   // entries (200 MB, 7 s of a cold run's disk cache at a million points); only param.harmonic,
   // whose own map is cached, reads it.
