@@ -12,6 +12,7 @@
 
 #include "nodes/geom/angular_gap.h"
 #include "nodes/geom/kd_tree.h"
+#include "nodes/geom/normal_equations.h"
 
 namespace scallop {
 
@@ -168,7 +169,7 @@ bool HeightFieldModel::Impl::local_fit(double x, double y, const std::uint32_t* 
       const double w = std::exp(-2.0 * (l.x() * l.x() + l.y() * l.y()));
       Eigen::Matrix<double, 6, 1> b;
       b << 1, l.x(), l.y(), l.x() * l.x(), l.x() * l.y(), l.y() * l.y();
-      M.selfadjointView<Eigen::Lower>().rankUpdate(b, w);
+      add_weighted_outer_lower(M, b, w);
       rhs += w * l.z() * b;
     }
     M.triangularView<Eigen::Upper>() = M.transpose();
@@ -393,7 +394,7 @@ bool HeightFieldModel::Impl::xy_fit(double x, double y, const std::uint32_t* idx
   for (std::size_t j = 0; j < got; ++j) {
     const Eigen::Matrix<double, 6, 1> b = basis(j);
     const double w = std::exp(-2.0 * (b[3] + b[5]));
-    M.selfadjointView<Eigen::Lower>().rankUpdate(b, w);
+    add_weighted_outer_lower(M, b, w);
     rhs += w * z[idx[j]] * b;
   }
   M.triangularView<Eigen::Upper>() = M.transpose();

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 #include "nodes/geom/kd_tree.h"
+#include "nodes/geom/normal_equations.h"
 
 namespace scallop {
 
@@ -120,7 +121,7 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
     b << 1, o.x(), o.y(), o.x() * o.x(), o.x() * o.y(), o.y() * o.y();
     Eigen::Matrix<double, 1, 6> f;
     f << impl_->P[idx[j]].transpose(), impl_->N[idx[j]].transpose();
-    M.selfadjointView<Eigen::Lower>().rankUpdate(b, w);
+    add_weighted_outer_lower(M, b, w);
     rhs.noalias() += (w * b) * f;
   }
   Eigen::Matrix<double, 1, 6> value;
