@@ -1,8 +1,10 @@
 #include "nodes/types/toolpath.h"
 
+#include <cstdint>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <string>
 
 namespace scallop {
 
@@ -63,7 +65,13 @@ void LinkedPath::serialize(std::ostream& out) const {
   bin::write_f64(out, scallop_height);
   bin::write_f64(out, chord_error);
   bin::write_f64(out, clearance_z);
-  bin::write_vector(out, moves);
+  // Kinds and tips in columns: a Move has padding bytes after its kind, which written whole
+  // would put whatever memory held there into the file (cache entries differed run to run).
+  std::vector<std::uint8_t> kinds(moves.size());
+  std::vector<Eigen::Vector3d> tips(moves.size());
+  for (std::size_t i = 0; i < moves.size(); ++i) kinds[i] = static_cast<std::uint8_t>(moves[i].kind), tips[i] = moves[i].tip;
+  bin::write_vector(out, kinds);
+  bin::write_vector(out, tips);
 }
 
 ValuePtr LinkedPath::deserialize(std::istream& in) {
@@ -72,7 +80,16 @@ ValuePtr LinkedPath::deserialize(std::istream& in) {
   l->scallop_height = bin::read_f64(in);
   l->chord_error = bin::read_f64(in);
   l->clearance_z = bin::read_f64(in);
-  l->moves = bin::read_vector<Move>(in);
+  const std::vector<std::uint8_t> kinds = bin::read_vector<std::uint8_t>(in);
+  const std::vector<Eigen::Vector3d> tips = bin::read_vector<Eigen::Vector3d>(in);
+  if (kinds.size() != tips.size()) throw std::runtime_error("corrupt linked path: " + std::to_string(kinds.size()) +
+                                                            " move kinds for " + std::to_string(tips.size()) + " tips");
+  l->moves.resize(kinds.size());
+  for (std::size_t i = 0; i < kinds.size(); ++i) {
+    if (kinds[i] > static_cast<std::uint8_t>(MoveKind::Plunge))
+      throw std::runtime_error("corrupt linked path: move kind " + std::to_string(kinds[i]));
+    l->moves[i] = {static_cast<MoveKind>(kinds[i]), tips[i]};
+  }
   return l;
 }
 
