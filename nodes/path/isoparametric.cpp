@@ -2,12 +2,14 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <nanoflann.hpp>
 #include <stdexcept>
 #include <string>
@@ -910,10 +912,17 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
         " mm wide; at least " + fmt(std::round(work.points)) + " points), more than max_passes " +
         std::to_string(o.max_passes) + ": raise scallop_height or tool_radius, or max_passes if "
         "the time is worth it (planning takes roughly 0.01 to 0.2 s per pass)");
-  const UVInterpolator interp(cloud.points, cloud.normals, map.uv, domain, o.interpolation_k,
-                              cloud.has_uncertainty() ? &cloud.uncertainty : nullptr);
-  const BallLifter lifter(cloud.points, o.tool_radius);
-  const HeightFieldModel model(cloud.points, 20, cloud.has_uncertainty() ? &cloud.uncertainty : nullptr);
+  // Three k-d trees over the whole cloud, each built on one thread: built side by side.
+  std::optional<UVInterpolator> interp;
+  std::optional<BallLifter> lifter;
+  std::optional<HeightFieldModel> model;
+  tbb::parallel_invoke(
+      [&] {
+        interp.emplace(cloud.points, cloud.normals, map.uv, domain, o.interpolation_k,
+                       cloud.has_uncertainty() ? &cloud.uncertainty : nullptr);
+      },
+      [&] { lifter.emplace(cloud.points, o.tool_radius); },
+      [&] { model.emplace(cloud.points, 20, cloud.has_uncertainty() ? &cloud.uncertainty : nullptr); });
   // The holes: every loop after the outer one, as the polygon of its points' uv.
   std::vector<std::vector<Eigen::Vector2d>> hole_polygons;
   std::vector<const std::vector<int>*> hole_loops;
@@ -931,7 +940,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
       hole_polygons.push_back(std::move(poly));
     }
   const Holes holes(std::move(hole_polygons));
-  Planner planner(interp, lifter, &model, co, o, holes);
+  Planner planner(*interp, *lifter, &*model, co, o, holes);
   std::vector<double> nn;
   for (std::size_t i = 0; i < neighbors.size(); i += std::max<std::size_t>(1, neighbors.size() / 4096))
     if (neighbors.k > 0) nn.push_back(std::sqrt(neighbors.sq_dist(i, 0)));
