@@ -15,6 +15,7 @@
 #include <iterator>
 #include <limits>
 #include <numbers>
+#include <random>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -22,6 +23,7 @@
 #include "engine/file_ref.h"
 #include "engine/node.h"
 #include "nodes/io/mesh_reader.h"
+#include "nodes/io/mm_units.h"
 #include "nodes/io/pcd_reader.h"
 #include "nodes/io/ply_reader.h"
 #include "nodes/types/ply_writer.h"
@@ -730,6 +732,24 @@ TEST_F(ReadCloud, NodeWarnsWhenTheCloudDoesNotLookLikeMillimetres) {
 }
 
 // ---------------------------------------------------------------- real data
+
+TEST(ReadCloudUnits, SpacingMatchesTheDensityAboveAndBelowTheSubsetSize) {
+  // Uniform random points on a 100 x 100 mm square, density lambda per mm^2: the median distance
+  // to the nearest other point is sqrt(ln 2 / (pi lambda)). Above 200 000 points the spacing comes
+  // from a random 200 000 of them, scaled by sqrt(200 000 / n): the same figure.
+  for (std::size_t n : {150000u, 600000u}) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(0, 100);
+    std::vector<Eigen::Vector3d> P(n);
+    for (auto& p : P) p = Eigen::Vector3d(u(rng), u(rng), 5);
+    const double lambda = static_cast<double>(n) / 1e4;
+    const double expected = std::sqrt(std::log(2.0) / (std::numbers::pi * lambda));
+    const CloudScale s = measure_scale(P);
+    EXPECT_EQ(s.points, n);
+    EXPECT_NEAR(s.extent, 100, 0.01);
+    EXPECT_NEAR(s.spacing / expected, 1, 0.1) << n;  // a 1000-point sample's median: about 3 %
+  }
+}
 
 TEST(ReadCloudRealData, SharedDataCountsAndBoxes) {
   const std::string root = std::string(SCALLOP_SOURCE_DIR) + "/../shared/data";
