@@ -25,7 +25,8 @@ std::string out_of_range_point(const std::vector<Eigen::Vector3d>& P);
 // What the cloud's size says about its units. extent = largest side of the bounding box of the
 // finite points; spacing = median distance to the nearest other point (over up to 1000 points;
 // above 200 000 points, to the nearest of a random 200 000 of them, times sqrt(200 000 / #P):
-// within a factor of about 2 of the whole cloud's, enough to tell units), or 0 without `spacing` (a mesh's vertices: a CAD mesh's are as far apart as its faces are
+// within a factor of about 2 of the whole cloud's, enough to tell units), or 0 without
+// `spacing` (a mesh's vertices: a CAD mesh's are as far apart as its faces are
 // large, whatever the units).
 struct CloudScale {
   std::size_t points = 0;  // finite ones

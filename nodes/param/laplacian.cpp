@@ -75,7 +75,6 @@ void optimal_weights(const std::vector<Eigen::Vector3d>& P, const Eigen::Vector3
   }
   const Eigen::Vector2d s = D.rowwise().sum();
   const Eigen::Vector2d y = (DDt + delta * tr * Eigen::Matrix2d::Identity()).llt().solve(s);
-  w.resize(k);
   w = (1.0 - (D.transpose() * y).array()).matrix();
   w /= w.sum();
   // Least-change projection onto {D w = 0, 1^T w = 1}, in units of the rms distance so that the
@@ -93,7 +92,7 @@ void optimal_weights(const std::vector<Eigen::Vector3d>& P, const Eigen::Vector3
   r.head<2>() = D * w / rho;
   r(2) = w.sum() - 1;
   const Eigen::Vector3d z = AAt.ldlt().solve(r);
-  w -= (D.transpose() * z.head<2>() / rho).array().matrix();
+  w -= D.transpose() * z.head<2>() / rho;
   w.array() -= z(2);
 }
 
