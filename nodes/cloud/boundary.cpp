@@ -16,8 +16,8 @@
 
 namespace scallop {
 
-double largest_angular_gap(const std::vector<Eigen::Vector3d>& P, const Eigen::Vector3d& normal,
-                           std::size_t i, const std::vector<int>& around) {
+bool angular_gap_exceeds(const std::vector<Eigen::Vector3d>& P, const Eigen::Vector3d& normal, std::size_t i,
+                         const std::vector<int>& around, double angle) {
   Eigen::Vector3d t1, t2;
   tangent_frame(normal, t1, t2);
   thread_local std::vector<Eigen::Vector2d> d;
@@ -26,7 +26,10 @@ double largest_angular_gap(const std::vector<Eigen::Vector3d>& P, const Eigen::V
     const Eigen::Vector3d e = P[j] - P[i];
     d.emplace_back(e.dot(t1), e.dot(t2));  // a duplicate or a point straight above: no direction
   }
-  return largest_angular_gap(d.data(), d.size());
+  // every 45-degree sector held: the widest gap is below pi/2 (the test is exact to 1e-12 rad
+  // at the default angle, pi/2 as 90 degrees converts it)
+  if (angle >= (1 - 1e-12) * std::numbers::pi / 2 && every_octant_occupied(d.data(), d.size())) return false;
+  return largest_angular_gap(d.data(), d.size()) > angle;
 }
 
 std::vector<std::uint8_t> detect_boundary(const std::vector<Eigen::Vector3d>& P,
@@ -56,7 +59,7 @@ std::vector<std::uint8_t> detect_boundary(const std::vector<Eigen::Vector3d>& P,
     std::vector<std::size_t>& seen = seen_by_thread.local();  // seen[q] == i + 1: q is in i's ring
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       ring.assign(nbrs.indices.begin() + i * nbrs.k, nbrs.indices.begin() + (i + 1) * nbrs.k);
-      if (largest_angular_gap(P, N[i], i, ring) <= angle) continue;
+      if (!angular_gap_exceeds(P, N[i], i, ring, angle)) continue;
       if (seen.empty()) seen.assign(n, 0);
       seen[i] = i + 1;
       for (int q : ring) seen[q] = i + 1;
@@ -67,7 +70,7 @@ std::vector<std::uint8_t> detect_boundary(const std::vector<Eigen::Vector3d>& P,
           if (seen[o] != i + 1) seen[o] = i + 1, ring.push_back(o);
         }
       }
-      b[i] = largest_angular_gap(P, N[i], i, ring) > angle ? 1 : 0;
+      b[i] = angular_gap_exceeds(P, N[i], i, ring, angle) ? 1 : 0;
     }
     done.done(r.size());  // the cleaning pass below is quick
   });

@@ -35,10 +35,10 @@ std::vector<std::uint8_t> detect_boundary(const std::vector<Eigen::Vector3d>& P,
                                           const Neighborhoods& nbrs, double angle, bool clean = true,
                                           const std::function<void(double)>& progress = {});
 
-// The largest angular gap (radians, in [0, 2 pi]) between the directions from P[i] to the points
-// `around`, projected on the plane through P[i] normal to `normal`; 2 pi when no point has a
-// tangential component.
-double largest_angular_gap(const std::vector<Eigen::Vector3d>& P, const Eigen::Vector3d& normal,
-                           std::size_t i, const std::vector<int>& around);
+// Whether the largest angular gap (radians, in [0, 2 pi]) between the directions from P[i] to the
+// points `around`, projected on the plane through P[i] normal to `normal`, exceeds `angle`; the
+// gap is 2 pi when no point has a tangential component.
+bool angular_gap_exceeds(const std::vector<Eigen::Vector3d>& P, const Eigen::Vector3d& normal, std::size_t i,
+                         const std::vector<int>& around, double angle);
 
 }  // namespace scallop

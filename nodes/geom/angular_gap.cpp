@@ -41,4 +41,22 @@ double largest_angular_gap(const Eigen::Vector2d* d, std::size_t count) {
   return widest;
 }
 
+bool every_octant_occupied(const Eigen::Vector2d* d, std::size_t count) {
+  unsigned occupied = 0;
+  for (std::size_t j = 0; j < count && occupied != 0xffu; ++j) {
+    const double x = d[j].x(), y = d[j].y();
+    // the quadrant [q pi/2, (q+1) pi/2), and (a, b) the direction turned back into the first
+    // one (a > 0, b >= 0): its angle there is >= pi/4 exactly when b >= a
+    int q;
+    double a, b;
+    if (x > 0 && y >= 0) q = 0, a = x, b = y;
+    else if (x <= 0 && y > 0) q = 1, a = y, b = -x;
+    else if (x < 0 && y <= 0) q = 2, a = -x, b = -y;
+    else if (x >= 0 && y < 0) q = 3, a = -y, b = x;
+    else continue;  // (0, 0): no direction
+    occupied |= 1u << (2 * q + (b >= a ? 1 : 0));
+  }
+  return occupied == 0xffu;
+}
+
 }  // namespace scallop

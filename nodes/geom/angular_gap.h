@@ -26,4 +26,10 @@ inline double pseudo_angle(double x, double y) {
 // only the gaps that may be the widest are measured (atan2 of their cross and dot products).
 double largest_angular_gap(const Eigen::Vector2d* d, std::size_t count);
 
+// True when each of the eight 45-degree sectors [k pi/4, (k+1) pi/4) around the origin holds one
+// of the directions d[0..count) (decided by exact comparisons): then every gap between them is
+// narrower than a quarter turn, since a wider one would contain a whole sector. A cheap test
+// that answers "is the widest gap over a threshold >= pi/2?" for most points inside a cloud.
+bool every_octant_occupied(const Eigen::Vector2d* d, std::size_t count);
+
 }  // namespace scallop

@@ -61,9 +61,8 @@ struct HeightFieldModel::Impl {
   double mean_uncertainty(const std::uint32_t* idx, std::size_t got) const;
   // The centroid in xy of the points idx[0..got), got > 0.
   Eigen::Vector2d centroid(const std::uint32_t* idx, std::size_t got) const;
-  // The widest angle (radians) between neighbouring directions from (x, y) to the points
-  // idx[0..got).
-  double widest_gap(double x, double y, const std::uint32_t* idx, std::size_t got) const;
+  // The directions from (x, y) to the points idx[0..got), got <= 64.
+  std::array<Eigen::Vector2d, 64> directions(double x, double y, const std::uint32_t* idx, std::size_t got) const;
   // How surely (x, y) lies beyond the cloud's edge: 0 inside, 1 where the points around it all
   // lie to one side; idx[0..got) its nearest points (a first look).
   double beyond_edge(double x, double y, const std::uint32_t* idx, std::size_t got) const;
@@ -287,10 +286,11 @@ Eigen::Vector2d HeightFieldModel::Impl::centroid(const std::uint32_t* idx, std::
   return c / double(got);
 }
 
-double HeightFieldModel::Impl::widest_gap(double x, double y, const std::uint32_t* idx, std::size_t got) const {
+std::array<Eigen::Vector2d, 64> HeightFieldModel::Impl::directions(double x, double y, const std::uint32_t* idx,
+                                                                   std::size_t got) const {
   std::array<Eigen::Vector2d, 64> d;
   for (std::size_t j = 0; j < got; ++j) d[j] = xy[idx[j]] - Eigen::Vector2d(x, y);
-  return largest_angular_gap(d.data(), got);
+  return d;
 }
 
 double HeightFieldModel::Impl::beyond_edge(double x, double y, const std::uint32_t* idx, std::size_t got) const {
@@ -299,11 +299,16 @@ double HeightFieldModel::Impl::beyond_edge(double x, double y, const std::uint32
   // freeform patch's denoised 50k-point cloud, in 1808 holes whose nearest point was 0.6 to
   // 0.9 mm away (with the 20 nearest points, up to pi: too few to tell a hole from an edge).
   constexpr double kFrom = 0.6 * kPi, kTo = 0.9 * kPi;
-  if (widest_gap(x, y, idx, got) < kFrom) return 0;  // fewer points cannot close a wide gap
+  {
+    // fewer points cannot close a wide gap; all sectors held: no gap as wide as pi/2 < kFrom
+    const auto d = directions(x, y, idx, got);
+    if (every_octant_occupied(d.data(), got) || largest_angular_gap(d.data(), got) < kFrom) return 0;
+  }
   std::uint32_t wide[64];
   double d2[64];
   const double q[2] = {x, y};
-  const double widest = widest_gap(x, y, wide, tree->knnSearch(q, 64, wide, d2));
+  const std::size_t got_wide = tree->knnSearch(q, 64, wide, d2);
+  const double widest = largest_angular_gap(directions(x, y, wide, got_wide).data(), got_wide);
   return std::clamp((widest - kFrom) / (kTo - kFrom), 0.0, 1.0);
 }
 

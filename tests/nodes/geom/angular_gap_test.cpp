@@ -95,5 +95,35 @@ TEST(AngularGap, MatchesSortedAtan2OnRandomDirections) {
   }
 }
 
+TEST(AngularGap, EveryOctantOccupiedOnlyWhenNoGapReachesAQuarterTurn) {
+  // The eight sector boundaries themselves (0, 45, ..., 315 degrees, exact on the axes and
+  // diagonals) fill every sector; leave one out and its sector is empty (a gap of 90 degrees).
+  std::vector<Eigen::Vector2d> corners = {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}, {1, -1}};
+  EXPECT_TRUE(every_octant_occupied(corners.data(), corners.size()));
+  for (std::size_t k = 0; k < corners.size(); ++k) {
+    std::vector<Eigen::Vector2d> missing = corners;
+    missing.erase(missing.begin() + std::ptrdiff_t(k));
+    EXPECT_FALSE(every_octant_occupied(missing.data(), missing.size())) << k;
+  }
+  // Random sets: occupied means a widest gap below pi/2; and the converse fails only when some
+  // gap is at least pi/4 wide (an empty sector lies inside a gap).
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int occupied = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::vector<Eigen::Vector2d> d(4 + trial % 30);
+    for (auto& v : d) v = Eigen::Vector2d(u(rng), u(rng));
+    if (trial % 7 == 0) d.push_back(Eigen::Vector2d::Zero());
+    const double gap = largest_angular_gap(d.data(), d.size());
+    if (every_octant_occupied(d.data(), d.size())) {
+      ++occupied;
+      EXPECT_LT(gap, kPi / 2) << trial;
+    } else {
+      EXPECT_GE(gap, kPi / 4) << trial;
+    }
+  }
+  EXPECT_GT(occupied, 500);  // the test saw both answers
+}
+
 }  // namespace
 }  // namespace scallop
