@@ -26,4 +26,21 @@ using KdTree = nanoflann::KDTreeSingleIndexAdaptor<
     nanoflann::L2_Simple_Adaptor<double, PointsAdaptor<Point>, double, std::uint32_t>, PointsAdaptor<Point>, Dim,
     std::uint32_t>;
 
+// A nanoflann result set that keeps every index within a radius, unsorted (cheaper than the
+// sorted matches of radiusSearch): tree.findNeighbors(set, query, nanoflann::SearchParams(32, 0,
+// false)). radius2 is the radius squared; out is cleared first.
+struct CollectWithin {
+  double radius2;
+  std::vector<std::uint32_t>* out;
+  void init() {}
+  void clear() { out->clear(); }
+  std::size_t size() const { return out->size(); }
+  bool full() const { return true; }
+  bool addPoint(double d2, std::uint32_t i) {
+    if (d2 < radius2) out->push_back(i);
+    return true;
+  }
+  double worstDist() const { return radius2; }
+};
+
 }  // namespace scallop

@@ -5,8 +5,11 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <nanoflann.hpp>
 #include <stdexcept>
 
+#include "nodes/geom/kd_tree.h"
 #include "nodes/geom/segment.h"
 #include "nodes/path/step_size.h"
 
@@ -20,9 +23,36 @@ struct Rect {
   double u0, u1, v0, v1;
 };
 
+// The segments of a ball-centre polyline, indexed by their midpoints for the scallop's ray
+// queries (on the heap: the tree reads the midpoints in place, and contours are moved).
+struct SegmentIndex {
+  std::vector<Eigen::Vector3d> mid;
+  std::vector<double> half;  // half lengths
+  double half_max = 0;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double extent = 0;  // every midpoint lies within this of centre
+  PointsAdaptor<Eigen::Vector3d> adaptor{mid};
+  KdTree<Eigen::Vector3d, 3> tree{3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
+
+  explicit SegmentIndex(const std::vector<Eigen::Vector3d>& c) {
+    for (std::size_t k = 0; k + 1 < c.size(); ++k) {
+      mid.push_back((c[k] + c[k + 1]) / 2);
+      half.push_back((c[k + 1] - c[k]).norm() / 2);
+      half_max = std::max(half_max, half.back());
+    }
+    if (mid.empty()) return;
+    Eigen::Vector3d lo = mid[0], hi = mid[0];
+    for (const auto& m : mid) lo = lo.cwiseMin(m), hi = hi.cwiseMax(m);
+    centre = (lo + hi) / 2;
+    extent = (hi - lo).norm() / 2;
+    tree.buildIndex();
+  }
+};
+
 struct Contour {
   std::vector<Eigen::Vector2d> uv;
   std::vector<Eigen::Vector3d> p, n, c;  // contact, unit normal, ball centre
+  std::unique_ptr<SegmentIndex> index;   // over c, once the contour is complete
 };
 
 // Side s of a rectangle, walked counter-clockwise in (u, v): 0 bottom (v = v0), 1 right (u = u1),
@@ -51,6 +81,7 @@ class ContourPlanner {
       trace(a, b, c);
     }
     add(c, c.uv.front());  // closed
+    c.index = std::make_unique<SegmentIndex>(c.c);
     return c;
   }
 
@@ -203,17 +234,28 @@ class ContourPlanner {
   }
 
   // Scallop at x left by the balls swept along contour c (+infinity when they miss its normal).
+  // The ray cannot enter a capsule sooner than its distance from the segment, less r, which is
+  // at least (distance to the midpoint) - (half length) - r: the segments with midpoints within
+  // rho + r + the longest half length are looked at, rho growing until the entry found is below
+  // it (then no farther segment can come first) or every segment was looked at.
   double scallop_at(const SurfaceSample& x, const Contour& c) const {
+    const SegmentIndex& index = *c.index;
     double best = kInf;
-    for (std::size_t k = 0; k + 1 < c.c.size(); ++k) {
-      const Eigen::Vector3d& a = c.c[k];
-      const Eigen::Vector3d& b = c.c[k + 1];
-      // The ray cannot enter a capsule closer than its distance from the segment, less r.
-      const double reach = ((a + b) / 2 - x.position).norm() - (b - a).norm() / 2 - r_;
-      if (reach >= best) continue;
-      best = std::min(best, ray_capsule_entry(x.position, x.normal, a, b, r_));
+    if (index.mid.empty()) return best;
+    thread_local std::vector<std::uint32_t> near;
+    const double everything = (x.position - index.centre).norm() + index.extent;
+    for (double rho = 2 * o_.scallop_height;; rho *= 4) {
+      const double radius = rho + r_ + index.half_max;
+      CollectWithin found{radius * radius, &near};
+      near.clear();
+      index.tree.findNeighbors(found, x.position.data(), nanoflann::SearchParams(32, 0, false));
+      for (std::uint32_t k : near) {
+        const double reach = (index.mid[k] - x.position).norm() - index.half[k] - r_;
+        if (reach >= best) continue;
+        best = std::min(best, ray_capsule_entry(x.position, x.normal, c.c[k], c.c[k + 1], r_));
+      }
+      if (best <= rho || radius > everything) return best;
     }
-    return best;
   }
 };
 

@@ -7,24 +7,6 @@
 #include <limits>
 
 namespace scallop {
-namespace {
-
-// Every index within a radius, unsorted (cheaper than nanoflann's sorted radiusSearch).
-struct CollectAll {
-  double radius;  // squared
-  std::vector<std::uint32_t>* out;
-  void init() {}
-  void clear() { out->clear(); }
-  std::size_t size() const { return out->size(); }
-  bool full() const { return true; }
-  bool addPoint(double d, std::uint32_t i) {
-    if (d < radius) out->push_back(i);
-    return true;
-  }
-  double worstDist() const { return radius; }
-};
-
-}  // namespace
 
 // The capsule is the union of a finite cylinder and two balls; the flat ends of the cylinder lie
 // inside the balls, so the first entry is the least of the side entry (when its foot falls on
@@ -84,7 +66,7 @@ CentreIndex::CentreIndex(const std::vector<CentreSegment>& segs, double piece) {
 }
 
 void CentreIndex::near(const Eigen::Vector3d& m, double radius, std::vector<std::uint32_t>& out) const {
-  CollectAll rs{radius * radius, &out};
+  CollectWithin rs{radius * radius, &out};
   out.clear();
   if (!a_.empty()) tree_->findNeighbors(rs, m.data(), nanoflann::SearchParams(32, 0, false));
 }
