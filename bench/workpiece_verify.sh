@@ -8,12 +8,13 @@
 # N points (../shared/tools/sample_mesh.py, seed 1) and the cloud runs through
 # bench/workpiece-contour-cloud.json (reconstruction, mesh.cloud_envelope, then the same chain);
 # the judge still measures against the true mesh. EXTRA holds more --set items for the graph.
+# R, H and E set the tool radius, scallop limit and chord tolerance (default 3, 0.05, 0.01 mm).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mesh=${1:-../shared/data/fandisk/fandisk.off}
 scale=${2:-50}
 out=${3:-/tmp/scallop-workpiece}
-r=3 h=0.05 e=0.01
+r=${R:-3} h=${H:-0.05} e=${E:-0.01}
 rm -rf "$out"
 if [ -n "${CLOUD_POINTS:-}" ]; then
   mkdir -p "$out"

@@ -15,6 +15,7 @@
 #include <limits>
 #include <map>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "nodes/mesh/mesh_distance.h"
@@ -297,6 +298,12 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
       measured_area += samples[i].weight;
       if (!std::isnan(traced[i].scallop)) finished[traced[i].finisher] += samples[i].weight;
     }
+  struct MoveGouge {
+    double depth;
+    Eigen::Vector3d centre;  // the ball centre where a move reaches deepest into the part
+    std::string setup;
+  };
+  std::vector<MoveGouge> move_gouges;  // each setup's deepest, where over the tolerance
   for (std::size_t s = 0; s < setups.size(); ++s) {
     const PartSetupCut& cut = setups[s];
     using Deepest = std::pair<double, Eigen::Vector3d>;  // a gouge bound and where (ball centre)
@@ -323,6 +330,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     for (const auto& c : cut.feed) cut_length += (c.b - c.a).norm();
     for (const auto& c : cut.rapid) rapid_length += (c.b - c.a).norm();
     gouge_max = std::max(gouge_max, g);
+    if (g > tol) move_gouges.push_back({g, deepest.second, cut.name});
     rapid_min = std::min(rapid_min, rc);
     through_total += thr;
     cut_total += cut_length, rapid_total += rapid_length;
@@ -427,10 +435,10 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   }
   rep["unreachable"] = places;
 
-  // The worst places: uncut first, then the highest scallops and gouges (interior scallops over
-  // the limit are what fails).
-  // The worst places, one per stepover around: uncut, gouges and scallops over the limit,
-  // interior ones (what pass asks) before the others, each by its excess.
+  // The worst places, one per stepover around: first the moves that reach into the part beyond
+  // the tolerance (each setup's deepest, at its ball centre: a move can gouge where no surface
+  // sample shows it, through a thin wall), then uncut, gouges and scallops over the limit at the
+  // surface samples, interior ones (what pass asks) before the others, each by its excess.
   enum Kind { Scallop, Gouge, Uncut };
   std::vector<std::tuple<bool, double, std::size_t, Kind>> rank;
   for (std::size_t i = 0; i < res.samples.size(); ++i) {
@@ -442,6 +450,17 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   std::sort(rank.rbegin(), rank.rend());
   nlohmann::json worst = nlohmann::json::array();
   std::vector<Eigen::Vector3d> listed;
+  std::sort(move_gouges.begin(), move_gouges.end(), [](const MoveGouge& a, const MoveGouge& b) { return a.depth > b.depth; });
+  for (const MoveGouge& m : move_gouges) {
+    if (worst.size() == 10) break;
+    listed.push_back(m.centre);
+    nlohmann::json w = xyz(m.centre);
+    w["kind"] = "gouge";
+    w["value"] = m.depth;
+    w["at"] = "ball centre";
+    w["setup"] = m.setup;
+    worst.push_back(w);
+  }
   for (const auto& [interior, score, i, kind] : rank) {
     if (worst.size() == 10) break;
     const SimSample& s = res.samples[i];

@@ -91,6 +91,14 @@ TEST(SimulatePart, GougesInsideAndNearAreMeasuredAndARapidThroughThePartIsCounte
   EXPECT_EQ(rep["rapids_through_part"], 1);
   EXPECT_NEAR(rep["rapid_min_clearance"].get<double>(), -5 - r, 1e-3);
   EXPECT_EQ(rep["fail_reasons"][1], "gouge max 8 > 0.01");
+  // the deepest move leads the worst places, at its ball centre, named by its setup
+  EXPECT_EQ(rep["worst"][0]["kind"], "gouge");
+  EXPECT_EQ(rep["worst"][0]["at"], "ball centre");
+  EXPECT_EQ(rep["worst"][0]["setup"], "through");
+  EXPECT_EQ(rep["worst"][0]["value"].get<double>(), through);
+  EXPECT_NEAR(rep["worst"][0]["x"].get<double>(), 10, 1e-9);
+  EXPECT_NEAR(rep["worst"][0]["z"].get<double>(), 5, 1e-9);
+  EXPECT_EQ(rep["worst"][1]["setup"], "dip");
   EXPECT_EQ(rep["fail_reasons"][3], "1 rapid(s) through the part");
 }
 
