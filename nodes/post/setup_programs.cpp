@@ -1,5 +1,8 @@
 #include "nodes/post/setup_programs.h"
 
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -33,11 +36,16 @@ double lift_clear(Eigen::Vector3d& c, const MeshDistance& part, double r, double
   return lift;
 }
 
-// Every ball centre of `path` (machine frame) kept off the whole part, and the middles of its
-// moves: a middle that reaches in gets a lifted point of its own, its halves checked again (up to
-// 4 times).
-void keep_off_part(Toolpath& path, const MeshDistance& part, double part_top_z, double tolerance, SetupProgram& stats) {
-  const double r = path.tool_radius;
+struct LiftStats {
+  std::size_t lifted = 0;  // ball positions (and inserted move middles) lifted
+  double lift_max = 0;     // mm
+};
+
+// Every ball centre of one pass (machine frame, ball radius r) kept off the whole part, and the
+// middles of its moves: a middle that reaches in gets a lifted point of its own, its halves
+// checked again (up to 6 times).
+void keep_pass_off_part(ToolpathPass& pass, double r, const MeshDistance& part, double part_top_z, double tolerance,
+                        LiftStats& stats) {
   // A pass's ends: the tool comes down onto its start and leaves its end straight along +z, so the
   // ball must pass the part on the way, not only its centre line (a compound-angle clamping put
   // an overhang 0.33 mm into a ball plunging onto a fandisk contour): the end is raised to the
@@ -68,7 +76,7 @@ void keep_off_part(Toolpath& path, const MeshDistance& part, double part_top_z, 
       stats.lift_max = std::max(stats.lift_max, lift);
     }
   };
-  for (ToolpathPass& pass : path.passes) {
+  {
     for (std::size_t k = 0; k < pass.contact.size(); ++k) lift_point(pass.contact[k], pass.normal[k]);
     if (!pass.contact.empty()) {
       clear_above(pass.contact.front(), pass.normal.front());
@@ -147,6 +155,19 @@ void keep_off_part(Toolpath& path, const MeshDistance& part, double part_top_z, 
     }
     pass = std::move(out);
   }
+}
+
+// The passes of `path` kept off the part, side by side (each on its own: the same result in any
+// order).
+void keep_off_part(Toolpath& path, const MeshDistance& part, double part_top_z, double tolerance, SetupProgram& stats) {
+  tbb::combinable<LiftStats> local;
+  tbb::parallel_for(std::size_t(0), path.passes.size(), [&](std::size_t i) {
+    keep_pass_off_part(path.passes[i], path.tool_radius, part, part_top_z, tolerance, local.local());
+  });
+  local.combine_each([&](const LiftStats& l) {
+    stats.lifted += l.lifted;
+    stats.lift_max = std::max(stats.lift_max, l.lift_max);
+  });
 }
 
 }  // namespace
