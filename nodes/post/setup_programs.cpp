@@ -137,18 +137,36 @@ void keep_pass_off_part(ToolpathPass& pass, double r, const MeshDistance& part, 
         const Eigen::Vector3d ca = out.contact[k - 1] + r * out.normal[k - 1], cb = out.contact[k] + r * out.normal[k];
         Eigen::Vector3d nearest;
         std::size_t evaluations = 0;
-        bool reaches = part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false) < r - tolerance;
-        for (int q = 1; q < 8 && !reaches; ++q) reaches = blocked(ca + (cb - ca) * (q / 8.0));
-        if (!reaches) continue;
-        const std::size_t low = ca.z() < cb.z() ? k - 1 : k;
-        const double rise = std::abs(cb.z() - ca.z()) + 1e-6;
-        out.contact[low].z() += rise;
-        lift_point(out.contact[low], out.normal[low]);
-        ++stats.lifted;
-        stats.lift_max = std::max(stats.lift_max, rise);
+        const double least = part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false);
+        // how far the move must go up: what it lacks in distance, or, where a point of it lies
+        // under the part, what that point needs to clear it
+        double need = least < r - tolerance ? r - tolerance - least : 0;
+        for (int q = 1; q < 8 && need == 0; ++q) {
+          Eigen::Vector3d c = ca + (cb - ca) * (q / 8.0);
+          if (blocked(c)) need = lift_clear(c, part, r, tolerance);
+        }
+        if (!(need > 0)) continue;
+        // The lower end goes up to the upper end's height; ends already level (raised so before)
+        // both go up by what the move lacks: raising one end to the other's height no longer
+        // moves it (a move beside a slope kept 0.01 mm of a fandisk's side that way).
+        std::vector<std::size_t> ends;
+        double rise;
+        if (std::abs(cb.z() - ca.z()) > 1e-3) {
+          ends = {ca.z() < cb.z() ? k - 1 : k};
+          rise = std::abs(cb.z() - ca.z()) + 1e-6;
+        } else {
+          ends = {k - 1, k};
+          rise = std::max(need, 1e-4) + 1e-6;
+        }
+        for (std::size_t e : ends) {
+          out.contact[e].z() += rise;
+          lift_point(out.contact[e], out.normal[e]);
+          ++stats.lifted;
+          stats.lift_max = std::max(stats.lift_max, rise);
+          next[e] = 1;
+          if (e + 1 < next.size()) next[e + 1] = 1;
+        }
         raised = true;
-        next[low] = 1;
-        if (low + 1 < next.size()) next[low + 1] = 1;
       }
       if (!raised) break;
       check.swap(next);

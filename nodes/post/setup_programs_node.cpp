@@ -22,7 +22,7 @@ struct SetupProgramsOptions {
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 5;  // 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes
+  d.version = 6;  // 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole
                   // 3: moves and links kept off the part's faces exactly (MeshDistance::least_along)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), linked "
