@@ -76,103 +76,101 @@ void keep_pass_off_part(ToolpathPass& pass, double r, const MeshDistance& part, 
       stats.lift_max = std::max(stats.lift_max, lift);
     }
   };
-  {
-    for (std::size_t k = 0; k < pass.contact.size(); ++k) lift_point(pass.contact[k], pass.normal[k]);
-    if (!pass.contact.empty()) {
-      clear_above(pass.contact.front(), pass.normal.front());
-      clear_above(pass.contact.back(), pass.normal.back());
-    }
-    ToolpathPass out;
-    // A ball centre the tool cannot be at: too near the part, or under it (inside the solid or
-    // under an overhang: the unsigned distance alone misses a centre deep inside).
-    auto blocked = [&](const Eigen::Vector3d& c) {
-      return part(c) < r - tolerance || std::isfinite(part.ray_distance(c, Eigen::Vector3d::UnitZ()));
-    };
-    std::function<void(const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&,
-                       int)>
-        middle = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& na, const Eigen::Vector3d& b,
-                     const Eigen::Vector3d& nb, int depth) {
-          if (depth == 0) return;
-          const Eigen::Vector3d ca = a + r * na, cb = b + r * nb;
-          // Where the move comes nearest the part, if nearer than r - tolerance (found exactly,
-          // MeshDistance::least_along, unsigned: the part may be open); else where a point of it
-          // lies under the part.
-          double q = -1;
-          Eigen::Vector3d nearest;
-          std::size_t evaluations = 0;
-          if (part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false) < r - tolerance) {
-            const double len2 = (cb - ca).squaredNorm();
-            q = len2 > 0 ? std::clamp((nearest - ca).dot(cb - ca) / len2, 1.0 / 16, 15.0 / 16) : 0.5;
-          } else {
-            for (double f : {0.5, 0.25, 0.75, 0.125, 0.375, 0.625, 0.875})
-              if (std::isfinite(part.ray_distance((1 - f) * ca + f * cb, Eigen::Vector3d::UnitZ()))) {
-                q = f;
-                break;
-              }
-          }
-          if (q < 0) return;
-          const Eigen::Vector3d n = ((1 - q) * na + q * nb).normalized();
-          if (!n.allFinite()) return;
-          Eigen::Vector3d m = (1 - q) * ca + q * cb - r * n;
-          lift_point(m, n);
-          middle(a, na, m, n, depth - 1);
-          out.contact.push_back(m), out.normal.push_back(n);
-          if (!pass.uv.empty()) out.uv.push_back(out.uv.back());
-          middle(m, n, b, nb, depth - 1);
-        };
-    for (std::size_t k = 0; k < pass.contact.size(); ++k) {
-      if (k > 0) middle(pass.contact[k - 1], pass.normal[k - 1], pass.contact[k], pass.normal[k], 6);
-      out.contact.push_back(pass.contact[k]), out.normal.push_back(pass.normal[k]);
-      if (!pass.uv.empty()) out.uv.push_back(pass.uv[k]);
-    }
-    // Where a move still reaches in (a narrow neck above a free pocket: its ends clear, its
-    // middle not), its lower end is raised to its upper end's height, until no move does.
-    // A sweep checks the moves next to a point the previous one raised (the first, all of them).
-    std::vector<char> check(out.contact.size(), 1), next(out.contact.size(), 0);  // move k-1 -> k
-    for (int sweep = 0; sweep < 50; ++sweep) {
-      bool raised = false;
-      std::fill(next.begin(), next.end(), 0);
-      for (std::size_t k = 1; k < out.contact.size(); ++k) {
-        if (!check[k]) continue;
-        const Eigen::Vector3d ca = out.contact[k - 1] + r * out.normal[k - 1], cb = out.contact[k] + r * out.normal[k];
+  for (std::size_t k = 0; k < pass.contact.size(); ++k) lift_point(pass.contact[k], pass.normal[k]);
+  if (!pass.contact.empty()) {
+    clear_above(pass.contact.front(), pass.normal.front());
+    clear_above(pass.contact.back(), pass.normal.back());
+  }
+  ToolpathPass out;
+  // A ball centre the tool cannot be at: too near the part, or under it (inside the solid or
+  // under an overhang: the unsigned distance alone misses a centre deep inside).
+  auto blocked = [&](const Eigen::Vector3d& c) {
+    return part(c) < r - tolerance || std::isfinite(part.ray_distance(c, Eigen::Vector3d::UnitZ()));
+  };
+  std::function<void(const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&,
+                     int)>
+      middle = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& na, const Eigen::Vector3d& b,
+                   const Eigen::Vector3d& nb, int depth) {
+        if (depth == 0) return;
+        const Eigen::Vector3d ca = a + r * na, cb = b + r * nb;
+        // Where the move comes nearest the part, if nearer than r - tolerance (found exactly,
+        // MeshDistance::least_along, unsigned: the part may be open); else where a point of it
+        // lies under the part.
+        double q = -1;
         Eigen::Vector3d nearest;
         std::size_t evaluations = 0;
-        const double least = part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false);
-        // how far the move must go up: what it lacks in distance, or, where a point of it lies
-        // under the part, what that point needs to clear it
-        double need = least < r - tolerance ? r - tolerance - least : 0;
-        for (int q = 1; q < 8 && need == 0; ++q) {
-          Eigen::Vector3d c = ca + (cb - ca) * (q / 8.0);
-          if (blocked(c)) need = lift_clear(c, part, r, tolerance);
-        }
-        if (!(need > 0)) continue;
-        // The lower end goes up to the upper end's height; ends already level (raised so before)
-        // both go up by what the move lacks: raising one end to the other's height no longer
-        // moves it (a move beside a slope kept 0.01 mm of a fandisk's side that way).
-        std::vector<std::size_t> ends;
-        double rise;
-        if (std::abs(cb.z() - ca.z()) > 1e-3) {
-          ends = {ca.z() < cb.z() ? k - 1 : k};
-          rise = std::abs(cb.z() - ca.z()) + 1e-6;
+        if (part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false) < r - tolerance) {
+          const double len2 = (cb - ca).squaredNorm();
+          q = len2 > 0 ? std::clamp((nearest - ca).dot(cb - ca) / len2, 1.0 / 16, 15.0 / 16) : 0.5;
         } else {
-          ends = {k - 1, k};
-          rise = std::max(need, 1e-4) + 1e-6;
+          for (double f : {0.5, 0.25, 0.75, 0.125, 0.375, 0.625, 0.875})
+            if (std::isfinite(part.ray_distance((1 - f) * ca + f * cb, Eigen::Vector3d::UnitZ()))) {
+              q = f;
+              break;
+            }
         }
-        for (std::size_t e : ends) {
-          out.contact[e].z() += rise;
-          lift_point(out.contact[e], out.normal[e]);
-          ++stats.lifted;
-          stats.lift_max = std::max(stats.lift_max, rise);
-          next[e] = 1;
-          if (e + 1 < next.size()) next[e + 1] = 1;
-        }
-        raised = true;
-      }
-      if (!raised) break;
-      check.swap(next);
-    }
-    pass = std::move(out);
+        if (q < 0) return;
+        const Eigen::Vector3d n = ((1 - q) * na + q * nb).normalized();
+        if (!n.allFinite()) return;
+        Eigen::Vector3d m = (1 - q) * ca + q * cb - r * n;
+        lift_point(m, n);
+        middle(a, na, m, n, depth - 1);
+        out.contact.push_back(m), out.normal.push_back(n);
+        if (!pass.uv.empty()) out.uv.push_back(out.uv.back());
+        middle(m, n, b, nb, depth - 1);
+      };
+  for (std::size_t k = 0; k < pass.contact.size(); ++k) {
+    if (k > 0) middle(pass.contact[k - 1], pass.normal[k - 1], pass.contact[k], pass.normal[k], 6);
+    out.contact.push_back(pass.contact[k]), out.normal.push_back(pass.normal[k]);
+    if (!pass.uv.empty()) out.uv.push_back(pass.uv[k]);
   }
+  // Where a move still reaches in (a narrow neck above a free pocket: its ends clear, its
+  // middle not), its lower end is raised to its upper end's height, until no move does.
+  // A sweep checks the moves next to a point the previous one raised (the first, all of them).
+  std::vector<char> check(out.contact.size(), 1), next(out.contact.size(), 0);  // move k-1 -> k
+  for (int sweep = 0; sweep < 50; ++sweep) {
+    bool raised = false;
+    std::fill(next.begin(), next.end(), 0);
+    for (std::size_t k = 1; k < out.contact.size(); ++k) {
+      if (!check[k]) continue;
+      const Eigen::Vector3d ca = out.contact[k - 1] + r * out.normal[k - 1], cb = out.contact[k] + r * out.normal[k];
+      Eigen::Vector3d nearest;
+      std::size_t evaluations = 0;
+      const double least = part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false);
+      // how far the move must go up: what it lacks in distance, or, where a point of it lies
+      // under the part, what that point needs to clear it
+      double need = least < r - tolerance ? r - tolerance - least : 0;
+      for (int q = 1; q < 8 && need == 0; ++q) {
+        Eigen::Vector3d c = ca + (cb - ca) * (q / 8.0);
+        if (blocked(c)) need = lift_clear(c, part, r, tolerance);
+      }
+      if (!(need > 0)) continue;
+      // The lower end goes up to the upper end's height; ends already level (raised so before)
+      // both go up by what the move lacks: raising one end to the other's height no longer
+      // moves it (a move beside a slope kept 0.01 mm of a fandisk's side that way).
+      std::vector<std::size_t> ends;
+      double rise;
+      if (std::abs(cb.z() - ca.z()) > 1e-3) {
+        ends = {ca.z() < cb.z() ? k - 1 : k};
+        rise = std::abs(cb.z() - ca.z()) + 1e-6;
+      } else {
+        ends = {k - 1, k};
+        rise = std::max(need, 1e-4) + 1e-6;
+      }
+      for (std::size_t e : ends) {
+        out.contact[e].z() += rise;
+        lift_point(out.contact[e], out.normal[e]);
+        ++stats.lifted;
+        stats.lift_max = std::max(stats.lift_max, rise);
+        next[e] = 1;
+        if (e + 1 < next.size()) next[e + 1] = 1;
+      }
+      raised = true;
+    }
+    if (!raised) break;
+    check.swap(next);
+  }
+  pass = std::move(out);
 }
 
 // The passes of `path` kept off the part, side by side (each on its own: the same result in any
