@@ -26,10 +26,7 @@ bool angular_gap_exceeds(const std::vector<Eigen::Vector3d>& P, const Eigen::Vec
     const Eigen::Vector3d e = P[j] - P[i];
     d.emplace_back(e.dot(t1), e.dot(t2));  // a duplicate or a point straight above: no direction
   }
-  // every 45-degree sector held: the widest gap is below pi/2 (the test is exact to 1e-12 rad
-  // at the default angle, pi/2 as 90 degrees converts it)
-  if (angle >= (1 - 1e-12) * std::numbers::pi / 2 && every_octant_occupied(d.data(), d.size())) return false;
-  return largest_angular_gap(d.data(), d.size()) > angle;
+  return angular_gap_exceeds(d.data(), d.size(), angle);
 }
 
 std::vector<std::uint8_t> detect_boundary(const std::vector<Eigen::Vector3d>& P,

@@ -59,4 +59,9 @@ bool every_octant_occupied(const Eigen::Vector2d* d, std::size_t count) {
   return occupied == 0xffu;
 }
 
+bool angular_gap_exceeds(const Eigen::Vector2d* d, std::size_t count, double angle) {
+  if (angle >= (1 - 1e-12) * std::numbers::pi / 2 && every_octant_occupied(d, count)) return false;
+  return largest_angular_gap(d, count) > angle;
+}
+
 }  // namespace scallop

@@ -32,4 +32,8 @@ double largest_angular_gap(const Eigen::Vector2d* d, std::size_t count);
 // that answers "is the widest gap over a threshold >= pi/2?" for most points inside a cloud.
 bool every_octant_occupied(const Eigen::Vector2d* d, std::size_t count);
 
+// Whether largest_angular_gap(d, count) exceeds `angle`; for angle >= pi/2 (to 1e-12: 90 degrees
+// converted) answered by every_octant_occupied where that holds, without sorting.
+bool angular_gap_exceeds(const Eigen::Vector2d* d, std::size_t count, double angle);
+
 }  // namespace scallop

@@ -299,11 +299,8 @@ double HeightFieldModel::Impl::beyond_edge(double x, double y, const std::uint32
   // freeform patch's denoised 50k-point cloud, in 1808 holes whose nearest point was 0.6 to
   // 0.9 mm away (with the 20 nearest points, up to pi: too few to tell a hole from an edge).
   constexpr double kFrom = 0.6 * kPi, kTo = 0.9 * kPi;
-  {
-    // fewer points cannot close a wide gap; all sectors held: no gap as wide as pi/2 < kFrom
-    const auto d = directions(x, y, idx, got);
-    if (every_octant_occupied(d.data(), got) || largest_angular_gap(d.data(), got) < kFrom) return 0;
-  }
+  // fewer points cannot close a wide gap
+  if (!angular_gap_exceeds(directions(x, y, idx, got).data(), got, kFrom)) return 0;
   std::uint32_t wide[64];
   double d2[64];
   const double q[2] = {x, y};

@@ -125,5 +125,19 @@ TEST(AngularGap, EveryOctantOccupiedOnlyWhenNoGapReachesAQuarterTurn) {
   EXPECT_GT(occupied, 500);  // the test saw both answers
 }
 
+TEST(AngularGap, ExceedsAgreesWithTheGapItself) {
+  // The sector shortcut answers only what the widest gap would, at thresholds below, at and
+  // above a quarter turn (90 degrees converted as the boundary node converts it).
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 500; ++trial) {
+    std::vector<Eigen::Vector2d> d(4 + trial % 20);
+    for (auto& v : d) v = Eigen::Vector2d(u(rng), u(rng));
+    const double gap = largest_angular_gap(d.data(), d.size());
+    for (double angle : {kPi / 3, 90 * kPi / 180, 0.6 * kPi, kPi})
+      EXPECT_EQ(angular_gap_exceeds(d.data(), d.size(), angle), gap > angle) << trial << " " << angle;
+  }
+}
+
 }  // namespace
 }  // namespace scallop
