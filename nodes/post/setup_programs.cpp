@@ -37,29 +37,33 @@ double lift_clear(Eigen::Vector3d& c, const MeshDistance& part, double r, double
 }
 
 struct LiftStats {
-  std::size_t lifted = 0;  // ball positions (and inserted move middles) lifted
-  double lift_max = 0;     // mm
+  std::size_t lifted = 0;   // ball positions (and inserted move middles) lifted
+  double lift_max = 0;      // mm
+  std::size_t dropped = 0;  // ball positions left out: no clear way to them (the pass split there)
+  std::size_t splits = 0;   // passes cut in two there
 };
 
 // Every ball centre of one pass (machine frame, ball radius r) kept off the whole part, and the
 // middles of its moves: a middle that reaches in gets a lifted point of its own, its halves
-// checked again (up to 6 times).
-void keep_pass_off_part(ToolpathPass& pass, double r, const MeshDistance& part, double part_top_z, double tolerance,
-                        LiftStats& stats) {
+// checked again (up to 6 times). Returns the pass as pieces (the pass split there).
+std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const MeshDistance& part, double part_top_z,
+                                             double tolerance, LiftStats& stats) {
   // A pass's ends: the tool comes down onto its start and leaves its end straight along +z, so the
   // ball must pass the part on the way, not only its centre line (a compound-angle clamping put
   // an overhang 0.33 mm into a ball plunging onto a fandisk contour): the end is raised to the
   // lowest height from which the vertical up to above the part stays r - tolerance off it
   // (bisection: clear from a height, clear from any above it).
   const double top = part_top_z + r + 1;
+  // Whether the ball goes straight up clear from centre height z at (x, y) of c.
+  auto goes_up_clear = [&](const Eigen::Vector3d& c, double z) {
+    Eigen::Vector3d nearest;
+    std::size_t evaluations = 0;
+    return z >= top || part.least_along(Eigen::Vector3d(c.x(), c.y(), z), Eigen::Vector3d(c.x(), c.y(), top), r / 4,
+                                        r - tolerance, 1e-4, nearest, evaluations, false) >= r - tolerance;
+  };
   auto clear_above = [&](Eigen::Vector3d& contact, const Eigen::Vector3d& n) {
     const Eigen::Vector3d c = contact + r * n;
-    auto clear_from = [&](double z) {
-      Eigen::Vector3d nearest;
-      std::size_t evaluations = 0;
-      return z >= top || part.least_along(Eigen::Vector3d(c.x(), c.y(), z), Eigen::Vector3d(c.x(), c.y(), top), r / 4,
-                                          r - tolerance, 1e-4, nearest, evaluations, false) >= r - tolerance;
-    };
+    auto clear_from = [&](double z) { return goes_up_clear(c, z); };
     if (clear_from(c.z())) return;
     double low = c.z(), high = top;
     while (high - low > 1e-4) (clear_from(0.5 * (low + high)) ? high : low) = 0.5 * (low + high);
@@ -86,6 +90,19 @@ void keep_pass_off_part(ToolpathPass& pass, double r, const MeshDistance& part, 
   // under an overhang: the unsigned distance alone misses a centre deep inside).
   auto blocked = [&](const Eigen::Vector3d& c) {
     return part(c) < r - tolerance || std::isfinite(part.ray_distance(c, Eigen::Vector3d::UnitZ()));
+  };
+  // How far the move between ball centres ca and cb must go up: what it lacks in distance, or,
+  // where a point of it lies under the part, what that point needs to clear it; 0 when clear.
+  auto lacks = [&](const Eigen::Vector3d& ca, const Eigen::Vector3d& cb) {
+    Eigen::Vector3d nearest;
+    std::size_t evaluations = 0;
+    const double least = part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false);
+    double need = least < r - tolerance ? r - tolerance - least : 0;
+    for (int q = 1; q < 8 && need == 0; ++q) {
+      Eigen::Vector3d c = ca + (cb - ca) * (q / 8.0);
+      if (blocked(c)) need = lift_clear(c, part, r, tolerance);
+    }
+    return need;
   };
   std::function<void(const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&,
                      int)>
@@ -134,16 +151,7 @@ void keep_pass_off_part(ToolpathPass& pass, double r, const MeshDistance& part, 
     for (std::size_t k = 1; k < out.contact.size(); ++k) {
       if (!check[k]) continue;
       const Eigen::Vector3d ca = out.contact[k - 1] + r * out.normal[k - 1], cb = out.contact[k] + r * out.normal[k];
-      Eigen::Vector3d nearest;
-      std::size_t evaluations = 0;
-      const double least = part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false);
-      // how far the move must go up: what it lacks in distance, or, where a point of it lies
-      // under the part, what that point needs to clear it
-      double need = least < r - tolerance ? r - tolerance - least : 0;
-      for (int q = 1; q < 8 && need == 0; ++q) {
-        Eigen::Vector3d c = ca + (cb - ca) * (q / 8.0);
-        if (blocked(c)) need = lift_clear(c, part, r, tolerance);
-      }
+      const double need = lacks(ca, cb);
       if (!(need > 0)) continue;
       // The lower end goes up to the upper end's height; ends already level (raised so before)
       // both go up by what the move lacks: raising one end to the other's height no longer
@@ -170,19 +178,53 @@ void keep_pass_off_part(ToolpathPass& pass, double r, const MeshDistance& part, 
     if (!raised) break;
     check.swap(next);
   }
-  pass = std::move(out);
+  // What the raising could not clear within its sweeps (a stretch under an overhang, which it
+  // climbs over one ball at a time: a fandisk clamping kept a 39 mm vertical move through the
+  // part that way) is not cut. The pass is split at every move that still reaches in, and each
+  // piece's ends, where the tool comes down and goes up along +z, are trimmed back to balls whose
+  // vertical is clear; the linker takes the tool between the pieces above the part.
+  std::vector<ToolpathPass> pieces;
+  auto centre = [&](std::size_t k) -> Eigen::Vector3d { return out.contact[k] + r * out.normal[k]; };
+  auto add_piece = [&](std::size_t first, std::size_t last) {  // balls first..last-1
+    const std::size_t balls = last - first;
+    while (first < last && !goes_up_clear(centre(first), centre(first).z())) ++first;
+    while (last > first && !goes_up_clear(centre(last - 1), centre(last - 1).z())) --last;
+    stats.dropped += balls - (last - first);
+    if (first == last) return;
+    ToolpathPass piece;
+    piece.contact.assign(out.contact.begin() + std::ptrdiff_t(first), out.contact.begin() + std::ptrdiff_t(last));
+    piece.normal.assign(out.normal.begin() + std::ptrdiff_t(first), out.normal.begin() + std::ptrdiff_t(last));
+    if (!out.uv.empty()) piece.uv.assign(out.uv.begin() + std::ptrdiff_t(first), out.uv.begin() + std::ptrdiff_t(last));
+    pieces.push_back(std::move(piece));
+  };
+  std::size_t start = 0;
+  for (std::size_t k = 1; k < out.contact.size(); ++k)
+    if (lacks(centre(k - 1), centre(k)) > 0) {
+      ++stats.splits;
+      add_piece(start, k);
+      start = k;
+    }
+  add_piece(start, out.contact.size());
+  return pieces;
 }
 
 // The passes of `path` kept off the part, side by side (each on its own: the same result in any
 // order).
 void keep_off_part(Toolpath& path, const MeshDistance& part, double part_top_z, double tolerance, SetupProgram& stats) {
   tbb::combinable<LiftStats> local;
+  std::vector<std::vector<ToolpathPass>> pieces(path.passes.size());
   tbb::parallel_for(std::size_t(0), path.passes.size(), [&](std::size_t i) {
-    keep_pass_off_part(path.passes[i], path.tool_radius, part, part_top_z, tolerance, local.local());
+    pieces[i] = keep_pass_off_part(std::move(path.passes[i]), path.tool_radius, part, part_top_z, tolerance,
+                                   local.local());
   });
+  path.passes.clear();
+  for (auto& p : pieces)
+    for (auto& piece : p) path.passes.push_back(std::move(piece));
   local.combine_each([&](const LiftStats& l) {
     stats.lifted += l.lifted;
     stats.lift_max = std::max(stats.lift_max, l.lift_max);
+    stats.dropped += l.dropped;
+    stats.splits += l.splits;
   });
 }
 

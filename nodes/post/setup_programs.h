@@ -10,7 +10,9 @@
 // move's nearest approach to the part is found exactly (MeshDistance::least_along), and where it is
 // too near (or, checked at eighths, a point of it lies under the part) a lifted point is
 // inserted and both halves are checked again (6 times at most); a move that still reaches in
-// (a narrow neck above a free pocket) has its lower end raised to its upper end's height. A
+// (a narrow neck above a free pocket) has its lower end raised to its upper end's height, and a
+// move that is still too near after that is not cut: the pass is split there and the pieces'
+// ends trimmed back to balls that go straight up clear (splits, dropped). A
 // pass's first and last ball, where the tool comes down and goes up along +z, is raised until
 // that vertical keeps the ball as far off the part (an overhang beside it, not only above it). The
 // lifts are counted (stock left). Links are kept as far off the part (checked against its
@@ -40,8 +42,10 @@ struct SetupProgram {
   std::size_t passes = 0;  // contours cut
   std::size_t moves = 0;
   double clearance_z = 0;  // mm, machine frame
-  std::size_t lifted = 0;  // ball positions (and inserted move middles) lifted off the part
-  double lift_max = 0;     // mm, the largest lift
+  std::size_t lifted = 0;   // ball positions (and inserted move middles) lifted off the part
+  double lift_max = 0;      // mm, the largest lift
+  std::size_t splits = 0;   // passes cut where a move could not be kept off the part
+  std::size_t dropped = 0;  // ball positions left out there (no clear way down or up to them)
 };
 
 // setups        the clampings (plan_setups, or setups_from_report of surface.setups' report)

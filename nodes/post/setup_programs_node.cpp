@@ -22,7 +22,7 @@ struct SetupProgramsOptions {
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 6;  // 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole
+  d.version = 7;  // 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near
                   // 3: moves and links kept off the part's faces exactly (MeshDistance::least_along)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), linked "
@@ -35,7 +35,8 @@ NodeDecl make_setup_programs_node() {
       .output("file", "File", "the setups file")
       .output("programs", "SetupPaths", "each program's moves with its part_to_machine (post.simulate_part)")
       .output("report", "Report", "{setups: [{name, gcode, passes, moves, clearance_z (mm, machine frame), lifted (ball positions kept off "
-              "the part), lift_max (mm)}]}")
+              "the part), lift_max (mm), splits (passes cut where a move could not be kept off the part), dropped (ball "
+              "positions left out there)}]}")
       .param_output_path("path", "the setups file to write, relative to the output folder (-o); the programs "
                                  "(setup_1.ngc, ...) go beside it");
   d.options<SetupProgramsOptions>()
@@ -71,10 +72,16 @@ NodeDecl make_setup_programs_node() {
     std::vector<std::pair<std::string, std::string>> beside;
     for (const SetupProgram& p : programs) beside.emplace_back(p.file, p.gcode);
     ctx.set("file", io::write_output_files(ctx, param, file.dump(1) + "\n", beside));
+    for (const SetupProgram& p : programs)
+      if (p.splits > 0)
+        ctx.warn("setup '" + p.name + "': " + std::to_string(p.splits) +
+                 " moves could not be kept off the part (under an overhang): the passes are cut there and " +
+                 std::to_string(p.dropped) + " ball positions left out (stock the certificate counts)");
     nlohmann::json list = nlohmann::json::array();
     for (const SetupProgram& p : programs)
       list.push_back({{"name", p.name}, {"gcode", p.file}, {"passes", p.passes}, {"moves", p.moves},
-                      {"clearance_z", p.clearance_z}, {"lifted", p.lifted}, {"lift_max", p.lift_max}});
+                      {"clearance_z", p.clearance_z}, {"lifted", p.lifted}, {"lift_max", p.lift_max},
+                      {"splits", p.splits}, {"dropped", p.dropped}});
     SetupPaths paths;
     for (const SetupProgram& p : programs)
       paths.setups.push_back({p.name, p.file, setups[p.setup].rotation, setups[p.setup].translation, p.linked});

@@ -66,6 +66,19 @@ std::vector<V> tips(const std::string& gcode) {
   return out;
 }
 
+// For each move k - 1 -> k of a program's tool tips t, the least distance from the part of the
+// ball's centre (radius r: the tip + r z) along it; entry 0 is unused (+infinity).
+std::vector<double> move_clearances(const std::vector<V>& t, const Mesh& part, double r) {
+  const MeshDistance distance(part);
+  std::vector<double> out(t.size(), INFINITY);
+  for (std::size_t k = 1; k < t.size(); ++k) {
+    V nearest;
+    std::size_t evaluations = 0;
+    out[k] = distance.least_along(t[k - 1] + V(0, 0, r), t[k] + V(0, 0, r), r / 8, r, 1e-5, nearest, evaluations, false);
+  }
+  return out;
+}
+
 TEST(SetupPrograms, EachClampingCutsItsPatchFromAboveInItsOwnFrame) {
   const Block b;
   ASSERT_EQ(b.setups.size(), 2u);
@@ -157,16 +170,11 @@ TEST(SetupPrograms, APassEndUnderAnOverhangIsRaisedUntilTheBallGoesUpClear) {
   const double centre_z = 11 + std::sqrt(2.9975 * 2.9975 - 4);
   EXPECT_NEAR(programs[0].lift_max, centre_z - 3, 2e-4);
   // Every move of the program, rapids and plunges included, keeps the ball r - e/4 off the part.
-  const MeshDistance distance(part);
   const std::vector<V> t = tips(programs[0].gcode);
   ASSERT_GE(t.size(), 3u);
-  for (std::size_t k = 1; k < t.size(); ++k) {
-    V nearest;
-    std::size_t evaluations = 0;
-    EXPECT_GE(distance.least_along(t[k - 1] + V(0, 0, 3), t[k] + V(0, 0, 3), 0.5, 3, 1e-5, nearest, evaluations, false),
-              3 - 0.0025 - 2e-4)
-        << "move " << k << " to " << t[k].transpose();
-  }
+  const std::vector<double> clearance = move_clearances(t, part, 3);
+  for (std::size_t k = 1; k < t.size(); ++k)
+    EXPECT_GE(clearance[k], 3 - 0.0025 - 2e-4) << "move " << k << " to " << t[k].transpose();
 }
 
 TEST(SetupPrograms, ABoxInFiveClampingsHasEveryFaceButItsBaseCutWithinH) {
@@ -252,20 +260,50 @@ TEST(SetupPrograms, EveryMoveOverRoughGroundKeepsTheBallOffThePart) {
     top.name = "1: +z", top.axis = V::UnitZ(), top.rotation.setIdentity(), top.translation.setZero(), top.patches = {0};
     const auto programs = setup_programs(path, {path.passes.size()}, {top}, part, {}, {});
     ASSERT_EQ(programs.size(), 1u);
-    const MeshDistance distance(part);
     const std::vector<V> t = tips(programs[0].gcode);
     ASSERT_GT(t.size(), 100u);
-    double least_all = INFINITY;
-    for (std::size_t k = 1; k < t.size(); ++k) {
-      V nearest;
-      std::size_t evaluations = 0;
-      const double least =
-          distance.least_along(t[k - 1] + V(0, 0, r), t[k] + V(0, 0, r), 0.25, r, 1e-5, nearest, evaluations, false);
-      least_all = std::min(least_all, least);
-      EXPECT_GE(least, r - e / 4 - 2e-4) << "move " << k << " to " << t[k].transpose();
-    }
-    EXPECT_LT(least_all, r);  // the balls do come close: the test sees the clearance at work
+    const std::vector<double> clearance = move_clearances(t, part, r);
+    for (std::size_t k = 1; k < t.size(); ++k)
+      EXPECT_GE(clearance[k], r - e / 4 - 2e-4) << "move " << k << " to " << t[k].transpose();
+    // the balls do come close: the test sees the clearance at work
+    EXPECT_LT(*std::min_element(clearance.begin(), clearance.end()), r);
   }
+}
+
+TEST(SetupPrograms, APassUnderARoofIsCutWhereNoMoveCanBeKeptOff) {
+  // A floor (z <= 0) and a roof over half of it ([20, 40] x [-5, 15] x [5, 6]). A pass along
+  // y = 5 on the floor, balls every 0.02 mm: those under the roof cannot be reached from above and
+  // go over it; the moves climbing there come too near the roof's edge, and raising one end per
+  // sweep climbs back 0.02 mm at a time, more balls than its sweeps (a fandisk clamping kept a
+  // 39 mm vertical move through the part that way). Wherever no move can be kept off, the pass is
+  // cut, so every move of the program, links included, keeps the ball r - e/4 off the part.
+  const double r = 2, e = 0.01;
+  const Mesh part = joined(box({0, -5, -5}, {40, 15, 0}), box({20, -5, 5}, {40, 15, 6}));
+  Toolpath path;
+  path.tool_radius = r, path.scallop_height = 0.05, path.chord_error = e;
+  ToolpathPass pass;
+  for (int k = 0; k <= 1500; ++k) {
+    pass.contact.push_back(V(2 + 0.02 * k, 5, 0));
+    pass.normal.push_back(V::UnitZ());
+  }
+  path.passes = {pass};
+  scallop::Setup top;
+  top.name = "1: +z", top.axis = V::UnitZ(), top.rotation.setIdentity(), top.translation.setZero(), top.patches = {0};
+  const auto programs = setup_programs(path, {1}, {top}, part, {}, {});
+  ASSERT_EQ(programs.size(), 1u);
+  EXPECT_GE(programs[0].splits, 1u);
+  const std::vector<V> t = tips(programs[0].gcode);
+  ASSERT_GT(t.size(), 100u);
+  const std::vector<double> clearance = move_clearances(t, part, r);
+  for (std::size_t k = 1; k < t.size(); ++k)
+    EXPECT_GE(clearance[k], r - e / 4 - 2e-4) << "move " << k << " to " << t[k].transpose();
+  // The floor before the roof is still cut: balls down on it up to r - e/4 before the roof's edge
+  // (where their vertical clears it), not beyond.
+  double last_on_floor = 0;
+  for (const V& p : t)
+    if (std::abs(p.z()) < 1e-6) last_on_floor = std::max(last_on_floor, p.x());
+  EXPECT_GT(last_on_floor, 17.0);
+  EXPECT_LE(last_on_floor, 20 - (r - e / 4) + 1e-9);
 }
 
 TEST(SetupPrograms, BadInputIsNamed) {
