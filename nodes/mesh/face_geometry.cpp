@@ -57,4 +57,19 @@ std::vector<Eigen::Vector3d> vertex_normals(const Mesh& mesh) {
   return n;
 }
 
+FannedTriangles fan_triangles(const Mesh& mesh, const std::vector<std::size_t>& faces) {
+  FannedTriangles out;
+  std::vector<std::size_t> local(mesh.num_vertices(), SIZE_MAX);
+  auto vertex = [&](std::uint32_t v) {
+    if (local[v] == SIZE_MAX) local[v] = out.points.size(), out.points.push_back(mesh.vertices[v]);
+    return local[v];
+  };
+  for (std::size_t f : faces) {
+    out.first_triangle.push_back(out.triangles.size());
+    const std::uint32_t* c = mesh.face(f);
+    for (std::size_t k = 1; k + 1 < mesh.face_size(f); ++k) out.triangles.push_back({vertex(c[0]), vertex(c[k]), vertex(c[k + 1])});
+  }
+  return out;
+}
+
 }  // namespace scallop

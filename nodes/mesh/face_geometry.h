@@ -3,6 +3,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
+#include <cstddef>
 #include <vector>
 
 #include "nodes/types/mesh.h"
@@ -31,5 +33,15 @@ std::vector<Eigen::Vector3d> vertex_normals(const Mesh& mesh);
 // Angle between a and b in degrees, in [0, 180]; atan2(|a x b|, a . b), accurate also near 0 and 180.
 // 0 when either is zero.
 double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
+
+// Faces `faces` of `mesh` fanned from their first corner into triangles over a compact vertex
+// list of their own (what CGAL's polygon-soup functions take): points holds each corner used
+// once, in order of first use; first_triangle[k] is the index of face faces[k]'s first triangle.
+struct FannedTriangles {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::array<std::size_t, 3>> triangles;
+  std::vector<std::size_t> first_triangle;
+};
+FannedTriangles fan_triangles(const Mesh& mesh, const std::vector<std::size_t>& faces);
 
 }  // namespace scallop

@@ -34,15 +34,18 @@ class MeshDistance {
   // where it lies on an edge or a corner, where faces disagree, the parity of the crossings of
   // three skew rays (majority), which needs a closed mesh. +infinity without faces.
   double signed_distance(const Eigen::Vector3d& p) const;
-  // The least signed distance along the segment [a, b], as a lower bound within eps of the truth
-  // wherever the truth is below `floor` (where it is not, the result is only known to be at least
-  // min(floor, the least found)): sampled every `step`, and a stretch halved while the bounds on
-  // the distance between its ends leave room for less than min(floor, the least found - eps) -
+  // The least signed distance along the segment [a, b], as a lower bound within
+  // max(eps, (floor - truth) / 1000) of the truth wherever the truth is below `floor` (where it is
+  // not, the result is only known to be at least min(floor, the least found)): sampled every
+  // `step`, and a stretch halved while the bounds on the distance between its ends leave room for
+  // less than min(floor, the least found - that precision), 4096 + 64 L / step halvings at most -
   // between two points g apart the distance is at least (d1 + d2 - g) / 2 (1-Lipschitz) and at
   // least min(d1, d2) - g² / (8 d_low) (a minimum of convex functions of curvature at most
   // 1 / d_low, d_low > 0 the first bound; as ../shared/tools/verify_part.py). `where` gets the
   // point of the least distance found, `evaluations` is increased by the distances asked.
-  // With is_signed false, the same for the unsigned distance (an open mesh has no inside).
+  // With is_signed false, the same for the unsigned distance (an open mesh has no inside). Past
+  // the halvings (a signed distance that flips without passing zero: a mesh whose inside is
+  // ambiguous) the result is still a lower bound, only not that close.
   double least_along(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double step, double floor, double eps,
                      Eigen::Vector3d& where, std::size_t& evaluations, bool is_signed = true) const;
 

@@ -19,6 +19,8 @@
 #include <utility>
 #include <vector>
 
+#include "nodes/mesh/face_geometry.h"
+#include "nodes/mesh/merge_solids.h"
 #include "nodes/mesh/mesh_topology.h"
 
 namespace scallop {
@@ -92,23 +94,13 @@ std::size_t orient_closed_components(Mesh& mesh) {
 
   // Only the closed components' vertices: CGAL's volume_connected_components crashes on an
   // isolated vertex (CGAL 5.5.1).
+  std::vector<std::size_t> closed_faces;
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f)
+    if (closed[comp[f]]) closed_faces.push_back(f);
+  const FannedTriangles fan = fan_triangles(mesh, closed_faces);
   std::vector<Point> points;
-  std::vector<std::size_t> local(mesh.num_vertices(), SIZE_MAX);
-  auto vertex = [&](std::uint32_t v) {
-    if (local[v] == SIZE_MAX) {
-      local[v] = points.size();
-      points.emplace_back(mesh.vertices[v].x(), mesh.vertices[v].y(), mesh.vertices[v].z());
-    }
-    return local[v];
-  };
-  std::vector<std::array<std::size_t, 3>> triangles;
-  std::vector<std::size_t> first_triangle(mesh.num_faces(), SIZE_MAX);
-  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
-    if (!closed[comp[f]]) continue;
-    first_triangle[f] = triangles.size();
-    const std::uint32_t* c = mesh.face(f);
-    for (std::size_t k = 1; k + 1 < mesh.face_size(f); ++k) triangles.push_back({vertex(c[0]), vertex(c[k]), vertex(c[k + 1])});
-  }
+  for (const auto& p : fan.points) points.emplace_back(p.x(), p.y(), p.z());
+  const auto& triangles = fan.triangles;
   if (triangles.empty() || !PMP::is_polygon_soup_a_polygon_mesh(triangles)) return 0;
   SurfaceMesh tm;
   PMP::polygon_soup_to_polygon_mesh(points, triangles, tm);
@@ -117,10 +109,10 @@ std::size_t orient_closed_components(Mesh& mesh) {
   // polygon_soup_to_polygon_mesh adds every point and then every triangle, in order: vertex i of
   // tm is point i, face i is triangle i.
   std::size_t turned = 0;
-  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
-    if (first_triangle[f] == SIZE_MAX) continue;
-    const auto t = SurfaceMesh::Face_index(static_cast<SurfaceMesh::size_type>(first_triangle[f]));
-    if (!reversed_in(tm, t, triangles[first_triangle[f]])) continue;
+  for (std::size_t k = 0; k < closed_faces.size(); ++k) {
+    const std::size_t f = closed_faces[k], first = fan.first_triangle[k];
+    const auto t = SurfaceMesh::Face_index(static_cast<SurfaceMesh::size_type>(first));
+    if (!reversed_in(tm, t, triangles[first])) continue;
     std::reverse(mesh.face_vertices.begin() + mesh.face_start[f] + 1, mesh.face_vertices.begin() + mesh.face_start[f + 1]);
     ++turned;
   }
@@ -160,6 +152,10 @@ Mesh repair_mesh(const Mesh& soup, const RepairOptions& options, RepairReport& r
   PMP::polygon_mesh_to_polygon_soup(sm, points, polygons);
   Mesh mesh = from_soup(points, polygons);
   if (options.orient_outward) report.faces_turned_outward = orient_closed_components(mesh);
+  if (options.orient_outward && options.merge_overlapping) {
+    const MergeSolidsReport merged = merge_overlapping_solids(mesh);
+    report.solids_merged = merged.solids_merged, report.solids_not_merged = merged.solids_not_merged;
+  }
   return mesh;
 }
 

@@ -12,6 +12,9 @@ struct RepairOptions {
   // Orient each closed component so that the mesh bounds a volume: normals point out of the
   // material (an outer shell's outward, a cavity's into the cavity).
   bool orient_outward = true;
+  // Closed components whose surfaces cross (solids of an assembly that overlap) replaced by
+  // their union (merge_solids.h); needs orient_outward.
+  bool merge_overlapping = true;
 };
 
 // What repair_mesh changed, step by step (each count 0 on a clean, consistently oriented mesh).
@@ -32,6 +35,8 @@ struct RepairReport {
   // On the mesh:
   std::size_t borders_stitched = 0;           // pairs of border edges joined (stitch_borders)
   std::size_t faces_turned_outward = 0;       // faces of closed components reversed (orient_to_bound_a_volume)
+  std::size_t solids_merged = 0;              // closed components merged into one they cross (their union)
+  std::size_t solids_not_merged = 0;          // crossing ones left apart (one intersects itself)
 };
 
 // soup  the input: any vertices and polygon faces (3 or more corners), in any orientation, with
@@ -39,7 +44,8 @@ struct RepairReport {
 // Returns the repaired mesh: vertices and faces renumbered (vertices in order of first use as
 // CGAL keeps them), every face with 3 or more distinct corners, quads and other polygons kept
 // as they are (Surface_mesh holds polygons), each component consistently oriented, manifold;
-// closed components bound a volume when options.orient_outward. Vertex normals, face labels
+// closed components bound a volume when options.orient_outward, and those that cross are one
+// (their union) when options.merge_overlapping too. Vertex normals, face labels
 // and feature edges are not carried over: repair comes before the steps that set them.
 // Faces of no area with distinct corners (collinear ones) stay: mesh_topology counts them.
 // Throws std::invalid_argument for a soup without faces or with a corner past the vertices,

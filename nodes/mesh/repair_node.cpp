@@ -11,10 +11,11 @@ namespace scallop::mesh_nodes {
 NodeDecl make_repair_node() {
   NodeDecl d;
   d.type = "mesh.repair";
-  d.version = 1;
+  d.version = 2;  // 2: crossing solids merged into their union
   d.description =
       "repairs a polygon soup with CGAL: merges duplicate points, drops degenerate and duplicate faces, orients "
-      "consistently, stitches borders, splits non-manifold edges and vertices, turns closed parts outward";
+      "consistently, stitches borders, splits non-manifold edges and vertices, turns closed parts outward, merges solids that cross "
+      "into their union (an assembly exported as one STL)";
   d.input("mesh", "Mesh", "any vertices and polygon faces (triangles, quads, mixed), in any orientation")
       .output("mesh", "Mesh",
               "manifold, each component consistently oriented, closed ones outward; quads kept; vertices and faces "
@@ -22,14 +23,18 @@ NodeDecl make_repair_node() {
       .output("report", "Report",
               "{changes: {points_merged, faces_simplified, pinched_faces_split, degenerate_faces_removed, "
               "duplicate_faces_removed, isolated_vertices_removed, faces_reversed, non_manifold_edges_cut, "
-              "non_manifold_vertices_split, borders_stitched, faces_turned_outward}, before, after: the topology "
-              "as io.read_mesh reports it}")
+              "non_manifold_vertices_split, borders_stitched, faces_turned_outward, solids_merged, solids_not_merged}, "
+              "before, after: the topology as io.read_mesh reports it}")
       .param_bool("orient_outward", true,
-                  "orient each closed component so that the mesh bounds a volume (normals out of the material)");
+                  "orient each closed component so that the mesh bounds a volume (normals out of the material)")
+      .param_bool("merge_overlapping", true,
+                  "replace closed components whose surfaces cross by their union (CGAL corefinement); needs "
+                  "orient_outward");
   d.run = [](NodeContext& ctx) {
     auto in = ctx.input<Mesh>("mesh");
     RepairOptions options;
     options.orient_outward = ctx.flag("orient_outward");
+    options.merge_overlapping = ctx.flag("merge_overlapping");
     RepairReport r;
     Mesh out;
     try {
@@ -48,7 +53,13 @@ NodeDecl make_repair_node() {
                               {"non_manifold_edges_cut", r.non_manifold_edges_cut},
                               {"non_manifold_vertices_split", r.non_manifold_vertices_split},
                               {"borders_stitched", r.borders_stitched},
-                              {"faces_turned_outward", r.faces_turned_outward}};
+                              {"faces_turned_outward", r.faces_turned_outward},
+                              {"solids_merged", r.solids_merged},
+                              {"solids_not_merged", r.solids_not_merged}};
+    if (r.solids_not_merged > 0)
+      ctx.warn(std::to_string(r.solids_not_merged) +
+               " closed components cross each other but could not be merged (one intersects itself): faces of one "
+               "lie inside another, and what is measured against the part is not exact there");
     report.data["before"] = topology_report(*in);
     report.data["after"] = topology_report(out);
     ctx.set("report", std::move(report));

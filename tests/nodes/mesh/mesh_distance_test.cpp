@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 
 #include "tests/nodes/mesh/mesh_test_util.h"
 
@@ -41,12 +42,16 @@ TEST(MeshDistance, TheClosestFaceIsThePolygonNotItsFannedTriangle) {
 TEST(MeshDistance, TheLeastAlongASegmentIsFoundBetweenItsSamples) {
   const MeshDistance cube(test::cube_mesh(3));
   // Parallel to the edge x = z = 1 at 0.2 from both faces: sqrt(0.08) from y = 0 to 1, more
-  // beyond; sampled only every 1.5, the least is found between the samples.
+  // beyond; sampled only every 1.5, the least is found between the samples, to a thousandth of
+  // its depth under the floor 1 (more than eps = 1e-6 here).
   V where;
   std::size_t evaluations = 0;
   const double least = cube.least_along(V(1.2, -1, 1.2), V(1.2, 2, 1.2), 1.5, 1, 1e-6, where, evaluations);
   EXPECT_LE(least, std::sqrt(0.08) + 1e-12);
-  EXPECT_GE(least, std::sqrt(0.08) - 1e-6);
+  EXPECT_GE(least, std::sqrt(0.08) - 1e-3 * (1 - std::sqrt(0.08)));
+  // With a floor just above it, to eps.
+  EXPECT_GE(cube.least_along(V(1.2, -1, 1.2), V(1.2, 2, 1.2), 1.5, std::sqrt(0.08) + 1e-4, 1e-6, where, evaluations),
+            std::sqrt(0.08) - 1e-6);
   EXPECT_GE(where.y(), -1e-6);
   EXPECT_LE(where.y(), 1 + 1e-6);
   EXPECT_GT(evaluations, 3u);

@@ -245,7 +245,9 @@ TEST(Repair, NodeReportsTheChangesAndTheTopologyBeforeAndAfter) {
                                                {"non_manifold_edges_cut", 0},
                                                {"non_manifold_vertices_split", 0},
                                                {"borders_stitched", 0},
-                                               {"faces_turned_outward", 0}}));
+                                               {"faces_turned_outward", 0},
+                                               {"solids_merged", 0},
+                                               {"solids_not_merged", 0}}));
   EXPECT_EQ(report["before"]["vertices"], 24);
   EXPECT_EQ(report["before"]["components"], 6);
   EXPECT_EQ(report["before"]["boundary_loops"], 6);
