@@ -17,7 +17,9 @@
 #include <TColStd_Array1OfInteger.hxx>
 #include <TColStd_Array1OfReal.hxx>
 #include <TColgp_Array2OfPnt.hxx>
+#include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
 
@@ -108,10 +110,14 @@ StepSummary read_step_summary(const std::string& path) {
   reader.TransferRoots();
   const TopoDS_Shape shape = reader.OneShape();
   StepSummary s;
-  for (TopExp_Explorer e(shape, TopAbs_SHELL); e.More(); e.Next()) ++s.shells;
-  for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
+  // Each face and shell once, however often the shape's structure reaches it.
+  TopTools_IndexedMapOfShape shells, faces;
+  TopExp::MapShapes(shape, TopAbs_SHELL, shells);
+  TopExp::MapShapes(shape, TopAbs_FACE, faces);
+  s.shells = std::size_t(shells.Extent());
+  for (int k = 1; k <= faces.Extent(); ++k) {
     ++s.faces;
-    const GeomAdaptor_Surface a(BRep_Tool::Surface(TopoDS::Face(e.Current())));
+    const GeomAdaptor_Surface a(BRep_Tool::Surface(TopoDS::Face(faces(k))));
     s.bspline_faces += a.GetType() == GeomAbs_BSplineSurface;
   }
   ShapeAnalysis_FreeBounds bounds(shape);
