@@ -26,7 +26,7 @@ double quantile(std::vector<double> xs, double q) {
 NodeDecl make_cloud_envelope_node() {
   NodeDecl d;
   d.type = "mesh.cloud_envelope";
-  d.version = 1;
+  d.version = 2;  // 2: faces folded onto a neighbour leave the side to the rays (MeshDistance::signed_distance)
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "

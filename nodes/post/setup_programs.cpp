@@ -36,18 +36,36 @@ double lift_clear(Eigen::Vector3d& c, const MeshDistance& part, double r, double
   return lift;
 }
 
+// The ball centre c lowered along -z, at most max_drop, until the part is r from it: where the
+// surface the pass was planned on lies above the part (a smooth B-spline over a faceted STL's
+// flat facets, or one that bulges between its quads), the ball comes down onto the part instead
+// of leaving that much stock. Each step is the distance beyond r, so the ball never comes nearer
+// than r (the distance is 1-Lipschitz). Returns the drop.
+double drop_onto(Eigen::Vector3d& c, const MeshDistance& part, double r, double max_drop) {
+  double drop = 0;
+  for (int it = 0; it < 64 && drop < max_drop; ++it) {
+    const double step = std::min(part(c) - r, max_drop - drop);
+    if (!(step > 1e-6)) break;
+    c.z() -= step;
+    drop += step;
+  }
+  return drop;
+}
+
 struct LiftStats {
   std::size_t lifted = 0;   // ball positions (and inserted move middles) lifted
   double lift_max = 0;      // mm
   std::size_t dropped = 0;  // ball positions left out: no clear way to them (the pass split there)
   std::size_t splits = 0;   // passes cut in two there
+  std::size_t lowered = 0;  // ball positions lowered onto the part
+  double lower_max = 0;           // mm
 };
 
 // Every ball centre of one pass (machine frame, ball radius r) kept off the whole part, and the
 // middles of its moves: a middle that reaches in gets a lifted point of its own, its halves
 // checked again (up to 6 times). Returns the pass as pieces (the pass split there).
 std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const MeshDistance& part, double part_top_z,
-                                             double tolerance, LiftStats& stats) {
+                                             double tolerance, double max_drop, LiftStats& stats) {
   // A pass's ends: the tool comes down onto its start and leaves its end straight along +z, so the
   // ball must pass the part on the way, not only its centre line (a compound-angle clamping put
   // an overhang 0.33 mm into a ball plunging onto a fandisk contour): the end is raised to the
@@ -80,7 +98,17 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
       stats.lift_max = std::max(stats.lift_max, lift);
     }
   };
-  for (std::size_t k = 0; k < pass.contact.size(); ++k) lift_point(pass.contact[k], pass.normal[k]);
+  for (std::size_t k = 0; k < pass.contact.size(); ++k) {
+    if (max_drop > 0) {
+      Eigen::Vector3d c = pass.contact[k] + r * pass.normal[k];
+      if (const double drop = drop_onto(c, part, r, max_drop); drop > 0) {
+        pass.contact[k] = c - r * pass.normal[k];
+        ++stats.lowered;
+        stats.lower_max = std::max(stats.lower_max, drop);
+      }
+    }
+    lift_point(pass.contact[k], pass.normal[k]);
+  }
   if (!pass.contact.empty()) {
     clear_above(pass.contact.front(), pass.normal.front());
     clear_above(pass.contact.back(), pass.normal.back());
@@ -210,12 +238,13 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
 
 // The passes of `path` kept off the part, side by side (each on its own: the same result in any
 // order).
-void keep_off_part(Toolpath& path, const MeshDistance& part, double part_top_z, double tolerance, SetupProgram& stats) {
+void keep_off_part(Toolpath& path, const std::vector<double>& max_drop, const MeshDistance& part, double part_top_z,
+                   double tolerance, SetupProgram& stats) {
   tbb::combinable<LiftStats> local;
   std::vector<std::vector<ToolpathPass>> pieces(path.passes.size());
   tbb::parallel_for(std::size_t(0), path.passes.size(), [&](std::size_t i) {
     pieces[i] = keep_pass_off_part(std::move(path.passes[i]), path.tool_radius, part, part_top_z, tolerance,
-                                   local.local());
+                                   max_drop[i], local.local());
   });
   path.passes.clear();
   for (auto& p : pieces)
@@ -225,6 +254,8 @@ void keep_off_part(Toolpath& path, const MeshDistance& part, double part_top_z, 
     stats.lift_max = std::max(stats.lift_max, l.lift_max);
     stats.dropped += l.dropped;
     stats.splits += l.splits;
+    stats.lowered += l.lowered;
+    stats.lower_max = std::max(stats.lower_max, l.lower_max);
   });
 }
 
@@ -232,7 +263,8 @@ void keep_off_part(Toolpath& path, const MeshDistance& part, double part_top_z, 
 
 std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector<std::size_t>& passes_per_patch,
                                          const std::vector<Setup>& setups, const Mesh& part,
-                                         const LinkOptions& link, const GCodeOptions& gcode) {
+                                         const LinkOptions& link, const GCodeOptions& gcode,
+                                         const std::vector<double>& patch_off_part) {
   if (std::accumulate(passes_per_patch.begin(), passes_per_patch.end(), std::size_t(0)) != path.passes.size())
     throw std::invalid_argument("the patches' pass counts do not add up to the toolpath's " +
                                 std::to_string(path.passes.size()) + " passes");
@@ -247,6 +279,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     local.scallop_height = path.scallop_height;
     local.chord_error = path.chord_error;
     local.pattern = path.pattern;
+    std::vector<double> max_drop;  // per pass
     for (std::size_t p : s.patches) {
       if (p >= passes_per_patch.size())
         throw std::invalid_argument("setup '" + s.name + "': patch " + std::to_string(p) + " has no passes");
@@ -255,6 +288,9 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
         for (auto& c : pass.contact) c = s.rotation * c + s.translation;
         for (auto& n : pass.normal) n = s.rotation * n;
         local.passes.push_back(std::move(pass));
+        // Along z a patch as steep as a setup takes (n . axis >= 0.2) may stand 5 times as far
+        // above the part as it is off it.
+        max_drop.push_back(p < patch_off_part.size() ? 5 * patch_off_part[p] : 0.0);
       }
     }
     if (local.passes.empty()) continue;
@@ -268,7 +304,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     if (placed.num_faces() > 0) {
       double top_z = -std::numeric_limits<double>::infinity();
       for (const auto& v : placed.vertices) top_z = std::max(top_z, v.z());
-      keep_off_part(local, distance, top_z, tolerance, prog);
+      keep_off_part(local, max_drop, distance, top_z, tolerance, prog);
       // Links kept as far off the part as the balls: checked against its faces, not only its
       // vertices.
       const double r = path.tool_radius;

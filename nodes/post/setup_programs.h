@@ -46,17 +46,24 @@ struct SetupProgram {
   double lift_max = 0;      // mm, the largest lift
   std::size_t splits = 0;   // passes cut where a move could not be kept off the part
   std::size_t dropped = 0;  // ball positions left out there (no clear way down or up to them)
+  std::size_t lowered = 0;  // ball positions lowered onto the part (patch_off_part)
+  double lower_max = 0;           // mm
 };
 
 // setups        the clampings (plan_setups, or setups_from_report of surface.setups' report)
 // path          the passes of every patch, patch by patch (path.contour_grid)
 // passes_per_patch  how many of them each patch has, in order (their sum: path.passes.size())
 // part          the whole part in its own frame (its mesh; without faces no ball is lifted)
+// patch_off_part  per patch, how far its surface lies from the part at most (path.contour_grid's
+//               part_distance_max; empty: 0): a ball is lowered along +z's opposite onto the part
+//               by up to 5 times that (a setup's patch is at most that steep) where the surface
+//               stands above the part, so that it touches the part and leaves no such stock
 // Returns one program per setup that cuts anything. Throws std::invalid_argument when the counts
 // do not add up; link_passes' and write_gcode's errors pass through.
 std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector<std::size_t>& passes_per_patch,
                                          const std::vector<Setup>& setups, const Mesh& part,
-                                         const LinkOptions& link, const GCodeOptions& gcode);
+                                         const LinkOptions& link, const GCodeOptions& gcode,
+                                         const std::vector<double>& patch_off_part = {});
 
 // The setups file: {"format": "scallop-setups/1", "units": "mm", "setups": [{name, gcode,
 // part_to_machine}]}.

@@ -22,7 +22,7 @@ struct SetupProgramsOptions {
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 7;  // 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near
+  d.version = 8;  // 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it
                   // 3: moves and links kept off the part's faces exactly (MeshDistance::least_along)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), linked "
@@ -36,7 +36,8 @@ NodeDecl make_setup_programs_node() {
       .output("programs", "SetupPaths", "each program's moves with its part_to_machine (post.simulate_part)")
       .output("report", "Report", "{setups: [{name, gcode, passes, moves, clearance_z (mm, machine frame), lifted (ball positions kept off "
               "the part), lift_max (mm), splits (passes cut where a move could not be kept off the part), dropped (ball "
-              "positions left out there)}]}")
+              "positions left out there), lowered (ball positions lowered onto the part where the patch's surface "
+              "stands above it), lower_max (mm)}]}")
       .param_output_path("path", "the setups file to write, relative to the output folder (-o); the programs "
                                  "(setup_1.ngc, ...) go beside it");
   d.options<SetupProgramsOptions>()
@@ -55,7 +56,11 @@ NodeDecl make_setup_programs_node() {
     const std::string param = ctx.text("path");
     if (param.empty()) throw NodeError("parameter 'path' is empty: give the setups file to write");
     std::vector<std::size_t> counts;
-    for (const auto& p : contours.value("patches", nlohmann::json::array())) counts.push_back(p.value("contours", 0));
+    std::vector<double> off_part;
+    for (const auto& p : contours.value("patches", nlohmann::json::array())) {
+      counts.push_back(p.value("contours", 0));
+      off_part.push_back(p.value("part_distance_max", 0.0));
+    }
     LinkOptions link;
     link.safety = o.safety;
     GCodeOptions g;
@@ -64,7 +69,7 @@ NodeDecl make_setup_programs_node() {
     std::vector<SetupProgram> programs;
     try {
       setups = setups_from_report(setups_report, counts.size());
-      programs = setup_programs(*path, counts, setups, *mesh, link, g);
+      programs = setup_programs(*path, counts, setups, *mesh, link, g, off_part);
     } catch (const std::exception& e) {
       throw NodeError(std::string("post.setup_programs: ") + e.what());
     }
@@ -81,7 +86,8 @@ NodeDecl make_setup_programs_node() {
     for (const SetupProgram& p : programs)
       list.push_back({{"name", p.name}, {"gcode", p.file}, {"passes", p.passes}, {"moves", p.moves},
                       {"clearance_z", p.clearance_z}, {"lifted", p.lifted}, {"lift_max", p.lift_max},
-                      {"splits", p.splits}, {"dropped", p.dropped}});
+                      {"splits", p.splits}, {"dropped", p.dropped}, {"lowered", p.lowered},
+                      {"lower_max", p.lower_max}});
     SetupPaths paths;
     for (const SetupProgram& p : programs)
       paths.setups.push_back({p.name, p.file, setups[p.setup].rotation, setups[p.setup].translation, p.linked});

@@ -6,6 +6,7 @@
 #include <limits>
 #include <random>
 
+#include "nodes/mesh/mesh_topology.h"
 #include "tests/nodes/mesh/mesh_test_util.h"
 
 namespace scallop {
@@ -37,6 +38,38 @@ TEST(MeshDistance, TheClosestFaceIsThePolygonNotItsFannedTriangle) {
   EXPECT_EQ(d.closest_face(V(0.8, 0.3, 1.5)), 1u);
   EXPECT_EQ(d.closest_face(V(0.5, 0.5, -0.3)), 0u);
   EXPECT_EQ(MeshDistance(Mesh()).closest_face(V(0, 0, 0)), std::numeric_limits<std::size_t>::max());
+}
+
+TEST(MeshDistance, AFaceFoldedBackOntoItsNeighbourDoesNotTellTheSide) {
+  // The unit cube with its top fanned around (0.5, 0.5, 1), the fan's first triangle split at a
+  // point f = (0.5, -0.05, 1) just beyond the top's front edge: the triangle (a, b, f) lies on the
+  // plane z = 1 folded back under its neighbours (normal -z, 180 degrees from theirs), as the
+  // slivers of block.off do. Still closed, still the cube. Above the fold the point is outside:
+  // by the folded triangle's normal alone it read as inside.
+  Mesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.push_back(V(i & 1, (i >> 1) & 1, (i >> 2) & 1));
+  m.vertices.push_back(V(0.5, 0.5, 1));    // 8: p, the top's centre
+  m.vertices.push_back(V(0.5, -0.05, 1));  // 9: f
+  m.add_face({0, 2, 3, 1});                 // bottom
+  m.add_face({0, 1, 5, 4});                 // front, y = 0
+  m.add_face({2, 6, 7, 3});                 // back
+  m.add_face({0, 4, 6, 2});                 // x = 0
+  m.add_face({1, 3, 7, 5});                 // x = 1
+  m.add_face({4, 5, 9});                    // the fold (a, b, f), clockwise from above
+  m.add_face({5, 8, 9});
+  m.add_face({8, 4, 9});
+  m.add_face({5, 7, 8});
+  m.add_face({7, 6, 8});
+  m.add_face({6, 4, 8});
+  const MeshTopology t = mesh_topology(m, mesh_edges(m));
+  ASSERT_EQ(t.boundary_loops, 0);
+  ASSERT_EQ(t.non_manifold_edges, 0u);
+  const MeshDistance d(m);
+  EXPECT_NEAR(d.signed_distance(V(0.45, -0.01, 1.3)), 0.3, 1e-12);
+  EXPECT_NEAR(d.signed_distance(V(0.3, -0.02, 1.2)), 0.2, 1e-12);
+  EXPECT_NEAR(d.signed_distance(V(0.45, 0.02, 0.9)), -0.02, 1e-12);  // inside, nearest the front
+  EXPECT_NEAR(d.signed_distance(V(0.5, 0.5, 1.4)), 0.4, 1e-12);
+  EXPECT_NEAR(d.signed_distance(V(0.5, 0.5, 0.6)), -0.4, 1e-12);
 }
 
 TEST(MeshDistance, TheLeastAlongASegmentIsFoundBetweenItsSamples) {

@@ -306,6 +306,37 @@ TEST(SetupPrograms, APassUnderARoofIsCutWhereNoMoveCanBeKeptOff) {
   EXPECT_LE(last_on_floor, 20 - (r - e / 4) + 1e-9);
 }
 
+TEST(SetupPrograms, ABallAboveThePartIsLoweredOntoItByAtMostFiveTimesItsSurfacesDistance) {
+  // A floor (z <= 0) and a pass planned on a surface 0.3 mm above it (a smooth patch over a
+  // faceted STL's flat facets): told the patch lies up to 0.3 off the part, the balls come down
+  // until they touch the floor (tips at z = 0); told 0.05, by 5 x 0.05 = 0.25 (tips at 0.05);
+  // told nothing, they stay. Never nearer than r.
+  const double r = 2, e = 0.01;
+  const Mesh part = box({-5, -5, -5}, {15, 15, 0});
+  Toolpath path;
+  path.tool_radius = r, path.scallop_height = 0.05, path.chord_error = e;
+  ToolpathPass pass;
+  for (double x = 0; x <= 10; x += 0.5) pass.contact.push_back(V(x, 5, 0.3)), pass.normal.push_back(V::UnitZ());
+  path.passes = {pass};
+  scallop::Setup top;
+  top.name = "1: +z", top.axis = V::UnitZ(), top.rotation.setIdentity(), top.translation.setZero(), top.patches = {0};
+  for (const auto& [off, tip_z] : {std::pair{0.3, 0.0}, {0.05, 0.05}, {-1.0, 0.3}}) {
+    const std::vector<double> off_part = off < 0 ? std::vector<double>{} : std::vector<double>{off};
+    const auto programs = setup_programs(path, {1}, {top}, part, {}, {}, off_part);
+    ASSERT_EQ(programs.size(), 1u);
+    EXPECT_EQ(programs[0].lowered, off < 0 ? 0u : pass.contact.size());
+    std::size_t on_path = 0;
+    for (const V& t : tips(programs[0].gcode))
+      if (std::abs(t.y() - 5) < 1e-9 && t.z() < 1) {
+        EXPECT_NEAR(t.z(), tip_z, 1e-4) << "off " << off;  // 4 decimals in the program
+        ++on_path;
+      }
+    EXPECT_EQ(on_path, pass.contact.size()) << "off " << off;
+    const std::vector<double> clearance = move_clearances(tips(programs[0].gcode), part, r);
+    EXPECT_GE(*std::min_element(clearance.begin(), clearance.end()), r - 1e-4) << "off " << off;
+  }
+}
+
 TEST(SetupPrograms, BadInputIsNamed) {
   const Block b;
   EXPECT_EQ(test::error_of<std::invalid_argument>(
