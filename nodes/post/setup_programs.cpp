@@ -58,12 +58,13 @@ struct LiftStats {
   std::size_t dropped = 0;  // ball positions left out: no clear way to them (the pass split there)
   std::size_t splits = 0;   // passes cut in two there
   std::size_t lowered = 0;  // ball positions lowered onto the part
-  double lower_max = 0;           // mm
+  double lower_max = 0;     // mm
 };
 
 // Every ball centre of one pass (machine frame, ball radius r) kept off the whole part, and the
 // middles of its moves: a middle that reaches in gets a lifted point of its own, its halves
-// checked again (up to 6 times). Returns the pass as pieces (the pass split there).
+// checked again (up to 6 times); first each ball is lowered onto the part by at most max_drop.
+// Returns the pass as pieces: split where a move could not be kept off the part.
 std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const MeshDistance& part, double part_top_z,
                                              double tolerance, double max_drop, LiftStats& stats) {
   // A pass's ends: the tool comes down onto its start and leaves its end straight along +z, so the

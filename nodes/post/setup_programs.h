@@ -3,20 +3,21 @@
 // ../shared/tools/verify_part.py and a machinist read (format scallop-setups/1).
 //
 // A part point p is at R p + t in setup s's frame ([R|t] = its part_to_machine), a normal n at
-// R n. The balls are kept off the whole part, not only off the patch they cut: where the part
-// (its mesh, in that frame) comes closer than r - max(e/4, 0.001) to a ball centre, or lies
-// straight above it (the tool comes down along +z: it cannot reach under an overhang, and a
-// centre inside the solid is far from its surface), the ball is lifted along +z until clear. A
-// move's nearest approach to the part is found exactly (MeshDistance::least_along), and where it is
-// too near (or, checked at eighths, a point of it lies under the part) a lifted point is
-// inserted and both halves are checked again (6 times at most); a move that still reaches in
-// (a narrow neck above a free pocket) has its lower end raised to its upper end's height, and a
-// move that is still too near after that is not cut: the pass is split there and the pieces'
-// ends trimmed back to balls that go straight up clear (splits, dropped). A
-// pass's first and last ball, where the tool comes down and goes up along +z, is raised until
-// that vertical keeps the ball as far off the part (an overhang beside it, not only above it). The
-// lifts are counted (stock left). Links are kept as far off the part (checked against its
-// vertices and its faces), and the clearance plane set above its points (link.h).
+// R n. Where the patch's surface stands above the part (patch_off_part), each ball is first
+// lowered along -z until it touches the part. The balls are kept off the whole part, not only off
+// the patch they cut: where the part (its mesh, in that frame) comes closer than
+// r - max(e/4, 0.001) to a ball centre, or lies straight above it (the tool comes down along +z:
+// it cannot reach under an overhang, and a centre inside the solid is far from its surface), the
+// ball is lifted along +z until clear. A move's nearest approach to the part is found exactly
+// (MeshDistance::least_along), and where it is too near (or, checked at eighths, a point of it
+// lies under the part) a lifted point is inserted and both halves are checked again (6 times at
+// most); a move that still reaches in (a narrow neck above a free pocket) has its lower end raised
+// to its upper end's height, and a move that is still too near after that is not cut: the pass
+// is split there and the pieces' ends trimmed back to balls that go straight up clear (splits,
+// dropped). A pass's first and last ball, where the tool comes down and goes up along +z, is
+// raised until that vertical keeps the ball as far off the part (an overhang beside it, not only
+// above it). The lifts are counted (stock left). Links are kept as far off the part (checked
+// against its vertices and its faces), and the clearance plane set above its points (link.h).
 #pragma once
 
 #include <Eigen/Core>
@@ -47,7 +48,7 @@ struct SetupProgram {
   std::size_t splits = 0;   // passes cut where a move could not be kept off the part
   std::size_t dropped = 0;  // ball positions left out there (no clear way down or up to them)
   std::size_t lowered = 0;  // ball positions lowered onto the part (patch_off_part)
-  double lower_max = 0;           // mm
+  double lower_max = 0;     // mm, the largest drop
 };
 
 // setups        the clampings (plan_setups, or setups_from_report of surface.setups' report)
@@ -55,9 +56,9 @@ struct SetupProgram {
 // passes_per_patch  how many of them each patch has, in order (their sum: path.passes.size())
 // part          the whole part in its own frame (its mesh; without faces no ball is lifted)
 // patch_off_part  per patch, how far its surface lies from the part at most (path.contour_grid's
-//               part_distance_max; empty: 0): a ball is lowered along +z's opposite onto the part
-//               by up to 5 times that (a setup's patch is at most that steep) where the surface
-//               stands above the part, so that it touches the part and leaves no such stock
+//               part_distance_max; empty: 0): where the surface stands above the part, a ball is
+//               lowered along -z onto it by up to 5 times that (a setup's patch is at most that
+//               steep), so that it touches the part and leaves no such stock
 // Returns one program per setup that cuts anything. Throws std::invalid_argument when the counts
 // do not add up; link_passes' and write_gcode's errors pass through.
 std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector<std::size_t>& passes_per_patch,
