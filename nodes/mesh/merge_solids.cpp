@@ -93,9 +93,11 @@ MergeSolidsReport merge_overlapping_solids(Mesh& mesh) {
     }
     for (int c : group) merged[c] = true;
     report.solids_merged += group.size() - 1;
-    // The cut leaves slivers of no area where the solids' faces met nearly along a line (16 on
-    // the ABC plate), which QuadriFlow refuses: collapsed away, and a vertex where two sheets
-    // touch split in two.
+    // The cut leaves slivers of (nearly) no area where the solids' faces met nearly along a line
+    // (16 on the ABC plate), which QuadriFlow refuses: degenerate ones removed, then edges shorter
+    // than 1e-7 of the diagonal collapsed and triangles with an angle over 179.7 degrees flipped
+    // away (needles longer than that are the CAD's own and stay); a vertex where two sheets touch
+    // is split in two.
     PMP::remove_degenerate_faces(result);
     {
       Eigen::AlignedBox3d all;
