@@ -45,11 +45,9 @@ MergeSolidsReport merge_overlapping_solids(Mesh& mesh) {
   MergeSolidsReport report;
   const MeshEdges edges = mesh_edges(mesh);
   const std::vector<int> comp = face_components(mesh, edges);
-  const int n_comp = comp.empty() ? 0 : *std::max_element(comp.begin(), comp.end()) + 1;
+  const std::vector<bool> closed = closed_components(edges, comp);
+  const int n_comp = static_cast<int>(closed.size());
   if (n_comp < 2) return report;
-  std::vector<bool> closed(n_comp, true);
-  for (std::size_t e = 0; e < edges.size(); ++e)
-    if (edges.faces_on(e) != 2) closed[comp[edges.faces(e)[0]]] = false;
   std::vector<std::vector<std::size_t>> faces_of(n_comp);
   std::vector<Eigen::AlignedBox3d> box(n_comp);
   for (std::size_t f = 0; f < mesh.num_faces(); ++f) {

@@ -71,6 +71,14 @@ std::vector<int> face_components(const Mesh& mesh, const MeshEdges& edges) {
   return comp;
 }
 
+std::vector<bool> closed_components(const MeshEdges& edges, const std::vector<int>& component) {
+  const int n = component.empty() ? 0 : *std::max_element(component.begin(), component.end()) + 1;
+  std::vector<bool> closed(n, true);
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    if (edges.faces_on(e) != 2) closed[component[edges.faces(e)[0]]] = false;
+  return closed;
+}
+
 std::vector<std::vector<std::uint32_t>> boundary_loops(const Mesh& mesh, const MeshEdges& edges) {
   // Directed boundary edges u -> v as the one face on them runs, indexed by u.
   std::vector<std::pair<std::uint32_t, std::uint32_t>> out_edges;

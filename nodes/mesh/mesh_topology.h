@@ -36,6 +36,10 @@ MeshEdges mesh_edges(const Mesh& mesh);
 // Component id (0, 1, ...) of every face, faces joined through shared edges.
 std::vector<int> face_components(const Mesh& mesh, const MeshEdges& edges);
 
+// Per component of `component` (face_components' ids), whether it is closed: each of its edges on
+// exactly two faces.
+std::vector<bool> closed_components(const MeshEdges& edges, const std::vector<int>& component);
+
 // Boundary loops: each a closed chain of vertices along edges with one face, in the direction of
 // that face's corners. Where a vertex has several boundary edges out (non-manifold), loops
 // are cut at the first free one.

@@ -87,10 +87,7 @@ bool reversed_in(const SurfaceMesh& tm, SurfaceMesh::Face_index t, const std::ar
 std::size_t orient_closed_components(Mesh& mesh) {
   const MeshEdges edges = mesh_edges(mesh);
   const std::vector<int> comp = face_components(mesh, edges);
-  const int n_comp = comp.empty() ? 0 : *std::max_element(comp.begin(), comp.end()) + 1;
-  std::vector<bool> closed(n_comp, true);
-  for (std::size_t e = 0; e < edges.size(); ++e)
-    if (edges.faces_on(e) != 2) closed[comp[edges.faces(e)[0]]] = false;
+  const std::vector<bool> closed = closed_components(edges, comp);
 
   // Only the closed components' vertices: CGAL's volume_connected_components crashes on an
   // isolated vertex (CGAL 5.5.1).
