@@ -30,6 +30,8 @@ struct Projection {
   Vector3d point, normal;
   bool moved = false;
   double spread = 0;  // standard error of the projected point along the normal / noise sigma
+  double residual_variance = -1;  // mm^2, the fit's residual variance (-1: not computed)
+  double dof = 0;                 // its effective degrees of freedom
 };
 
 // Gaussian weights w[j] = exp(-d2[j] / h2) and the weighted PCA frame (t1, t2, n) of X[0..m)
@@ -107,10 +109,33 @@ bool fit_quadric(const Vector3d* X, const double* d2, int m, double h2, const Ve
   return f.coef.allFinite();
 }
 
+// The residual variance of the weighted quadric fit f to X[0..m) (weights w), an estimate of
+// sigma^2 when the quadric follows the surface, and its effective degrees of freedom. False when
+// they are not defined (too few points for the weights).
+bool residual_variance(const Vector3d* X, int m, const QuadricFit& f, const std::vector<double>& w,
+                       double& var, double& dof) {
+  double sw = 0, sw2 = 0, ssr = 0;
+  for (int j = 0; j < m; ++j) {
+    const Vector3d r = X[j] - X[0];
+    const Vector6d phi = quadric_basis(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h);
+    sw += w[j];
+    sw2 += w[j] * w[j];
+    ssr += w[j] * std::pow(r.dot(f.n) - phi.dot(f.coef), 2);
+  }
+  // E[sum w r^2] = sigma^2 tr(W (I - H)) with the hat matrix H = Phi A^-1 Phi^T W, and
+  // tr(W H) = tr(A^-1 Phi^T W^2 Phi) = tr(A^-1 B).
+  const double denom = sw - f.ldlt.solve(f.B).trace();
+  dof = sw * sw / sw2 - 6;
+  if (!(denom > 0) || !(dof > 1)) return false;
+  var = ssr / denom;
+  return std::isfinite(var);
+}
+
 // One MLS projection of q (= X[0]) given its neighbourhood X[0..m) with squared distances
 // d2[0..m) from q (d2[0] = 0). h2 is the squared Gaussian width: weight exp(-d2 / h2).
 // `up` orients the normal.
-Projection project(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up) {
+Projection project(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up,
+                   bool with_variance = false) {
   Projection out;
   out.point = X[0];
   out.normal = up;
@@ -122,6 +147,8 @@ Projection project(const Vector3d* X, const double* d2, int m, double h2, const 
   // variance is sigma^2 e0^T A^-1 B A^-1 e0 with B = Phi^T W^2 Phi.
   const Vector6d g = f.ldlt.solve(Vector6d::Unit(0));
   out.spread = std::sqrt(std::max(0.0, g.dot(f.B * g)));
+  if (with_variance && !residual_variance(X, m, f, w, out.residual_variance, out.dof))
+    out.residual_variance = -1;
 
   // Step 3: the quadric point above q, and the quadric's normal there (gradient (b, c) / h).
   out.point = X[0] + f.coef(0) * f.n;
@@ -139,21 +166,7 @@ bool fit_variance(const Vector3d* X, const double* d2, int m, double h2, double&
   thread_local std::vector<double> w;
   QuadricFit f;
   if (!fit_quadric(X, d2, m, h2, Vector3d::UnitZ(), w, f)) return false;
-  double sw = 0, sw2 = 0, ssr = 0;
-  for (int j = 0; j < m; ++j) {
-    const Vector3d r = X[j] - X[0];
-    const Vector6d phi = quadric_basis(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h);
-    sw += w[j];
-    sw2 += w[j] * w[j];
-    ssr += w[j] * std::pow(r.dot(f.n) - phi.dot(f.coef), 2);
-  }
-  // E[sum w r^2] = sigma^2 tr(W (I - H)) with the hat matrix H = Phi A^-1 Phi^T W, and
-  // tr(W H) = tr(A^-1 Phi^T W^2 Phi) = tr(A^-1 B).
-  const double denom = sw - f.ldlt.solve(f.B).trace();
-  dof = sw * sw / sw2 - 6;
-  if (!(denom > 0) || !(dof > 1)) return false;
-  var = ssr / denom;
-  return std::isfinite(var);
+  return residual_variance(X, m, f, w, var, dof);
 }
 
 void check_points(const std::vector<Vector3d>& P) {
@@ -179,6 +192,8 @@ void check_input(const std::vector<Vector3d>& P, const std::vector<Vector3d>& N,
   if (!std::isfinite(o.radius) || o.radius < 0)
     throw std::invalid_argument("radius must be finite and >= 0 (got " +
                                 std::to_string(o.radius) + ")");
+  if (o.widen < 1)
+    throw std::invalid_argument("widen must be at least 1 (got " + std::to_string(o.widen) + ")");
   if (o.iterations < 0)
     throw std::invalid_argument("iterations must be >= 0 (got " + std::to_string(o.iterations) + ")");
   if (nbrs) {
@@ -273,6 +288,7 @@ void summarize_uncertainty(DenoiseResult& res, int scales) {
 }  // namespace
 
 constexpr int kMaxWiden = 2;
+constexpr int kIsolationNeighbours = 32;  // a narrowed point with under a quarter of its 32 nearest narrowed is chance
 constexpr int kMinScaleNeighbours = 16;  // the narrowest fit of the multi-scale rule
 constexpr double kRefitAgreement = 2;  // how many noise widths a wider rim refit may move a point
 
@@ -296,7 +312,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
       if (progress) progress(1.0);
       return res;
     }
-    k_wanted = choose_denoise_k(res.noise_sigma, o.tolerance);
+    k_wanted = choose_denoise_k(res.noise_sigma, o.tolerance) * (o.scales > 1 ? o.widen : 1);
   }
   res.points = P;
   res.normals.assign(n, Vector3d::UnitZ());
@@ -328,6 +344,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
   if (o.scales > 1 && res.noise_sigma < 0) res.noise_sigma = estimate_noise_sigma(P);
   // The multi-scale rule's neighbour counts, narrowest first: k / 2^(S-1) (at least
   // kMinScaleNeighbours) ... k.
+  const bool lack_of_fit = o.scales > 1 && o.misfit_z > 0;
   std::vector<int> ks{k};
   while (static_cast<int>(ks.size()) < o.scales && ks.back() / 2 >= kMinScaleNeighbours)
     ks.push_back(ks.back() / 2);
@@ -346,6 +363,15 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
         s.idx.assign(first, first + k);
         s.d2.resize(k);
         for (int j = 0; j < k; ++j) s.d2[j] = (X[s.idx[j]] - X[i]).squaredNorm();
+      }
+    };
+    // The m nearest neighbours of point i into s.idx / s.d2 (m <= k when the neighbourhoods are given).
+    auto nearest = [&](std::size_t i, int m, Scratch& s) {
+      if (index) {
+        index->query(X[i], m, s.idx, s.d2, static_cast<int>(i));
+      } else {
+        const auto first = nbrs->indices.begin() + i * nbrs->k;
+        s.idx.assign(first, first + std::min(m, nbrs->k));
       }
     };
     // Automatic radius. Taking each point's own k-th neighbour distance would give a point on the
@@ -392,7 +418,8 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
       // averages over most of the neighbourhood (measured: lower noise than h = R / 2 for the
       // same k, with no visible bias).
       const Vector3d up = N.empty() ? Vector3d::UnitZ() : N[i];
-      return project(s.pts.data(), s.pd2.data(), static_cast<int>(s.pts.size()), R2 / 2, up);
+      return project(s.pts.data(), s.pd2.data(), static_cast<int>(s.pts.size()), R2 / 2, up,
+                     lack_of_fit);
     };
     // The projection of point i from the narrower neighbourhood of radius R sqrt(kk / k), the
     // subset of the one fit_point(i, s, k) has just gathered into s.
@@ -406,7 +433,8 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
           s.sub_pd2.push_back(s.pd2[j]);
         }
       const Vector3d up = N.empty() ? Vector3d::UnitZ() : N[i];
-      return project(s.sub_pts.data(), s.sub_pd2.data(), static_cast<int>(s.sub_pts.size()), R2 / 2, up);
+      return project(s.sub_pts.data(), s.sub_pd2.data(), static_cast<int>(s.sub_pts.size()), R2 / 2, up,
+                     lack_of_fit);
     };
     auto store = [&](std::size_t i, const Projection& p) {
       next[i] = p.point;
@@ -427,7 +455,14 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
     // against a wider one m scales up       bias <= |a_j - a_keep| / (2^(1.5 m) - 1).
     // The difference is not reduced by the noise it may hold: noise shared by nested fits can
     // hide a bias as well as fake one (measured on noisy crests: subtracting it left points 1.7
-    // times their bound off the surface).
+    // times their bound off the surface). Only the bias_scales narrower fits next to the kept one
+    // count: the narrowest are so noisy that their differences, not any bias, set the bound
+    // (median uncertainty of a noisy plane 0.0156 with all six, 0.0104 with three, k = 1200).
+    // Where a crest lies inside every wide fit, their biases are alike (no longer growing as
+    // the cube of the radius) and they agree; their residuals do not: a wider fit is kept only
+    // if its residual variance passes a lack-of-fit test against sigma^2, within misfit_z of
+    // its spread sqrt(2 / dof) (measured on a noisy crest of slope 0.3, radius 3 mm, k = 1200:
+    // largest |error| / uncertainty 1.21 without the test, 0.90 with it).
     auto fit_scales = [&](std::size_t i, Scratch& s) -> Projection {
       const Projection widest = fit_point(i, s, k);
       bias[i] = 0;
@@ -451,6 +486,15 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
                                                                   fits[j].spread * fits[j].spread));
           agrees = std::abs(a[j] - a[i2]) <= o.ici_gamma * noise;
         }
+        // and a wider fit must follow the surface as well as noise lets it: its residual
+        // variance within the upper misfit_z quantile of sigma^2 chi^2_nu / nu (Wilson-Hilferty;
+        // the normal approximation 1 + z sqrt(2 / nu) narrowed a few % of a noisy plane's
+        // points by chance at its few-neighbour scales, each then 3 to 10 times less certain)
+        if (agrees && lack_of_fit && keep != ks.size() && fits[j].residual_variance >= 0) {
+          const double nu = fits[j].dof, c = 2 / (9 * nu);
+          agrees = fits[j].residual_variance <=
+                   sigma * sigma * std::pow(1 - c + o.misfit_z * std::sqrt(c), 3);
+        }
         if (!agrees) break;
         keep = j;
       }
@@ -459,6 +503,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
       for (std::size_t j = 0; j < ks.size(); ++j) {
         if (j == keep || !fits[j].moved) continue;
         const double m = std::abs(static_cast<double>(j) - static_cast<double>(keep));
+        if (j < keep && o.bias_scales > 0 && m > o.bias_scales) continue;
         const double growth = std::pow(2.0, o.bias_growth * m);
         b = std::max(b, std::abs(a[j] - a[keep]) / (j < keep ? 1 - 1 / growth : growth - 1));
       }
@@ -480,6 +525,53 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
       kept += kept_here;
       done.done(range.size());
     });
+    // A point narrowed nearly alone, under a quarter of its kIsolationNeighbours nearest
+    // narrowed with it, is chance: the neighbourhoods of nearby points overlap it almost wholly,
+    // so a shape the wide fit misses would narrow them too (a crest narrows a band, whose edge
+    // still has half its neighbours narrowed). Chance narrowings (4-sigma disagreements, in
+    // clusters of 2 to 5 points around an extreme sample: 17 points of a 50 000-point noisy
+    // plane) keep a fit 2 to 8 times less certain, and each leaves stock for the planner
+    // around it; such a point keeps the widest fit instead, with the median bias bound of its
+    // neighbours (the largest, itself a noisy difference, left them 0.03-0.05 mm uncertain).
+    if (ks.size() > 1) {
+      std::vector<std::size_t> narrowed;
+      for (std::size_t i = 0; i < n; ++i)
+        if (chosen[i] > 0) narrowed.push_back(i);
+      if (!narrowed.empty() && !index && !nbrs) index = std::make_unique<KnnIndex>(X);
+      std::vector<char> isolated(narrowed.size(), 0);
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, narrowed.size(), 64), [&](const auto& range) {
+        Scratch& s = scratch.local();
+        for (std::size_t r = range.begin(); r != range.end(); ++r) {
+          const std::size_t i = narrowed[r];
+          nearest(i, kIsolationNeighbours, s);
+          isolated[r] = 4 * std::count_if(s.idx.begin(), s.idx.end(), [&](int j) { return chosen[j] > 0; }) <
+                        static_cast<std::ptrdiff_t>(s.idx.size());
+        }
+      });
+      std::vector<double> neighbour_bias(narrowed.size(), 0.0);
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, narrowed.size(), 16), [&](const auto& range) {
+        Scratch& s = scratch.local();
+        for (std::size_t r = range.begin(); r != range.end(); ++r) {
+          if (!isolated[r]) continue;
+          const std::size_t i = narrowed[r];
+          nearest(i, kIsolationNeighbours, s);
+          s.offsets.clear();
+          for (int j : s.idx) s.offsets.push_back(bias[j]);
+          if (!s.offsets.empty()) {  // the upper median: each bound is itself a noisy difference
+            std::nth_element(s.offsets.begin(), s.offsets.begin() + s.offsets.size() / 2, s.offsets.end());
+            neighbour_bias[r] = s.offsets[s.offsets.size() / 2];
+          }
+          const Projection p = fit_point(i, s, k);
+          if (p.moved) store(i, p);
+        }
+      });
+      for (std::size_t r = 0; r < narrowed.size(); ++r)
+        if (isolated[r]) {
+          bias[narrowed[r]] = neighbour_bias[r];
+          chosen[narrowed[r]] = 0;
+          ++res.unnarrowed;
+        }
+    }
     // Near the rim of the cloud the neighbourhood is one-sided: half (a quarter at a corner) of
     // the points, and an offset extrapolated to the edge of the fit, so the projected point is
     // 1.5 to 4 times less certain than inside (measured standard errors, sigma = 0.02 mm, k = 301:

@@ -27,8 +27,17 @@ namespace scallop {
 struct DenoiseOptions {
   int k = 0;               // neighbours in each fit (the point itself excluded), >= 5; or 0:
                            // automatic, from the estimated noise and `tolerance` (see
-                           // choose_denoise_k); the cloud is returned unchanged when the noise
-                           // is already below `tolerance`
+                           // choose_denoise_k; with scales > 1 the widest fit takes `widen`
+                           // times that); the cloud is returned unchanged when the noise is
+                           // already below `tolerance`
+  int widen = 1;           // automatic k with scales > 1: the widest fit's neighbours, times the
+                           // one-scale k. The lack-of-fit test and the agreement with the
+                           // narrower fits keep a wide fit only where the surface is smooth
+                           // enough for it, and there 4 halves the standard error (median
+                           // uncertainty of the catalog's noisy clouds, sigma 0.02 mm: 0.019-0.021
+                           // -> 0.010-0.016 mm). Not the default: on the bundled example
+                           // (sigma 0.005, 8000 points) it took the certificate's gouge bound at
+                           // the rim from 0.00983 to 0.0106, over e = 0.01.
   double tolerance = 0.002;  // mm; automatic mode only: the normal error (RMS) aimed at
   double radius = 0;       // mm; R, the neighbourhood radius: of the k nearest neighbours only
                            // those within R are used, with Gaussian weights exp(-2 d^2 / R^2).
@@ -39,16 +48,23 @@ struct DenoiseOptions {
   bool set_normals = true; // output normals from the quadric's gradient
   bool equalize_rim = true; // refit points whose standard error is above 1.15 times the median
                             // (one-sided neighbourhoods near the rim) from 2 k neighbours
-  int scales = 5;           // fits from k / 2^(scales-1) (at least 16) to k neighbours; each
-                            // point keeps the widest one that agrees with the narrower ones
-                            // (a Lepski-type rule, see mls_denoise) and its uncertainty counts
-                            // the bias left; 1: k only, the uncertainty counts noise only (not
-                            // honest where the shape is sharp for the neighbourhood: a crest)
-  double ici_gamma = 3.0;   // how many noise spreads two nested fits may differ by and agree
-                            // (2 narrowed ~10 % of a noisy plane's points by chance, each then
-                            // 2-4 times less certain; the bias bound below does not rely on it)
+  int scales = 7;           // fits from k / 2^(scales-1) (at least 16) to k neighbours; each
+                            // point keeps the widest one that agrees with the narrower ones and
+                            // follows the surface (a Lepski-type rule, see mls_denoise) and its
+                            // uncertainty counts the bias left; 1: k only, the uncertainty counts
+                            // noise only (not honest where the shape is sharp for the
+                            // neighbourhood: a crest)
+  double ici_gamma = 4.0;   // how many noise spreads two nested fits may differ by and agree
+                            // (on a noisy plane, k = 1200: 3 narrowed 1 % of the points by
+                            // chance, each then 2-8 times less certain and 0.045 mm off at
+                            // worst; 4 narrowed 0.04 %, worst error 0.016; a crest's bias
+                            // the scales cannot see is left to the lack-of-fit test)
   double bias_growth = 1.5; // a fit's bias grows at least by 2^bias_growth per doubling of k
                             // (as the cube of its radius)
+  double misfit_z = 4.0;    // a wider fit is kept only while its residual variance is within
+                            // misfit_z of its own spread of sigma^2 (a lack-of-fit test; 0: none)
+  int bias_scales = 3;      // how many narrower scales next to the kept one bound its bias
+                            // (0: all of them)
 };
 
 struct DenoiseResult {
@@ -72,6 +88,7 @@ struct DenoiseResult {
   // ones, uncertainty_factor(scales) * noise_sigma for every point; at least kUncertaintyFloor
   std::vector<double> uncertainty;
   std::size_t narrowed = 0;  // points kept with a narrower fit than k (sharp shape)
+  std::size_t unnarrowed = 0;  // points narrowed alone (by chance) given the widest fit back
   // The uncertainty in brief, for reports (mm): its median (the upper one of an even count),
   // its largest value and the output point that has it (the first such), the number of standard
   // errors it counts (uncertainty_factor(scales)), and the largest bias bound (0 when skipped).
@@ -94,7 +111,10 @@ struct DenoiseResult {
 // (bench/extra_surfaces.py error, 50k points, sigma = 0.02, k ~ 300, 5 scales): plane 0.59,
 // waves 0.52, canopy 0.66, crests of radius 1 and 3 mm with flanks of slope 0.7: 0.93 and 0.93
 // (with 5.5: 1.00 on both crests; with 4: 1.31, 1.32). The median uncertainty is then 0.024 mm
-// against 0.0106 with one scale.
+// against 0.0106 with one scale. Since 7 scales up to 4 times k, the lack-of-fit test and the
+// bias from the 3 nearest narrower scales (k ~ 1200): median 0.0103-0.0156 mm, largest |error| /
+// uncertainty 0.49 (plane) to 0.91 (freeform) over the catalog's noisy clouds, 0.68-0.90 on
+// crests of radius 1, 3 and 10 mm (bench/extra_surfaces.py error).
 inline constexpr double kUncertaintyFactor = 4.0;
 // No cloud is known better than this (mm): below it, float storage (a float32 coordinate of
 // 100 mm is rounded to 4e-6 mm) and any scanner's resolution. Without it an exact clean cloud's

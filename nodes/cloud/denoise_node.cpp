@@ -11,12 +11,12 @@ namespace scallop::cloud_nodes {
 NodeDecl make_denoise_node() {
   NodeDecl d;
   d.type = "cloud.denoise";
-  d.version = 6;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty, a 0.1 um floor; 6: 5 scales by default
+  d.version = 7;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty, a 0.1 um floor; 6: 5 scales by default; 7: 7 scales, `widen`, a lack-of-fit test, the bias from the 3 nearest narrower scales, lone narrowings undone
   d.description =
       "moving-least-squares denoising: each point projected along its local normal onto a "
       "weighted quadric fitted to its neighbours, at the widest of several scales (k, k/2, ... "
-      "k/16) that agrees with the narrower ones, so crests and creases are not flattened "
-      "(parallel)";
+      "k/64) that agrees with the narrower ones and whose residuals are noise, so crests and "
+      "creases are not flattened (parallel)";
   d.input("cloud", "Cloud", "the noisy points; their normals, if any, only orient the new ones")
       .input("neighbors", "Neighbors",
              "neighbours of each point (its first k are used); computed here when absent", false)
@@ -28,15 +28,19 @@ NodeDecl make_denoise_node() {
               "keep it as a margin")
       .output("report", "Report",
               "{noise_sigma (mm, estimated), k (used; 0 when skipped), moved_rms (mm), skipped, "
-              "rim_refitted (points refitted from a wider neighbourhood), rim_refits_biased (of those, kept with the narrower fit because the wider one was biased), narrowed (points kept with a narrower fit than k: sharp shape), bias_max (mm), uncertainty {median, "
+              "rim_refitted (points refitted from a wider neighbourhood), rim_refits_biased (of those, kept with the narrower fit because the wider one was biased), narrowed (points kept with a narrower fit than k: sharp shape), unnarrowed (points narrowed alone, by chance, given the widest fit back), bias_max (mm), uncertainty {median, "
               "max, max_at, factor}: how far the points may still be off the real surface}");
   d.options<DenoiseOptions>()
-      .integer("k", &DenoiseOptions::k, 0, 512, "",
-               "neighbours in each fit; more averages more noise away (noise in the normal "
+      .integer("k", &DenoiseOptions::k, 0, 4096, "",
+               "neighbours in the widest fit; more averages more noise away (noise in the normal "
                "direction falls roughly as 1/sqrt(k)) but smooths more of the shape. 0: "
                "automatic: the noise sigma is estimated from local quadric fits; below "
                "`tolerance` the cloud passes unchanged, otherwise k = clamp(3 (sigma / "
-               "tolerance)^2, 32, 512)")
+               "tolerance)^2, 32, 512), times `widen` with scales > 1")
+      .integer("widen", &DenoiseOptions::widen, 1, 8, "",
+               "automatic k with scales > 1: the widest fit takes this many times the one-scale "
+               "k. 4 halves the uncertainty of smooth noisy clouds (sigma 0.02 mm: median "
+               "0.010 mm, and h = 0.05 becomes plannable) but slows denoising about 8 times")
       .number("tolerance", &DenoiseOptions::tolerance, 1e-6, 1e3, "mm",
               "automatic mode (k = 0): the normal error the denoised cloud should reach; "
               "clouds with less estimated noise are left as they are")
@@ -45,13 +49,23 @@ NodeDecl make_denoise_node() {
               "weights exp(-2 d^2/R^2)); 0: automatic, the smallest k-th neighbour distance "
               "around each point")
       .integer("iterations", &DenoiseOptions::iterations, 0, 20, "", "projections in sequence")
-      .integer("scales", &DenoiseOptions::scales, 1, 6, "",
+      .integer("scales", &DenoiseOptions::scales, 1, 8, "",
                "fits at k, k/2, ... (down to 16 neighbours); each point keeps the widest that "
-               "agrees with the narrower ones, so a crest or crease is not flattened, and its "
-               "uncertainty is 6 standard errors plus the bias bound from the other scales "
-               "(honest on crests, about twice the single-scale uncertainty on noisy clouds; the "
-               "default). 1: one fit of k; uncertainty 4 standard errors, noise only, which a "
-               "crest or crease sharp for the neighbourhood exceeds")
+               "agrees with the narrower ones and passes the lack-of-fit test, so a crest or "
+               "crease is not flattened, and its uncertainty is 6 standard errors plus the bias "
+               "bound from the other scales (honest on crests; the default). 1: one fit of k; "
+               "uncertainty 4 standard errors, noise only, which a crest or crease sharp for the "
+               "neighbourhood exceeds")
+      .integer("bias_scales", &DenoiseOptions::bias_scales, 0, 8, "",
+               "how many narrower scales next to the kept one bound its bias (0: all; the "
+               "narrowest are noisy enough to double the uncertainty on a plane)")
+      .number("misfit_z", &DenoiseOptions::misfit_z, 0.0, 10.0, "",
+              "lack-of-fit test: a wider fit is kept only while its residual variance is within "
+              "this many of its own spreads of the noise's (0: no test)")
+      .number("ici_gamma", &DenoiseOptions::ici_gamma, 0.5, 10.0, "",
+              "how many noise spreads two nested fits may differ by and still agree")
+      .number("bias_growth", &DenoiseOptions::bias_growth, 0.25, 3.0, "",
+              "a fit's bias is taken to grow at least by 2^bias_growth per doubling of k")
       .flag("normals", &DenoiseOptions::set_normals,
             "set normals from the fitted quadrics (oriented like the input normals, or "
             "+Z); otherwise the input normals are kept");
@@ -79,6 +93,7 @@ NodeDecl make_denoise_node() {
                    {"rim_refitted", r.refitted},
                    {"rim_refits_biased", r.refits_biased},
                    {"narrowed", r.narrowed},
+                   {"unnarrowed", r.unnarrowed},
                    {"bias_max", r.bias_max},
                    {"uncertainty", {{"median", r.uncertainty_median},
                                     {"max", r.uncertainty_max},
