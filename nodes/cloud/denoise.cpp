@@ -538,23 +538,17 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
       for (std::size_t i = 0; i < n; ++i)
         if (chosen[i] > 0) narrowed.push_back(i);
       if (!narrowed.empty() && !index && !nbrs) index = std::make_unique<KnnIndex>(X);
+      // chosen and bias change only after this loop, so every point sees the same neighbours
       std::vector<char> isolated(narrowed.size(), 0);
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, narrowed.size(), 64), [&](const auto& range) {
+      std::vector<double> neighbour_bias(narrowed.size(), 0.0);
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, narrowed.size(), 16), [&](const auto& range) {
         Scratch& s = scratch.local();
         for (std::size_t r = range.begin(); r != range.end(); ++r) {
           const std::size_t i = narrowed[r];
           nearest(i, kIsolationNeighbours, s);
           isolated[r] = 4 * std::count_if(s.idx.begin(), s.idx.end(), [&](int j) { return chosen[j] > 0; }) <
                         static_cast<std::ptrdiff_t>(s.idx.size());
-        }
-      });
-      std::vector<double> neighbour_bias(narrowed.size(), 0.0);
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, narrowed.size(), 16), [&](const auto& range) {
-        Scratch& s = scratch.local();
-        for (std::size_t r = range.begin(); r != range.end(); ++r) {
           if (!isolated[r]) continue;
-          const std::size_t i = narrowed[r];
-          nearest(i, kIsolationNeighbours, s);
           s.offsets.clear();
           for (int j : s.idx) s.offsets.push_back(bias[j]);
           if (!s.offsets.empty()) {  // the upper median: each bound is itself a noisy difference
