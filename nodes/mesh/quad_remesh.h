@@ -22,8 +22,9 @@
 // of its output as a quad of no area, two opposite corners at one place on two vertices (a, b,
 // a', c): such a doublet is zipped (a' welded to a, the face removed: its neighbours then share
 // the edges a-b and a-c), so the rest stays all quads; a face with a corner repeating the one
-// before loses the repeat (a quad becomes a triangle). Unused vertices are dropped; each
-// component is turned to the input's orientation when QuadriFlow reversed it (the area-weighted
+// before loses the repeat (a quad becomes a triangle; two such triangles sharing an edge are
+// made one quad, a lone one away from the border is taken out and closed as below: see
+// pair_triangles). Unused vertices are dropped; each component is turned to the input's orientation when QuadriFlow reversed it (the area-weighted
 // agreement of its face normals with the nearest input face's). Where QuadriFlow left a triangle
 // out, a three-edge hole the input has not (a 40 x 30 x 12 box at 1500 quads: two, for every
 // seed tried; the fandisk at 1000 quads: two), the holes are closed and the mesh kept all quads
@@ -75,6 +76,9 @@ struct QuadRemeshReport {
   std::size_t doublets_zipped = 0;  // QuadriFlow's triangles written as quads of no area (see above)
   std::size_t holes_filled = 0, quads_split = 0;  // its triangles left out, closed (fill_triangle_holes.h)
   std::size_t repeated_corners_removed = 0, faces_dropped = 0, components_reversed = 0;
+  // triangles left by a repeated corner: pairs sharing an edge made one quad; lone ones opened
+  // into three-edge holes (closed with the holes above)
+  std::size_t triangles_paired = 0, triangles_opened = 0;
   std::string feature_source;     // "feature_edges" (the input's) or "angle"
   double feature_length = 0;      // mm, the input's feature curves
   double feature_length_on_quad_edges = 0;  // mm
@@ -124,6 +128,14 @@ Mesh clean_quadriflow_output(const Mesh& quads, QuadRemeshReport& report);
 // "" when `quads` has no more boundary loops than `input`, else the error quad_remesh throws:
 // QuadriFlow tears a hole where it leaves out a triangle, which would pass for the part's border.
 std::string holes_torn(const Mesh& input, const Mesh& quads);
+
+// quads  manifold, consistently oriented, quads and triangles (vertices, faces only)
+// The triangles made quads where they can be: two sharing an edge become one quad (their four
+// corners, in the triangles' direction); a lone one none of whose corners is on the border is
+// taken out, leaving a three-edge hole for fill_triangle_holes. Triangles on the border stay.
+// Counts them in report.triangles_paired and triangles_opened. Faces without triangles come back
+// unchanged and in order; merged quads come first.
+Mesh pair_triangles(const Mesh& quads, QuadRemeshReport& report);
 
 // The reason `mesh` is not a manifold, consistently oriented polygon mesh, or "" when it is: no
 // faces, a face with fewer than 3 corners, a corner past the vertices or repeated, an edge with 3

@@ -12,7 +12,7 @@ namespace scallop::mesh_nodes {
 NodeDecl make_quad_remesh_node() {
   NodeDecl d;
   d.type = "mesh.quad_remesh";
-  d.version = 2;
+  d.version = 3;
   d.description =
       "remeshes into quads aligned with the sharp features by QuadriFlow, run in Blender (Debian package blender) "
       "as a separate process";
@@ -30,7 +30,9 @@ NodeDecl make_quad_remesh_node() {
               "feature_length_below_60 (QuadriFlow keeps only edges sharper than 60 degrees), "
               "doublets_zipped (QuadriFlow's triangles, written as quads of no area, joined away), holes_filled "
               "(three-edge holes where it left a triangle out, closed keeping all quads), quads_split (by that), "
-              "repeated_corners_removed, faces_dropped, components_reversed, seconds, quadriflow_seconds, "
+              "repeated_corners_removed, triangles_paired (two triangles a repeated corner left, sharing an edge, "
+              "made one quad), triangles_opened (a lone one, closed as a hole), faces_dropped, components_reversed, "
+              "seconds, quadriflow_seconds, "
               "blender_version, blender, seed, snap: {corners, feature_vertices, surface_vertices (moved onto the input's "
               "corners, feature curves, faces), kept, off_surface_max (mm, before), moved_max (mm)}, topology}");
   d.options<QuadRemeshOptions>()
@@ -81,6 +83,8 @@ NodeDecl make_quad_remesh_node() {
                    {"holes_filled", r.holes_filled},
                    {"quads_split", r.quads_split},
                    {"repeated_corners_removed", r.repeated_corners_removed},
+                   {"triangles_paired", r.triangles_paired},
+                   {"triangles_opened", r.triangles_opened},
                    {"faces_dropped", r.faces_dropped},
                    {"snap",
                     {{"corners", r.snap.corners},

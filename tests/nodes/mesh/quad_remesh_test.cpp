@@ -10,6 +10,7 @@
 #include <cstdlib>
 
 #include "engine/node.h"
+#include "nodes/mesh/fill_triangle_holes.h"
 #include "nodes/mesh/mesh_topology.h"
 #include "nodes/types/document.h"
 #include "tests/nodes/mesh/mesh_test_util.h"
@@ -162,6 +163,72 @@ TEST(QuadRemesh, QuadriFlowsDoubletsAreZippedAwayAndOtherHolesRefused) {
   EXPECT_EQ(holes_torn(cube, torn),
             "QuadriFlow's quads have 1 boundary loop (of 4 edges) where the input has 0: it tore holes, usually "
             "where the part has details finer than the quads; raise target_faces or try another seed");
+}
+
+// A quad with a repeated corner comes out of clean_quadriflow_output as a triangle, which
+// mesh.segment refuses (it stopped a 200 000-point cloud of the block there). Two sharing an edge
+// become one quad; lone ones are opened into three-edge holes that fill_triangle_holes closes
+// keeping all quads; one on the border stays.
+TEST(QuadRemesh, TwoTrianglesMakeAQuadALoneOneIsClosedWithQuads) {
+  const Mesh cube = test::quad_box({2, 2, 2}, V(1, 1, 1));
+  Mesh split;  // the cube with its first face cut along a diagonal
+  split.vertices = cube.vertices;
+  for (std::size_t f = 0; f < cube.num_faces(); ++f) {
+    const std::uint32_t* q = cube.face(f);
+    if (f == 0) {
+      split.add_face({q[0], q[1], q[2]});
+      split.add_face({q[0], q[2], q[3]});
+    } else {
+      split.add_face({q[0], q[1], q[2], q[3]});
+    }
+  }
+  ASSERT_EQ(orientable_manifold_problem(split), "");
+  QuadRemeshReport r;
+  const Mesh paired = pair_triangles(split, r);
+  EXPECT_EQ(r.triangles_paired, 1u);
+  EXPECT_EQ(r.triangles_opened, 0u);
+  ASSERT_EQ(paired.num_faces(), cube.num_faces());
+  for (std::size_t f = 0; f < paired.num_faces(); ++f) EXPECT_EQ(paired.face_size(f), 4u);
+  EXPECT_EQ(orientable_manifold_problem(paired), "");
+  EXPECT_NEAR(six_volume(paired), six_volume(cube), 1e-12);
+  // the merged quad is the cut face's, its corners in its direction (a rotation of them)
+  std::vector<std::uint32_t> merged(paired.face(0), paired.face(0) + 4), cut(cube.face(0), cube.face(0) + 4);
+  std::rotate(merged.begin(), std::find(merged.begin(), merged.end(), cut[0]), merged.end());
+  EXPECT_EQ(merged, cut);
+
+  // A triangular prism: two lone triangles (its ends) and three quads.
+  Mesh prism;
+  prism.vertices = {V(0, 0, 0), V(1, 0, 0), V(0, 1, 0), V(0, 0, 2), V(1, 0, 2), V(0, 1, 2)};
+  prism.add_face({0, 2, 1});
+  prism.add_face({3, 4, 5});
+  prism.add_face({0, 1, 4, 3});
+  prism.add_face({1, 2, 5, 4});
+  prism.add_face({2, 0, 3, 5});
+  ASSERT_EQ(orientable_manifold_problem(prism), "");
+  QuadRemeshReport r2;
+  Mesh opened = pair_triangles(prism, r2);
+  EXPECT_EQ(r2.triangles_paired, 0u);
+  EXPECT_EQ(r2.triangles_opened, 2u);
+  EXPECT_EQ(opened.num_faces(), 3u);
+  const auto holes = boundary_loops(opened, mesh_edges(opened));
+  ASSERT_EQ(holes.size(), 2u);
+  const TriangleHoleFill fill = fill_triangle_holes(opened, holes);
+  EXPECT_EQ(fill.holes, 2u);
+  EXPECT_EQ(fill.left, 0u);
+  for (std::size_t f = 0; f < opened.num_faces(); ++f) EXPECT_EQ(opened.face_size(f), 4u);
+  EXPECT_EQ(orientable_manifold_problem(opened), "");
+  EXPECT_TRUE(boundary_loops(opened, mesh_edges(opened)).empty());
+  EXPECT_NEAR(six_volume(opened), six_volume(prism), 1e-12);
+
+  // A lone triangle on the border stays (mesh.segment names it).
+  Mesh fan;
+  fan.vertices = {V(0, 0, 0), V(1, 0, 0), V(1, 1, 0), V(0, 1, 0), V(2, 0, 0)};
+  fan.add_face({0, 1, 2, 3});
+  fan.add_face({1, 4, 2});
+  QuadRemeshReport r3;
+  const Mesh kept = pair_triangles(fan, r3);
+  EXPECT_EQ(r3.triangles_opened + r3.triangles_paired, 0u);
+  EXPECT_EQ(kept.face_vertices, fan.face_vertices);
 }
 
 TEST(QuadRemesh, RefusesANonManifoldOrInconsistentMeshAndSaysToRepairIt) {
