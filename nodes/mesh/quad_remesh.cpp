@@ -440,38 +440,37 @@ Mesh clean_quadriflow_output(const Mesh& m, QuadRemeshReport& report) {
   return keep_faces(out, std::vector<bool>(out.num_faces(), true));
 }
 
-// The triangles clean_quadriflow_output leaves (a quad with a repeated corner), made quads: two
-// that share an edge become the quad around it; a lone one away from the border is taken out,
-// a three-edge hole that fill_torn_triangles closes keeping the mesh all quads. Triangles on the
-// border stay (mesh.segment names them). On a 200 000-point cloud of the block (x 5) one such
-// triangle stopped the whole part at mesh.segment.
+// (quad_remesh.h) A 200 000-point cloud of the block (x 5) stopped at mesh.segment on such a
+// triangle.
 Mesh pair_triangles(const Mesh& quads, QuadRemeshReport& report) {
+  bool any = false;
+  for (std::size_t f = 0; f < quads.num_faces() && !any; ++f) any = quads.face_size(f) == 3;
+  if (!any) return quads;
   const MeshEdges edges = mesh_edges(quads);
   std::vector<bool> on_border(quads.num_vertices(), false);
   for (std::size_t e = 0; e < edges.size(); ++e)
     if (edges.is_boundary(e)) on_border[edges.edges[e][0]] = on_border[edges.edges[e][1]] = true;
-  std::vector<bool> keep(quads.num_faces(), true), merged(quads.num_faces(), false);
+  std::vector<bool> keep(quads.num_faces(), true);
   Mesh out;
   out.vertices = quads.vertices;
   for (std::size_t f = 0; f < quads.num_faces(); ++f) {
-    if (quads.face_size(f) != 3 || merged[f]) continue;
+    if (quads.face_size(f) != 3 || !keep[f]) continue;
     const std::uint32_t* a = quads.face(f);
-    for (int c = 0; c < 3 && !merged[f]; ++c) {
+    for (int c = 0; c < 3 && keep[f]; ++c) {
       const std::uint32_t e = edges.face_edge[quads.face_start[f] + c];
       if (edges.faces_on(e) != 2) continue;
       const std::uint32_t g = edges.faces(e)[0] == f ? edges.faces(e)[1] : edges.faces(e)[0];
-      if (quads.face_size(g) != 3 || merged[g]) continue;
+      if (quads.face_size(g) != 3 || !keep[g]) continue;
       // f runs a[c] -> a[c+1]; g runs the other way and has its own third corner
       std::uint32_t apex = a[c];
       for (int j = 0; j < 3; ++j)
         if (quads.face(g)[j] != a[c] && quads.face(g)[j] != a[(c + 1) % 3]) apex = quads.face(g)[j];
       if (apex == a[c] || apex == a[(c + 2) % 3]) continue;
       out.add_face({a[(c + 1) % 3], a[(c + 2) % 3], a[c], apex});
-      merged[f] = merged[g] = true;
       keep[f] = keep[g] = false;
       ++report.triangles_paired;
     }
-    if (!merged[f] && !on_border[a[0]] && !on_border[a[1]] && !on_border[a[2]]) {
+    if (keep[f] && !on_border[a[0]] && !on_border[a[1]] && !on_border[a[2]]) {
       keep[f] = false;
       ++report.triangles_opened;
     }

@@ -24,8 +24,9 @@
 // the edges a-b and a-c), so the rest stays all quads; a face with a corner repeating the one
 // before loses the repeat (a quad becomes a triangle; two such triangles sharing an edge are
 // made one quad, a lone one away from the border is taken out and closed as below: see
-// pair_triangles). Unused vertices are dropped; each component is turned to the input's orientation when QuadriFlow reversed it (the area-weighted
-// agreement of its face normals with the nearest input face's). Where QuadriFlow left a triangle
+// pair_triangles). Unused vertices are dropped; each component is turned to the input's
+// orientation when QuadriFlow reversed it (the area-weighted agreement of its face normals with
+// the nearest input face's). Where QuadriFlow left a triangle
 // out, a three-edge hole the input has not (a 40 x 30 x 12 box at 1500 quads: two, for every
 // seed tried; the fandisk at 1000 quads: two), the holes are closed and the mesh kept all quads
 // (fill_triangle_holes.h): a hole would pass for the part's border downstream. The result must
@@ -133,8 +134,8 @@ std::string holes_torn(const Mesh& input, const Mesh& quads);
 // The triangles made quads where they can be: two sharing an edge become one quad (their four
 // corners, in the triangles' direction); a lone one none of whose corners is on the border is
 // taken out, leaving a three-edge hole for fill_triangle_holes. Triangles on the border stay.
-// Counts them in report.triangles_paired and triangles_opened. Faces without triangles come back
-// unchanged and in order; merged quads come first.
+// Counts them in report.triangles_paired and triangles_opened. A mesh without triangles comes
+// back as it is; otherwise the merged quads come first, then the kept faces in order.
 Mesh pair_triangles(const Mesh& quads, QuadRemeshReport& report);
 
 // The reason `mesh` is not a manifold, consistently oriented polygon mesh, or "" when it is: no
