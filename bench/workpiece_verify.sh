@@ -7,7 +7,10 @@
 # With CLOUD_POINTS=N (and NOISE=sigma in mm, default 0) the part is first sampled into a cloud of
 # N points (../shared/tools/sample_mesh.py, seed 1) and the cloud runs through
 # bench/workpiece-contour-cloud.json (reconstruction, mesh.cloud_envelope, then the same chain);
-# the judge still measures against the true mesh. EXTRA holds more --set items for the graph.
+# the judge still measures against the true mesh. With OUTER_SURFACE=1 the cloud is sampled from
+# the mesh as mesh.repair leaves it (bench/repaired-mesh.json): an assembly's overlapping solids
+# merged, so that no point lies inside the part (a scanner sees none there; the ABC plate's STL is
+# such an assembly). EXTRA holds more --set items for the graph.
 # R, H and E set the tool radius, scallop limit and chord tolerance (default 3, 0.05, 0.01 mm).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,7 +21,12 @@ r=${R:-3} h=${H:-0.05} e=${E:-0.01}
 rm -rf "$out"
 if [ -n "${CLOUD_POINTS:-}" ]; then
   mkdir -p "$out"
-  /usr/bin/python3 ../shared/tools/sample_mesh.py --mesh "$mesh" --scale "$scale" --n "$CLOUD_POINTS" --seed 1 \
+  sampled=$mesh sampled_scale=$scale
+  if [ "${OUTER_SURFACE:-0}" = 1 ]; then
+    ./build/scallop run bench/repaired-mesh.json --input mesh="$mesh" --set read.scale="$scale" -o "$out/outer" --no-cache -q
+    sampled=$out/outer/repaired.ply sampled_scale=1
+  fi
+  /usr/bin/python3 ../shared/tools/sample_mesh.py --mesh "$sampled" --scale "$sampled_scale" --n "$CLOUD_POINTS" --seed 1 \
     --noise "${NOISE:-0}" -o "$out/cloud.ply"
   graph=(bench/workpiece-contour-cloud.json --input cloud="$out/cloud.ply")
 else

@@ -493,6 +493,26 @@ std::string holes_torn(const Mesh& input, const Mesh& quads) {
          "another seed";
 }
 
+std::string quads_off_the_input(const Mesh& input, const Mesh& quads) {
+  Eigen::AlignedBox3d box;
+  for (const auto& v : input.vertices) box.extend(v);
+  const double tolerance = 0.05 * box.diagonal().norm();
+  std::size_t off = 0;
+  double farthest = 0;
+  for (const auto& v : quads.vertices) {
+    const double d = box.exteriorDistance(v);
+    if (d > tolerance) ++off, farthest = std::max(farthest, d);
+  }
+  if (off == 0) return "";
+  const MeshTopology t = mesh_topology(input, mesh_edges(input));
+  return "QuadriFlow's quads are not usable: " + std::to_string(off) + " of " + std::to_string(quads.num_vertices()) +
+         " vertices lie outside the input's bounding box, up to " + fmt(farthest) +
+         " mm from it: QuadriFlow did not converge on this mesh (" + plural(static_cast<std::size_t>(t.components), "piece", "pieces") + ", " +
+         plural(static_cast<std::size_t>(t.boundary_loops), "boundary loop", "boundary loops") + ", " +
+         plural(static_cast<std::size_t>(t.genus), "handle", "handles") +
+         "); it did so on the reconstruction of a cloud that held points inside the part";
+}
+
 Mesh quad_remesh(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshReport& report,
                  const std::function<void(double, const std::string&)>& progress) {
   auto say = [&](double f, const std::string& what) {
@@ -527,6 +547,7 @@ Mesh quad_remesh(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshReport&
 
   Mesh quads = pair_triangles(clean_quadriflow_output(run_quadriflow(mesh, o, report, say), report), report);
   if (quads.num_faces() == 0) throw std::runtime_error("QuadriFlow gave no face; try another seed or target_faces");
+  if (const std::string off = quads_off_the_input(mesh, quads); !off.empty()) throw std::runtime_error(off);
   report.components_reversed = match_orientation(quads, mesh);
   auto check = [&] {
     if (const std::string problem = orientable_manifold_problem(quads); !problem.empty())

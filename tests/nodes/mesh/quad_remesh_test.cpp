@@ -291,5 +291,22 @@ TEST(QuadRemesh, WhenBlenderFailsTheErrorEndsWithItsLastLines) {
                 lines);
 }
 
+// QuadriFlow that does not converge scatters its vertices far off the part; a 200 000-point
+// cloud of the ABC plate, sampled inside its overlapping solids too, got quads 900 mm off a part
+// 120 mm long, whose only symptom had been a non-manifold edge.
+TEST(QuadRemesh, QuadsFarOffTheInputAreRefusedWithTheInputsTopology) {
+  const Mesh cube = test::quad_box({2, 2, 2}, V(1, 1, 1));  // the unit cube: diagonal sqrt(3)
+  Mesh near = cube;
+  near.vertices[0] += V(-0.08, 0, 0);  // 0.08 outside, within 5 % of sqrt(3) = 0.0866
+  EXPECT_EQ(quads_off_the_input(cube, near), "");
+  Mesh far = cube;
+  far.vertices[0] += V(-0.3, 0, 0);
+  far.vertices[1] = V(1, 1, 1) + V(0, 0, 0.5);
+  EXPECT_EQ(quads_off_the_input(cube, far),
+            "QuadriFlow's quads are not usable: 2 of 26 vertices lie outside the input's bounding box, up to 0.5 mm "
+            "from it: QuadriFlow did not converge on this mesh (1 piece, 0 boundary loops, 0 handles); it did so on "
+            "the reconstruction of a cloud that held points inside the part");
+}
+
 }  // namespace
 }  // namespace scallop
