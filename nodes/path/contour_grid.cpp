@@ -93,16 +93,28 @@ class ContourPlanner {
       const Eigen::Vector2d uv = a + (b - a) * (double(j) / (o_.side_samples - 1));
       const SurfaceDerivatives d = f_.derivatives(uv);
       const FundamentalForms ff = fundamental_forms(d.ru, d.rv, d.ruu, d.ruv, d.rvv, d.sample.normal);
-      const double theta = std::acos(std::clamp(ff.F / std::sqrt(ff.E * ff.G), -1.0, 1.0));
+      const double along = along_u(s) ? ff.E : ff.G, across = along_u(s) ? ff.G : ff.E;
+      // Where the side shrinks to a point (a patch's border collapsed: r_u = 0 along it) it has no
+      // direction, and the angle and the direction across it are 0 / 0: the step is taken
+      // straight across (an ABC plate's patch got NaN contours there, and GMP ended the run).
+      const bool collapsed = !(along > 1e-12 * across);
+      const double theta =
+          collapsed ? std::acos(0.0) : std::acos(std::clamp(ff.F / std::sqrt(ff.E * ff.G), -1.0, 1.0));
       // Across the pass, on the surface: perpendicular to r_u (a side along u) or to r_v.
-      const double kappa = along_u(s) ? normal_curvature(ff, -ff.F / ff.E, 1) : normal_curvature(ff, 1, -ff.F / ff.G);
+      const double kappa = along_u(s) ? normal_curvature(ff, collapsed ? 0 : -ff.F / ff.E, 1)
+                                      : normal_curvature(ff, 1, collapsed ? 0 : -ff.F / ff.G);
       double interval = side_interval(o_.scallop_height, r_, kappa);
       if (!std::isfinite(interval)) {
         ++unreachable;
         interval = side_interval(o_.scallop_height, r_, 0);  // the check between contours decides
       }
-      step = std::min(step, side_step_corrected(interval, std::sqrt(along_u(s) ? ff.G : ff.E), theta));
+      const double sample_step = side_step_corrected(interval, std::sqrt(across), theta);
+      if (std::isfinite(sample_step)) step = std::min(step, sample_step);
     }
+    if (!std::isfinite(step))
+      throw std::invalid_argument("the surface has no width across side " + std::to_string(s) + " of the rectangle (" +
+                                  std::to_string(r.u0) + ".." + std::to_string(r.u1) + ", " + std::to_string(r.v0) +
+                                  ".." + std::to_string(r.v1) + "): its patch is degenerate there");
     return step;
   }
 
@@ -309,7 +321,7 @@ ContourGridResult plan_contour_grid(const ParametricSurface& surface, const Cont
       bool ok = true;
       for (int s = 0; s < 4; ++s) {
         worst[s] = planner.strip_scallop(a, b, s, ca, cb);
-        if (worst[s] > o.scallop_height) {
+        if (!(worst[s] <= o.scallop_height)) {  // NaN too
           ok = false;
           step[s] *= std::max(0.1, 0.995 * std::sqrt(o.scallop_height / worst[s]));  // scallop ~ step^2
           ++shrinks;

@@ -19,7 +19,7 @@ namespace scallop::path_nodes {
 NodeDecl make_contour_grid_node() {
   NodeDecl d;
   d.type = "path.contour_grid";
-  d.version = 2;
+  d.version = 3;
   d.description =
       "contour-parallel passes on every B-spline patch (the second paper's Algorithm 1): nested rectangles of the "
       "patch's (u, v) square, each side stepped in from the scallop limit and the scallop between every two "

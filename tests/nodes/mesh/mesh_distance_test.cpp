@@ -8,6 +8,7 @@
 
 #include "nodes/mesh/mesh_topology.h"
 #include "tests/nodes/mesh/mesh_test_util.h"
+#include "tests/test_support.h"
 
 namespace scallop {
 namespace {
@@ -96,6 +97,20 @@ TEST(MeshDistance, TheLeastAlongASegmentIsFoundBetweenItsSamples) {
   const double far = cube.least_along(V(3, -1, 3), V(3, 2, 3), 0.5, 1, 1e-6, where, evaluations);
   EXPECT_LE(far, 2 * std::sqrt(2.0) + 1e-12);
   EXPECT_GE(far, 1 - 1e-12);
+}
+
+
+// CGAL's exact predicates turn a NaN into a GMP rational, and GMP ends the process (SIGFPE): the
+// query is refused with an exception the node reports instead.
+TEST(MeshDistance, APointThatIsNotFiniteIsRefusedNotACrash) {
+  const MeshDistance cube(test::cube_mesh(3));
+  const Eigen::Vector3d nan(0.5, std::nan(""), 0.5), inf(0.5, 0.5, HUGE_VAL);
+  const std::string said = "a distance to the mesh was asked at a point that is not finite";
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cube(nan); }), said);
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cube(inf); }), said);
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cube.closest_point(nan); }), said);
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cube.ray_distance(nan, Eigen::Vector3d::UnitZ()); }), said);
+  EXPECT_NEAR(cube(Eigen::Vector3d(0.5, 0.5, 2)), 1, 1e-12);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <map>
 #include <tuple>
 
+#include "nodes/geom/bspline_surface.h"
 #include "nodes/path/step_size.h"
 #include "nodes/types/document.h"
 #include "nodes/types/mesh.h"
@@ -219,6 +220,32 @@ TEST(ContourGrid, BadInputIsNamed) {
   EXPECT_EQ(error(o).substr(0, 35), "more than max_contours (3) contours");
 }
 
+// A patch whose side v = 0 shrinks to a point (a triangle, as the ABC plate's cloud gave one):
+// along that side r_u = 0, the angle between r_u and r_v and the direction across are 0 / 0. The
+// step there is taken straight across; before, it came out infinite, the next rectangle NaN, and
+// CGAL's exact arithmetic ended the whole run (SIGFPE) when the programs measured those balls.
+TEST(ContourGrid, APatchWithASideShrunkToAPointIsPlannedWithinH) {
+  // The plane z = 0 over the triangle (0, 0), (-20, 30), (20, 30).
+  const BSplinePatch patch(test::flat_patch(V(0, 0, 0), V(0, 0, 0), V(-20, 30, 0), V(20, 30, 0), V::UnitZ()).surface,
+                           V::UnitZ());
+  const ContourGridResult g = plan_contour_grid(patch, options());
+  ASSERT_GE(g.passes.size(), 2u);
+  std::vector<test::Segment> segs;
+  for (const auto& p : g.passes)
+    for (std::size_t k = 0; k < p.contact.size(); ++k) {
+      ASSERT_TRUE(p.contact[k].allFinite() && p.normal[k].allFinite());
+      if (k + 1 < p.contact.size()) segs.push_back({p.contact[k] + 3 * p.normal[k], p.contact[k + 1] + 3 * p.normal[k + 1]});
+    }
+  EXPECT_LE(g.report["scallop_max"].get<double>(), 0.02);
+  // Measured over the triangle, its rim included.
+  double worst = 0;
+  for (int i = 0; i <= 60; ++i)
+    for (int j = 0; j <= i; ++j) {
+      const double y = 30.0 * i / 60, x = i == 0 ? 0 : -y * 2 / 3 + (y * 4 / 3) * j / i;
+      worst = std::max(worst, test::traced_scallop(V(x, y, 0), V::UnitZ(), segs, 3));
+    }
+  EXPECT_LE(worst, 0.02 * 1.01);
+}
 
 TEST(ContourGrid, TheNodePlansEveryPatchAlongItsOwnDirection) {
   // A 20 x 10 top (z = 5, up) and a 20 x 5 wall (y = 0, facing -y), bilinear patches.
