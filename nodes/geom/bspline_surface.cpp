@@ -31,9 +31,14 @@ std::vector<double> averaged_knots(int poles, int degree) {
 }
 
 BasisAt bspline_basis(const std::vector<double>& knots, int degree, double t, int derivatives) {
-  TColStd_Array1OfReal flat(1, static_cast<int>(knots.size()));
-  for (std::size_t i = 0; i < knots.size(); ++i) flat(static_cast<int>(i) + 1) = knots[i];
-  math_Matrix m(1, derivatives + 1, 1, degree + 1);
+  if (degree < 1 || degree > kMaxDegree || derivatives < 0 || derivatives > kMaxDegree)
+    throw std::invalid_argument("bspline_basis: degree " + std::to_string(degree) + " with " +
+                                std::to_string(derivatives) + " derivatives");
+  // Views of the knots and of a buffer on the stack, not copies: this runs for every point the
+  // planners evaluate, and copying the knots made its cost grow with the patch's size.
+  const TColStd_Array1OfReal flat(knots.front(), 1, static_cast<int>(knots.size()));
+  double buffer[(kMaxDegree + 1) * (kMaxDegree + 1)];
+  math_Matrix m(buffer, 1, derivatives + 1, 1, degree + 1);
   int first = 0;
   // OpenCASCADE's index of the first non-zero function is 1-based.
   if (BSplCLib::EvalBsplineBasis(derivatives, degree + 1, flat, std::clamp(t, 0.0, 1.0), first, m) != 0)
@@ -80,7 +85,7 @@ Eigen::Vector3d surface_point(const BSplineSurface& s, double u, double v) {
 namespace {
 std::string knot_problem(const std::vector<double>& k, int degree, std::uint32_t poles, const char* dir) {
   const std::string d(dir);
-  if (degree < 1 || degree > 9) return "degree in " + d + " is " + std::to_string(degree) + " (1..9)";
+  if (degree < 1 || degree > kMaxDegree) return "degree in " + d + " is " + std::to_string(degree) + " (1.." + std::to_string(kMaxDegree) + ")";
   if (poles <= static_cast<std::uint32_t>(degree))
     return std::to_string(poles) + " poles in " + d + " for degree " + std::to_string(degree);
   if (k.size() != poles + degree + 1)

@@ -41,9 +41,11 @@ std::vector<double> averaged_knots(int poles, int degree);
 // The B-spline basis functions of `knots` (degree `degree`) that are non-zero at t in [0, 1],
 // with derivatives up to `derivatives` (<= degree): values(d, k) is the d-th derivative of basis
 // function first + k, k = 0..degree.
+constexpr int kMaxDegree = 9;
 struct BasisAt {
   int first = 0;
-  Eigen::MatrixXd values;  // (derivatives + 1) by (degree + 1)
+  // (derivatives + 1) by (degree + 1), held inline (no allocation per evaluation)
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxDegree + 1, kMaxDegree + 1> values;
 };
 BasisAt bspline_basis(const std::vector<double>& knots, int degree, double t, int derivatives);
 
