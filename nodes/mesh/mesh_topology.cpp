@@ -197,4 +197,11 @@ MeshTopology mesh_topology(const Mesh& mesh, const MeshEdges& edges) {
   return t;
 }
 
+double mean_edge_length(const Mesh& m) {
+  const MeshEdges edges = mesh_edges(m);
+  double sum = 0;
+  for (const auto& e : edges.edges) sum += (m.vertices[e[0]] - m.vertices[e[1]]).norm();
+  return edges.size() > 0 ? sum / static_cast<double>(edges.size()) : 0;
+}
+
 }  // namespace scallop

@@ -74,4 +74,7 @@ struct MeshTopology {
 
 MeshTopology mesh_topology(const Mesh& mesh, const MeshEdges& edges);
 
+// The mean length of the mesh's edges, each counted once (0 without edges).
+double mean_edge_length(const Mesh& mesh);
+
 }  // namespace scallop

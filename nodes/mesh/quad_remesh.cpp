@@ -194,13 +194,6 @@ std::size_t match_orientation(Mesh& quads, const Mesh& input) {
   return reversed;
 }
 
-double mean_edge_length(const Mesh& m) {
-  const MeshEdges edges = mesh_edges(m);
-  double sum = 0;
-  for (const auto& e : edges.edges) sum += (m.vertices[e[0]] - m.vertices[e[1]]).norm();
-  return edges.size() > 0 ? sum / static_cast<double>(edges.size()) : 0;
-}
-
 // The feature share (see the header) of the input's feature edges `reference` on the quads'.
 void measure_features(const Mesh& input, const std::vector<std::array<std::uint32_t, 2>>& reference, const Mesh& quads,
                       double tolerance_fraction, QuadRemeshReport& report) {

@@ -14,6 +14,7 @@
 #include <type_traits>
 
 #include "nodes/mesh/mesh_distance.h"
+#include "nodes/surface/subdivide_segments.h"
 
 namespace scallop {
 
@@ -287,8 +288,10 @@ std::vector<double> surface_distance_max(const Surfaces& surfaces, const Mesh& m
   return out;
 }
 
-Surfaces fit_surfaces(const Segments& seg, const FitBSplineOptions& o, FitStats* stats,
-                      const std::function<void(double, const std::string&)>& progress) {
+namespace {
+
+Surfaces fit_patches(const Segments& seg, const FitBSplineOptions& o, FitStats* stats,
+                     const std::function<void(double, const std::string&)>& progress) {
   const Mesh& mesh = seg.mesh;
   const std::size_t np = seg.patches.size();
   // Each patch's four borders as vertex chains (fit_grid_bspline's order), each stored once under
@@ -393,6 +396,35 @@ Surfaces fit_surfaces(const Segments& seg, const FitBSplineOptions& o, FitStats*
             }
           }
     }
+  }
+  return out;
+}
+
+}  // namespace
+
+Surfaces fit_surfaces(const Segments& seg, const FitBSplineOptions& o, FitStats* stats,
+                      const std::function<void(double, const std::string&)>& progress, const Mesh* part) {
+  Surfaces out = fit_patches(seg, o, stats, progress);
+  if (!part) return out;
+  if (o.subdivisions < 0) throw std::invalid_argument("subdivisions must not be negative");
+  if (part->num_faces() == 0) throw std::invalid_argument("the part's mesh has no faces");
+  std::vector<double> distance = surface_distance_max(out, *part);
+  auto farthest = [](const std::vector<double>& d) { return d.empty() ? 0.0 : *std::max_element(d.begin(), d.end()); };
+  const double before = farthest(distance);
+  Segments finer;
+  int level = 0;
+  while (level < o.subdivisions && farthest(distance) > o.part_tolerance) {
+    finer = subdivide_segments(level == 0 ? seg : finer, *part);
+    ++level;
+    if (progress) progress(0, "fitting B-spline patches to grids " + std::to_string(1 << level) + " times as fine");
+    out = fit_patches(finer, o, stats, progress);
+    distance = surface_distance_max(out, *part);
+  }
+  if (stats) {
+    stats->subdivisions = level;
+    stats->part_distance_before = before;
+    stats->part_distance_after = farthest(distance);
+    stats->part_distance = distance;
   }
   return out;
 }

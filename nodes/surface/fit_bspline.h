@@ -40,6 +40,10 @@ struct FitBSplineOptions {
   double tolerance = 0.00125;  // mm: largest distance from a grid vertex to its point on the surface
   double smoothing = 1e-2;     // alpha of the first try (thin-plate weight, relative)
   int refinements = 8;         // tries with alpha / 10 each before alpha = 0
+  // With the part's mesh given: the grids are made twice as fine (subdivide_segments.h), at most
+  // this many times, while some surface lies farther than part_tolerance off the part.
+  int subdivisions = 2;
+  double part_tolerance = 0.005;  // mm
 };
 
 // A fit and how it went. error is |S(u_k, v_k) - p_k| at the vertices' own parameters: an upper
@@ -70,17 +74,25 @@ GridFit fit_grid_bspline(const std::vector<Eigen::Vector3d>& points, std::uint32
 // off the part (path.contour_grid).
 std::vector<double> surface_distance_max(const Surfaces& surfaces, const Mesh& mesh);
 
-// How the patches meet.
+// How the patches meet, and how close they came to the part.
 struct FitStats {
+  int subdivisions = 0;                 // times the grids were made twice as fine
+  double part_distance_before = 0;      // mm, the farthest surface from the part before (0: no part)
+  double part_distance_after = 0;       // and after
+  std::vector<double> part_distance;    // per patch, after
   std::size_t shared_borders = 0;   // whole borders two patches share (one curve)
   std::size_t shared_edges = 0;     // mesh edges on the border of two patches
   double boundary_gap_max = 0;      // largest distance between two patches' surfaces along those edges
   std::size_t boundary_gap_patch_a = 0, boundary_gap_patch_b = 0;  // where (patch indices)
 };
 
-// Every patch of `segments` fitted, borders shared. Throws std::invalid_argument naming the
-// patch when its grid has a non-finite vertex.
+// Every patch of `segments` fitted, borders shared. With `part` (the mesh the quads were made
+// from, its feature_edges set), the grids are subdivided and fitted again while some patch lies
+// farther than options.part_tolerance off the part (surface_distance_max), at most
+// options.subdivisions times; the patches' rows and cols are then the finer grids'. Throws
+// std::invalid_argument naming the patch when its grid has a non-finite vertex.
 Surfaces fit_surfaces(const Segments& segments, const FitBSplineOptions& options, FitStats* stats = nullptr,
-                      const std::function<void(double, const std::string&)>& progress = {});
+                      const std::function<void(double, const std::string&)>& progress = {},
+                      const Mesh* part = nullptr);
 
 }  // namespace scallop

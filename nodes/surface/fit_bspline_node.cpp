@@ -13,14 +13,19 @@ namespace scallop::surface_nodes {
 NodeDecl make_fit_bspline_node() {
   NodeDecl d;
   d.type = "surface.fit_bspline";
-  d.version = 1;
+  d.version = 2;
   d.description =
       "fits each sharp height field with a bicubic B-spline on the unit square (the patch's quad grid as its "
       "parameters, thin-plate smoothing relaxed until every grid vertex is within tolerance); patches sharing a "
-      "whole border share its curve";
+      "whole border share its curve; given the part's mesh, the grids are made twice as fine, their new vertices "
+      "on the part, until the surfaces lie within part_tolerance of it";
   d.input("segments", "Segments", "the patches (mesh.segment)")
       .input("base", "Report", "mesh.setup_base's report, copied into this report as base", false)
       .input("quads", "Report", "mesh.quad_remesh's report, copied into this report as quad_mesh", false)
+      .input("part", "Mesh",
+             "the mesh the quads were made from, its feature_edges set (mesh.sharp_edges): the surfaces are refined "
+             "toward it",
+             false)
       .output("surfaces", "Surfaces", "per patch its B-spline surface, direction and fit figures")
       .output("mesh", "Mesh", "the surfaces sampled as quads, face label = patch, patch outlines as feature edges")
       .output("report", "Report",
@@ -28,7 +33,9 @@ NodeDecl make_fit_bspline_node() {
               "fit_max_error, fit_mean_error, smoothing, mesh_distance_max (surface to the quad mesh: facet sag and any "
               "bulge between vertices)}], fit_max_error and mesh_distance_max, patches_bulging (farther from their quads than a quarter edge) (largest over the patches), "
               "patches_over_tolerance, shared_borders, shared_edges, boundary_gap_max (mm, between neighbouring "
-              "surfaces along shared mesh edges) and between which patches, base_direction; base and quad_mesh when given}");
+              "surfaces along shared mesh edges) and between which patches, base_direction; base and quad_mesh when given; "
+              "with part: subdivisions, part_distance_before and part_distance_max (mm, the farthest surface from the "
+              "part before and after), per patch part_distance_max}");
   d.options<FitBSplineOptions>()
       .number("tolerance", &FitBSplineOptions::tolerance, 1e-9, 100, "mm",
               "largest distance from a grid vertex to its point on the surface (a quarter of the chord error: "
@@ -36,7 +43,11 @@ NodeDecl make_fit_bspline_node() {
       .number("smoothing", &FitBSplineOptions::smoothing, 0, 1, "",
               "the thin-plate weight alpha tried first (relative to the fitting term); 0: interpolate")
       .integer("refinements", &FitBSplineOptions::refinements, 0, 30, "",
-               "tries with alpha divided by 10 each before interpolating");
+               "tries with alpha divided by 10 each before interpolating")
+      .integer("subdivisions", &FitBSplineOptions::subdivisions, 0, 4, "",
+               "with part: the most times the grids are made twice as fine (each time 4 times the vertices)")
+      .number("part_tolerance", &FitBSplineOptions::part_tolerance, 1e-9, 100, "mm",
+              "with part: the grids are refined while a surface lies farther than this from the part");
   d.param_int("samples", 16, 1, 256, "", "quads per patch side in the output mesh");
   d.run = [](NodeContext& ctx) {
     auto segments = ctx.input<Segments>("segments");
@@ -45,14 +56,16 @@ NodeDecl make_fit_bspline_node() {
     FitStats stats;
     Surfaces s;
     try {
-      s = fit_surfaces(*segments, o, &stats, [&](double f, const std::string& m) { ctx.progress(f, m); });
+      const Mesh* part = ctx.has_input("part") ? ctx.input<Mesh>("part").get() : nullptr;
+      s = fit_surfaces(*segments, o, &stats, [&](double f, const std::string& m) { ctx.progress(f, m); }, part);
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }
     nlohmann::json patches = nlohmann::json::array();
     double worst = 0, farthest = 0;
     std::size_t over = 0;
-    for (const auto& p : s.patches) {
+    for (std::size_t i = 0; i < s.patches.size(); ++i) {
+      const SurfacePatch& p = s.patches[i];
       worst = std::max(worst, p.fit_max_error);
       farthest = std::max(farthest, p.mesh_distance_max);
       over += p.fit_max_error > o.tolerance;
@@ -65,6 +78,7 @@ NodeDecl make_fit_bspline_node() {
                          {"fit_mean_error", p.fit_mean_error},
                          {"smoothing", p.smoothing},
                          {"mesh_distance_max", p.mesh_distance_max}});
+      if (!stats.part_distance.empty()) patches.back()["part_distance_max"] = stats.part_distance[i];
     }
     // A facet's sag stays under an eighth of its edge wherever the part curves no tighter than the
     // quads are long; a surface farther from its quads than a quarter edge bulges between them.
@@ -103,6 +117,11 @@ NodeDecl make_fit_bspline_node() {
                    {"shared_edges", stats.shared_edges},
                    {"boundary_gap_max", stats.boundary_gap_max},
                    {"boundary_gap_between", {stats.boundary_gap_patch_a, stats.boundary_gap_patch_b}}};
+    if (ctx.has_input("part")) {
+      report.data["subdivisions"] = stats.subdivisions;
+      report.data["part_distance_before"] = stats.part_distance_before;
+      report.data["part_distance_max"] = stats.part_distance_after;
+    }
     const Eigen::Vector3d& b = s.base_direction;
     report.data["base_direction"] = {b.x(), b.y(), b.z()};
     // One report a person reads for the whole segmentation: the base and the quads it rests on.
