@@ -306,6 +306,9 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
       double top_z = -std::numeric_limits<double>::infinity();
       for (const auto& v : placed.vertices) top_z = std::max(top_z, v.z());
       keep_off_part(local, max_drop, distance, top_z, tolerance, prog);
+      // Every ball left out (no clear way to any of them; an ABC plate's noisy cloud had such a
+      // clamping, and linking nothing stopped the whole part): no program for this setup.
+      if (local.passes.empty()) continue;
       // Links kept as far off the part as the balls: checked against its faces, not only its
       // vertices.
       const double r = path.tool_radius;

@@ -59,7 +59,8 @@ struct SetupProgram {
 //               part_distance_max; empty: 0): where the surface stands above the part, a ball is
 //               lowered along -z onto it by up to 5 times that (a setup's patch is at most that
 //               steep), so that it touches the part and leaves no such stock
-// Returns one program per setup that cuts anything. Throws std::invalid_argument when the counts
+// Returns one program per setup that cuts anything (a setup none of whose balls could be kept off
+// the part gets none). Throws std::invalid_argument when the counts
 // do not add up; link_passes' and write_gcode's errors pass through.
 std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector<std::size_t>& passes_per_patch,
                                          const std::vector<Setup>& setups, const Mesh& part,

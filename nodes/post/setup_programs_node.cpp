@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -77,6 +78,13 @@ NodeDecl make_setup_programs_node() {
     std::vector<std::pair<std::string, std::string>> beside;
     for (const SetupProgram& p : programs) beside.emplace_back(p.file, p.gcode);
     ctx.set("file", io::write_output_files(ctx, param, file.dump(1) + "\n", beside));
+    std::vector<bool> written(setups.size(), false);
+    for (const SetupProgram& p : programs) written[p.setup] = true;
+    for (std::size_t i = 0; i < setups.size(); ++i)
+      if (!written[i] && std::any_of(setups[i].patches.begin(), setups[i].patches.end(),
+                                     [&](std::size_t p) { return p < counts.size() && counts[p] > 0; }))
+        ctx.warn("setup '" + setups[i].name + "': no ball of its passes could be kept off the part: no program is "
+                 "written for it, and its patches are stock the certificate counts");
     for (const SetupProgram& p : programs)
       if (p.splits > 0)
         ctx.warn("setup '" + p.name + "': " + std::to_string(p.splits) +

@@ -306,6 +306,31 @@ TEST(SetupPrograms, APassUnderARoofIsCutWhereNoMoveCanBeKeptOff) {
   EXPECT_LE(last_on_floor, 20 - (r - e / 4) + 1e-9);
 }
 
+// A setup none of whose balls is left after keeping them off the part gets no program, and the
+// other setups theirs: linking nothing threw "the tool path has no points" and stopped an ABC
+// plate's noisy cloud at its programs. (A pass without points stands for one whose every ball
+// was left out.)
+TEST(SetupPrograms, ASetupWithNothingLeftToCutGetsNoProgramTheOthersTheirs) {
+  const double r = 2, e = 0.01;
+  const Mesh part = box({-5, -5, -5}, {15, 15, 0});
+  Toolpath path;
+  path.tool_radius = r, path.scallop_height = 0.05, path.chord_error = e;
+  ToolpathPass pass;
+  for (int k = 0; k <= 10; ++k) pass.contact.push_back(V(k, 5, 0)), pass.normal.push_back(V::UnitZ());
+  path.passes = {ToolpathPass{}, pass};
+  scallop::Setup empty, top;
+  empty.name = "1: nothing", empty.axis = V::UnitZ(), empty.rotation.setIdentity(), empty.translation.setZero();
+  empty.patches = {0};
+  top = empty;
+  top.name = "2: +z", top.patches = {1};
+  const auto programs = setup_programs(path, {1, 1}, {empty, top}, part, {}, {});
+  ASSERT_EQ(programs.size(), 1u);
+  EXPECT_EQ(programs[0].name, "2: +z");
+  EXPECT_EQ(programs[0].setup, 1u);
+  EXPECT_EQ(programs[0].file, "setup_1.ngc");
+  EXPECT_GE(tips(programs[0].gcode).size(), 11u);
+}
+
 TEST(SetupPrograms, ABallAboveThePartIsLoweredOntoItByAtMostFiveTimesItsSurfacesDistance) {
   // A floor (z <= 0) and a pass planned on a surface 0.3 mm above it (a smooth patch over a
   // faceted STL's flat facets): told the patch lies up to 0.3 off the part, the balls come down
