@@ -59,6 +59,9 @@ struct LiftStats {
   std::size_t splits = 0;   // passes cut in two there
   std::size_t lowered = 0;  // ball positions lowered onto the part
   double lower_max = 0;     // mm
+  std::size_t high = 0;     // planned balls lifted more than the ball's radius
+  double high_max = 0;      // mm, the largest such lift
+  Eigen::Vector3d high_at = Eigen::Vector3d::Zero();  // its planned contact (machine frame)
 };
 
 // Every ball centre of one pass (machine frame, ball radius r) kept off the whole part, and the
@@ -99,6 +102,7 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
       stats.lift_max = std::max(stats.lift_max, lift);
     }
   };
+  const std::vector<Eigen::Vector3d> planned = pass.contact;  // before any lift, for the report
   for (std::size_t k = 0; k < pass.contact.size(); ++k) {
     if (max_drop > 0) {
       Eigen::Vector3d c = pass.contact[k] + r * pass.normal[k];
@@ -115,6 +119,8 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
     clear_above(pass.contact.back(), pass.normal.back());
   }
   ToolpathPass out;
+  constexpr std::size_t kMiddle = SIZE_MAX;
+  std::vector<std::size_t> origin;  // per ball of out: the pass's ball it is, or kMiddle (a move middle)
   // A ball centre the tool cannot be at: too near the part, or under it (inside the solid or
   // under an overhang: the unsigned distance alone misses a centre deep inside).
   auto blocked = [&](const Eigen::Vector3d& c) {
@@ -161,13 +167,13 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
         Eigen::Vector3d m = (1 - q) * ca + q * cb - r * n;
         lift_point(m, n);
         middle(a, na, m, n, depth - 1);
-        out.contact.push_back(m), out.normal.push_back(n);
+        out.contact.push_back(m), out.normal.push_back(n), origin.push_back(kMiddle);
         if (!pass.uv.empty()) out.uv.push_back(out.uv.back());
         middle(m, n, b, nb, depth - 1);
       };
   for (std::size_t k = 0; k < pass.contact.size(); ++k) {
     if (k > 0) middle(pass.contact[k - 1], pass.normal[k - 1], pass.contact[k], pass.normal[k], 6);
-    out.contact.push_back(pass.contact[k]), out.normal.push_back(pass.normal[k]);
+    out.contact.push_back(pass.contact[k]), out.normal.push_back(pass.normal[k]), origin.push_back(k);
     if (!pass.uv.empty()) out.uv.push_back(pass.uv[k]);
   }
   // Where a move still reaches in (a narrow neck above a free pocket: its ends clear, its
@@ -206,6 +212,19 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
     }
     if (!raised) break;
     check.swap(next);
+  }
+  // Balls lifted more than their radius touch nothing near where they were planned: from this
+  // direction the part is in the way there (the walls of the block's bores had whole setups
+  // lifted 125 mm over the part). They are counted for the report; the certificate measures the
+  // stock they leave. (Leaving them out would also drop the raised ends and the balls over rough
+  // ground that keep the tool clear.)
+  for (std::size_t k = 0; k < out.contact.size(); ++k) {
+    if (origin[k] == kMiddle) continue;
+    const double lift = out.contact[k].z() - planned[origin[k]].z();
+    if (lift > r) {
+      ++stats.high;
+      if (lift > stats.high_max) stats.high_max = lift, stats.high_at = planned[origin[k]];
+    }
   }
   // What the raising could not clear within its sweeps (a stretch under an overhang, which it
   // climbs over one ball at a time: a fandisk clamping kept a 39 mm vertical move through the
@@ -257,6 +276,8 @@ void keep_off_part(Toolpath& path, const std::vector<double>& max_drop, const Me
     stats.splits += l.splits;
     stats.lowered += l.lowered;
     stats.lower_max = std::max(stats.lower_max, l.lower_max);
+    stats.high_lifts += l.high;
+    if (l.high_max > stats.high_lift_max) stats.high_lift_max = l.high_max, stats.high_lift_at = l.high_at;
   });
 }
 
@@ -306,6 +327,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
       double top_z = -std::numeric_limits<double>::infinity();
       for (const auto& v : placed.vertices) top_z = std::max(top_z, v.z());
       keep_off_part(local, max_drop, distance, top_z, tolerance, prog);
+      prog.high_lift_at = s.rotation.transpose() * (prog.high_lift_at - s.translation);  // to the part's frame
       // Every ball left out (no clear way to any of them; an ABC plate's noisy cloud had such a
       // clamping, and linking nothing stopped the whole part): no program for this setup.
       if (local.passes.empty()) continue;

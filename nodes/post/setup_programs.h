@@ -49,6 +49,12 @@ struct SetupProgram {
   std::size_t dropped = 0;  // ball positions left out there (no clear way down or up to them)
   std::size_t lowered = 0;  // ball positions lowered onto the part (patch_off_part)
   double lower_max = 0;     // mm, the largest drop
+  // Planned ball positions lifted more than the ball's radius: they touch nothing near where they
+  // were planned (from this setup the part is in the way there); the largest such lift and its
+  // planned contact in the part's frame.
+  std::size_t high_lifts = 0;
+  double high_lift_max = 0;
+  Eigen::Vector3d high_lift_at = Eigen::Vector3d::Zero();
 };
 
 // setups        the clampings (plan_setups, or setups_from_report of surface.setups' report)

@@ -1,3 +1,4 @@
+#include <cstdio>
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -23,7 +24,7 @@ struct SetupProgramsOptions {
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 8;  // 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it
+  d.version = 9;  // 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
                   // 3: moves and links kept off the part's faces exactly (MeshDistance::least_along)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), linked "
@@ -38,7 +39,9 @@ NodeDecl make_setup_programs_node() {
       .output("report", "Report", "{setups: [{name, gcode, passes, moves, clearance_z (mm, machine frame), lifted (ball positions kept off "
               "the part), lift_max (mm), splits (passes cut where a move could not be kept off the part), dropped (ball "
               "positions left out there), lowered (ball positions lowered onto the part where the patch's surface "
-              "stands above it), lower_max (mm)}]}")
+              "stands above it), lower_max (mm), high_lifts (planned ball positions lifted more than the tool's radius: "
+              "from this setup the part is in the way there), high_lift_max (mm), high_lift_at (its planned contact, "
+              "part frame)}]}")
       .param_output_path("path", "the setups file to write, relative to the output folder (-o); the programs "
                                  "(setup_1.ngc, ...) go beside it");
   d.options<SetupProgramsOptions>()
@@ -86,6 +89,17 @@ NodeDecl make_setup_programs_node() {
         ctx.warn("setup '" + setups[i].name + "': no ball of its passes could be kept off the part: no program is "
                  "written for it, and its patches are stock the certificate counts");
     for (const SetupProgram& p : programs)
+      if (p.high_lifts > 0) {
+        const Eigen::Vector3d& a = p.high_lift_at;
+        char where[96];
+        std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", a.x(), a.y(), a.z());
+        ctx.warn("setup '" + p.name + "': " + std::to_string(p.high_lifts) +
+                 " ball positions were lifted more than the tool's radius to keep them off the part (up to " +
+                 std::to_string(p.high_lift_max) + " mm, planned at " + where +
+                 " in the part's frame): from this direction the part is in the way there, and what they were "
+                 "to cut is stock the certificate counts");
+      }
+    for (const SetupProgram& p : programs)
       if (p.splits > 0)
         ctx.warn("setup '" + p.name + "': " + std::to_string(p.splits) +
                  " moves could not be kept off the part (under an overhang): the passes are cut there and " +
@@ -95,7 +109,8 @@ NodeDecl make_setup_programs_node() {
       list.push_back({{"name", p.name}, {"gcode", p.file}, {"passes", p.passes}, {"moves", p.moves},
                       {"clearance_z", p.clearance_z}, {"lifted", p.lifted}, {"lift_max", p.lift_max},
                       {"splits", p.splits}, {"dropped", p.dropped}, {"lowered", p.lowered},
-                      {"lower_max", p.lower_max}});
+                      {"lower_max", p.lower_max}, {"high_lifts", p.high_lifts}, {"high_lift_max", p.high_lift_max},
+                      {"high_lift_at", {p.high_lift_at.x(), p.high_lift_at.y(), p.high_lift_at.z()}}});
     SetupPaths paths;
     for (const SetupProgram& p : programs)
       paths.setups.push_back({p.name, p.file, setups[p.setup].rotation, setups[p.setup].translation, p.linked});

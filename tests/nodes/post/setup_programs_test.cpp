@@ -145,6 +145,11 @@ TEST(SetupPrograms, ABallAgainstAWallIsLiftedOverIt) {
   ASSERT_EQ(programs.size(), 1u);
   EXPECT_GT(programs[0].lifted, 0u);
   EXPECT_NEAR(programs[0].lift_max, 5.0, 0.01);
+  // Those lifted more than r = 2 are counted: the highest (5) planned on the floor's edge x = 10.
+  EXPECT_GT(programs[0].high_lifts, 0u);
+  EXPECT_NEAR(programs[0].high_lift_max, 5.0, 0.01);
+  EXPECT_NEAR(programs[0].high_lift_at.x(), 10, 0.01);
+  EXPECT_NEAR(programs[0].high_lift_at.z(), 0, 1e-9);
   // No ball centre comes nearer than r - e/4 to the wall.
   const MeshDistance distance(part);
   for (const V& t : tips(programs[0].gcode)) EXPECT_GE(distance(t + V(0, 0, 2)), 2 - 0.0025 - 1e-4);
