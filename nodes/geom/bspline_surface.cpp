@@ -85,7 +85,8 @@ Eigen::Vector3d surface_point(const BSplineSurface& s, double u, double v) {
 namespace {
 std::string knot_problem(const std::vector<double>& k, int degree, std::uint32_t poles, const char* dir) {
   const std::string d(dir);
-  if (degree < 1 || degree > kMaxDegree) return "degree in " + d + " is " + std::to_string(degree) + " (1.." + std::to_string(kMaxDegree) + ")";
+  if (degree < 1 || degree > kMaxDegree)
+    return "degree in " + d + " is " + std::to_string(degree) + " (1.." + std::to_string(kMaxDegree) + ")";
   if (poles <= static_cast<std::uint32_t>(degree))
     return std::to_string(poles) + " poles in " + d + " for degree " + std::to_string(degree);
   if (k.size() != poles + degree + 1)

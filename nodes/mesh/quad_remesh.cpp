@@ -498,11 +498,12 @@ std::string quads_off_the_input(const Mesh& input, const Mesh& quads) {
   }
   if (off == 0) return "";
   const MeshTopology t = mesh_topology(input, mesh_edges(input));
+  auto count = [](int n) { return static_cast<std::size_t>(n); };
   return "QuadriFlow's quads are not usable: " + std::to_string(off) + " of " + std::to_string(quads.num_vertices()) +
          " vertices lie outside the input's bounding box, up to " + fmt(farthest) +
-         " mm from it: QuadriFlow did not converge on this mesh (" + plural(static_cast<std::size_t>(t.components), "piece", "pieces") + ", " +
-         plural(static_cast<std::size_t>(t.boundary_loops), "boundary loop", "boundary loops") + ", " +
-         plural(static_cast<std::size_t>(t.genus), "handle", "handles") +
+         " mm from it: QuadriFlow did not converge on this mesh (" + plural(count(t.components), "piece", "pieces") +
+         ", " + plural(count(t.boundary_loops), "boundary loop", "boundary loops") + ", " +
+         plural(count(t.genus), "handle", "handles") +
          "); it did so on the reconstruction of a cloud that held points inside the part";
 }
 

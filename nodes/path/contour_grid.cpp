@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 #include <limits>
 #include <memory>
 #include <nanoflann.hpp>
@@ -99,7 +100,7 @@ class ContourPlanner {
       // straight across (an ABC plate's patch got NaN contours there, and GMP ended the run).
       const bool collapsed = !(along > 1e-12 * across);
       const double theta =
-          collapsed ? std::acos(0.0) : std::acos(std::clamp(ff.F / std::sqrt(ff.E * ff.G), -1.0, 1.0));
+          collapsed ? std::numbers::pi / 2 : std::acos(std::clamp(ff.F / std::sqrt(ff.E * ff.G), -1.0, 1.0));
       // Across the pass, on the surface: perpendicular to r_u (a side along u) or to r_v.
       const double kappa = along_u(s) ? normal_curvature(ff, collapsed ? 0 : -ff.F / ff.E, 1)
                                       : normal_curvature(ff, 1, collapsed ? 0 : -ff.F / ff.G);

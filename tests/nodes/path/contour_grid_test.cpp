@@ -234,7 +234,8 @@ TEST(ContourGrid, APatchWithASideShrunkToAPointIsPlannedWithinH) {
   for (const auto& p : g.passes)
     for (std::size_t k = 0; k < p.contact.size(); ++k) {
       ASSERT_TRUE(p.contact[k].allFinite() && p.normal[k].allFinite());
-      if (k + 1 < p.contact.size()) segs.push_back({p.contact[k] + 3 * p.normal[k], p.contact[k + 1] + 3 * p.normal[k + 1]});
+      if (k + 1 < p.contact.size())
+        segs.push_back({p.contact[k] + 3 * p.normal[k], p.contact[k + 1] + 3 * p.normal[k + 1]});
     }
   EXPECT_LE(g.report["scallop_max"].get<double>(), 0.02);
   // Measured over the triangle, its rim included.
