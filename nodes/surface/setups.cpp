@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include "nodes/mesh/mesh_distance.h"
@@ -25,6 +27,22 @@ std::string axis_name(const Eigen::Vector3d& a) {
   char buf[96];
   std::snprintf(buf, sizeof buf, "(%.3f, %.3f, %.3f)", a.x(), a.y(), a.z());
   return buf;
+}
+
+// n directions spread evenly over the sphere (a Fibonacci lattice).
+std::vector<Eigen::Vector3d> sphere_lattice(int n) {
+  std::vector<Eigen::Vector3d> out;
+  for (int k = 0; k < n; ++k) {
+    const double z = 1 - (2 * k + 1.0) / n, rho = std::sqrt(1 - z * z), phi = k * M_PI * (3 - std::sqrt(5.0));
+    out.emplace_back(rho * std::cos(phi), rho * std::sin(phi), z);
+  }
+  return out;
+}
+
+double smallest_dot(const std::vector<Eigen::Vector3d>& normals, const Eigen::Vector3d& a) {
+  double m = std::numeric_limits<double>::infinity();
+  for (const auto& n : normals) m = std::min(m, n.dot(a));
+  return m;
 }
 
 }  // namespace
@@ -61,32 +79,32 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
   if (surfaces.base_direction.norm() > 0.5) candidates.push_back(-surfaces.base_direction.normalized());
   for (int k = 0; k < 3; ++k) candidates.push_back(Eigen::Vector3d::Unit(k)), candidates.push_back(-Eigen::Vector3d::Unit(k));
   const std::size_t first_sphere = candidates.size();
-  // Directions spread evenly over the sphere (a Fibonacci lattice).
-  for (int k = 0; o.any_axis && k < kSphere; ++k) {
-    const double z = 1 - (2 * k + 1.0) / kSphere, rho = std::sqrt(1 - z * z), phi = k * M_PI * (3 - std::sqrt(5.0));
-    candidates.push_back(Eigen::Vector3d(rho * std::cos(phi), rho * std::sin(phi), z));
-  }
+  const std::vector<Eigen::Vector3d> sphere = sphere_lattice(kSphere);
+  if (o.any_axis) candidates.insert(candidates.end(), sphere.begin(), sphere.end());
 
-  // can[c][p]: candidate c cuts patch p; low[c][p] its smallest n . a there.
-  const std::size_t nc = candidates.size();
-  std::vector<std::vector<double>> low(nc, std::vector<double>(np));
-  std::vector<std::vector<char>> can(nc, std::vector<char>(np));
-  std::vector<double> best(np, -2);  // each patch's largest smallest n . a over the candidates
-  for (std::size_t c = 0; c < nc; ++c)
-    for (std::size_t p = 0; p < np; ++p) {
-      double m = std::numeric_limits<double>::infinity();
-      for (const auto& n : normals[p]) m = std::min(m, n.dot(candidates[c]));
-      low[c][p] = m;
-      best[p] = std::max(best[p], m);
-    }
-  for (std::size_t c = 0; c < nc; ++c)
-    for (std::size_t p = 0; p < np; ++p)
-      can[c][p] = low[c][p] >= std::min(o.min_normal_dot, std::max(0.5 * best[p], 1e-3)) || c == p;
+  // low[c][p]: candidate c's smallest n . a over patch p. threshold[p]: the least a setup other than
+  // the patch's own may have there: min_normal_dot, or half the patch's best when that is lower.
+  std::vector<std::vector<double>> low;
+  const auto add_low_row = [&](const Eigen::Vector3d& a) {
+    low.emplace_back(np);
+    for (std::size_t p = 0; p < np; ++p) low.back()[p] = smallest_dot(normals[p], a);
+  };
+  for (const auto& a : candidates) add_low_row(a);
+  std::vector<double> threshold(np);
+  for (std::size_t p = 0; p < np; ++p) {
+    double best = -2;
+    for (const auto& row : low) best = std::max(best, row[p]);
+    threshold[p] = std::min(o.min_normal_dot, std::max(0.5 * best, 1e-3));
+  }
+  // own[p]: the candidate that may cut patch p whatever the part hides: its own direction, or the
+  // one found below that the part hides less of it from.
+  std::vector<std::size_t> own(np);
+  std::iota(own.begin(), own.end(), std::size_t(0));
 
   // Reach: from every sample, a little off the surface, the ray along the axis must leave the part
-  // without meeting it (an overhang hides the patch from that axis). A patch hidden from its own
-  // direction too keeps it, and the count of hidden samples is reported.
-  std::vector<std::vector<std::size_t>> hidden(nc, std::vector<std::size_t>(np, 0));
+  // without meeting it (an overhang hides the patch from that axis; the ball's width is the gouge
+  // guard's matter). hidden[c][p] counts the samples it does not, where c may cut p at all.
+  std::vector<std::vector<std::size_t>> hidden(candidates.size(), std::vector<std::size_t>(np, 0));
   if (part.num_faces() > 0) {
     Eigen::Vector3d lo = points[0], hi = points[0];
     for (const auto& q : points) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
@@ -95,16 +113,57 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
     // call every patch hidden (measured on the fandisk at 0.002: all 289 samples of 7 patches).
     const double offset = 1e-2 * (hi - lo).norm();
     const MeshDistance mesh(part);
-    tbb::parallel_for(std::size_t(0), nc * np, [&](std::size_t cp) {
-      const std::size_t c = cp / np, p = cp % np;
-      if (!can[c][p]) return;
-      for (std::size_t k = 0; k < positions[p].size(); ++k)
-        hidden[c][p] += std::isfinite(mesh.ray_distance(positions[p][k] + offset * candidates[c], candidates[c]));
+    // Hidden samples of patch p along a, counted up to limit.
+    const auto count_hidden = [&](const Eigen::Vector3d& a, std::size_t p, std::size_t limit) {
+      std::size_t n = 0;
+      for (std::size_t k = 0; k < positions[p].size() && n < limit; ++k)
+        n += std::isfinite(mesh.ray_distance(positions[p][k] + offset * a, a));
+      return n;
+    };
+    const auto measure_from = [&](std::size_t first) {
+      const std::size_t count = (candidates.size() - first) * np;
+      tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
+        const std::size_t c = first + i / np, p = i % np;
+        if (c == own[p] || low[c][p] >= threshold[p]) hidden[c][p] = count_hidden(candidates[c], p, positions[p].size());
+      });
+    };
+    measure_from(0);
+    // A patch the part hides from its own direction (a bore's wall: the opposite wall is in the
+    // way) is given the direction of the sphere's lattice that reaches the most of its samples
+    // (ties to the larger smallest n . a, at least its threshold), when that is more than its own
+    // reaches: tilted along the bore, the tool reaches in from the bore's end. Only where more
+    // than a tenth of the patch is hidden: a few samples hidden where a face meets a wall beside
+    // it are the rays' start off the surface, not an obstacle (the block's top face: 16 of 289).
+    std::vector<std::size_t> blocked;
+    for (std::size_t p = 0; p < np; ++p)
+      if (10 * hidden[p][p] > positions[p].size()) blocked.push_back(p);
+    std::vector<std::optional<Eigen::Vector3d>> around(blocked.size());
+    tbb::parallel_for(std::size_t(0), blocked.size(), [&](std::size_t i) {
+      const std::size_t p = blocked[i];
+      std::size_t fewest = hidden[p][p];
+      double best_low = -2;
+      for (const Eigen::Vector3d& a : sphere) {
+        const double l = smallest_dot(normals[p], a);
+        if (l < threshold[p] || (around[i] && l <= best_low && fewest == 0)) continue;
+        const std::size_t h = count_hidden(a, p, fewest + 1);
+        if (h < fewest || (h == fewest && around[i] && l > best_low)) around[i] = a, fewest = h, best_low = l;
+      }
     });
-    for (std::size_t c = 0; c < nc; ++c)
-      for (std::size_t p = 0; p < np; ++p)
-        if (c != p && hidden[c][p] > 0) can[c][p] = 0;
+    const std::size_t first_around = candidates.size();
+    for (std::size_t i = 0; i < blocked.size(); ++i)
+      if (around[i]) {
+        own[blocked[i]] = candidates.size();
+        candidates.push_back(*around[i]);
+        add_low_row(*around[i]);
+        hidden.emplace_back(np, 0);
+      }
+    measure_from(first_around);
   }
+  const std::size_t nc = candidates.size();
+  // can[c][p]: candidate c cuts patch p.
+  std::vector<std::vector<char>> can(nc, std::vector<char>(np));
+  for (std::size_t c = 0; c < nc; ++c)
+    for (std::size_t p = 0; p < np; ++p) can[c][p] = c == own[p] || (low[c][p] >= threshold[p] && hidden[c][p] == 0);
 
   // Square: the axes away from the base and along the coordinate axes, and any other candidate
   // that is one of them.

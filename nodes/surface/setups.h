@@ -20,11 +20,18 @@
 // protractor), then to the earlier candidate; repeated until every patch is covered. An axis reaches a patch only when the rays
 // along it from the patch's samples (started 0.01 of the part's diagonal along the axis, past the
 // gap between the fitted surface and the mesh) leave without meeting the part: an overhang hides
-// it (the ball's width is the gouge guard's matter). Each patch then goes to the chosen setup
-// where its smallest n . a is largest. Greedy set cover is within a factor ln(patches) of the
-// fewest setups. Measured (graphs/mesh-to-surfaces.json, defaults): the fandisk's 65 patches in
-// 14 setups (13 with any_axis), the block's 101 in 13 (11): thin strips along rounded edges,
-// nearly vertical to every axis but their own, drive the count.
+// it (the ball's width is the gouge guard's matter). A patch hidden from its own direction on
+// more than a tenth of its samples (a bore's wall, whose own direction runs into the opposite
+// wall) has that privilege moved to the direction of the 2000 over the sphere that reaches the
+// most of its samples with n . a at least t_p (ties to the larger smallest n . a), when it reaches
+// more than its own: tilted along the bore, from its end. Each patch then goes to the chosen
+// setup where its smallest n . a is largest. Greedy set cover is within a factor ln(patches) of
+// the fewest setups. Measured (graphs/mesh-to-surfaces.json, defaults): the fandisk's 65 patches
+// in 14 setups (13 with any_axis), the block's 101 in 13 (11): thin strips along rounded edges,
+// nearly vertical to every axis but their own, drive the count. With the part's mesh
+// (graphs/mesh-workpiece-contour.json, r = 2, 2026-11-27): the block x 5's 104 patches in 25
+// setups, 304 samples hidden from their setup's axis (33 setups and 6 186 before hidden patches
+// were reached around the part).
 //
 // part_to_machine: a rotation R with R a = +z (the shortest rotation; a half turn about x when a =
 // -z), and t such that the part's bounding box in the machine frame is centred on x = y = 0 and

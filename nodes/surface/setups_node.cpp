@@ -13,10 +13,11 @@ namespace scallop::surface_nodes {
 NodeDecl make_setups_node() {
   NodeDecl d;
   d.type = "surface.setups";
-  d.version = 3;  // 2: the part hides patches from axes; 3: square axes win ties within 0.005
+  d.version = 4;  // 2: the part hides patches from axes; 3: square axes win ties within 0.005; 4: hidden patches reached around the part
   d.description =
       "groups the patches into clampings by machining direction, as few as the directions allow (greedy set cover), "
-      "each with the rigid transform from the part's frame to the machine's (tool axis +z)";
+      "each with the rigid transform from the part's frame to the machine's (tool axis +z); a patch the part hides from "
+      "its own direction (a bore's wall) is reached from the direction that sees most of it (from the bore's end)";
   d.input("surfaces", "Surfaces", "the patches (surface.fit_bspline)")
       .input("mesh", "Mesh",
              "the whole part: an axis reaches a patch only where the part does not hide it, and the part is placed "

@@ -127,6 +127,50 @@ TEST(Setups, AWallSteeperThanTheLimitGetsItsOwnClamping) {
   EXPECT_NEAR(one[0].min_normal_dot, std::cos(t), 1e-12);
 }
 
+// A bore along x (radius 10, x from 0 to 20, wall in 36 flat faces) and, as a patch, the third
+// of its wall at the bottom (angles 210 to 330 degrees), faces and patch alike turned towards the
+// bore's axis: its own direction is +z, where the bore's top is in the way.
+std::pair<Surfaces, Mesh> bore_bottom() {
+  const double R = 10, L = 20;
+  const auto at = [&](double x, double deg) {
+    const double t = deg * M_PI / 180;
+    return V(x, R * std::cos(t), R * std::sin(t));
+  };
+  Mesh bore;
+  for (int k = 0; k < 36; ++k) bore.vertices.push_back(at(0, 10 * k)), bore.vertices.push_back(at(L, 10 * k));
+  for (std::uint32_t k = 0; k < 36; ++k) {
+    const std::uint32_t a = 2 * k, b = 2 * ((k + 1) % 36);
+    bore.add_face({a, a + 1, b + 1, b});
+  }
+  SurfacePatch p;
+  p.surface.degree_u = p.surface.degree_v = 1;
+  p.surface.poles_u = 13, p.surface.poles_v = 2;
+  p.surface.knots_u = clamped_uniform_knots(13, 1);
+  p.surface.knots_v = {0, 0, 1, 1};
+  for (const double x : {0.0, L})
+    for (int k = 0; k < 13; ++k) p.surface.poles.push_back(at(x, 210 + 10 * k));
+  p.direction = V::UnitZ();
+  Surfaces s;
+  s.patches.push_back(p);
+  return {s, bore};
+}
+
+TEST(Setups, ABoresWallHiddenFromItsOwnDirectionIsReachedFromTheBoresEnd) {
+  const auto [surfaces, bore] = bore_bottom();
+  // Nothing in the way: its own direction, +z.
+  const auto open = plan_setups(surfaces, Mesh{});
+  ASSERT_EQ(open.size(), 1u);
+  EXPECT_EQ(open[0].name, "1: +z");
+  // In the bore: tilted towards one of its ends, every sample reached, every normal at least the
+  // threshold (min_normal_dot 0.2: the patch's best, cos 60 = 0.5, halved is more) from the axis.
+  const auto tilted = plan_setups(surfaces, bore);
+  ASSERT_EQ(tilted.size(), 1u);
+  EXPECT_EQ(tilted[0].hidden_samples, 0u);
+  EXPECT_GE(tilted[0].min_normal_dot, 0.2);
+  EXPECT_GT(std::abs(tilted[0].axis.x()), 0.3);
+  EXPECT_GT(tilted[0].axis.z(), 0.3);
+}
+
 TEST(Setups, ARotationTakesEveryAxisToZ) {
   for (const V& a : {V(0, 0, 1), V(0, 0, -1), V(1, 0, 0), V(0.6, 0, -0.8), V(1, 2, 3).normalized()}) {
     const Eigen::Matrix3d R = rotation_to_z(a);
