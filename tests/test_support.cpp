@@ -109,12 +109,15 @@ Registry make_test_registry() {
 }
 
 std::map<std::string, ValuePtr> run_node(const NodeDecl& decl, const nlohmann::json& params,
-                                         std::map<std::string, ValuePtr> inputs, std::string* last_progress) {
+                                         std::map<std::string, ValuePtr> inputs, std::string* last_progress,
+                                         std::vector<std::string>* warnings) {
   nlohmann::json p = nlohmann::json::object();
   for (const auto& pd : decl.params) p[pd.name] = pd.default_value;
   for (const auto& [key, value] : params.items()) p[key] = value;
   NodeContext ctx(decl, "n", "part", p, std::move(inputs), [&](double, const std::string& m) {
     if (last_progress) *last_progress = m;
+  }, [&](const std::string& m) {
+    if (warnings) warnings->push_back(m);
   });
   decl.run(ctx);
   return ctx.take_outputs();

@@ -41,7 +41,8 @@ Registry make_test_registry();
 // `params`; `last_progress`, when given, receives the last progress message.
 std::map<std::string, ValuePtr> run_node(const NodeDecl& decl, const nlohmann::json& params,
                                          std::map<std::string, ValuePtr> inputs,
-                                         std::string* last_progress = nullptr);
+                                         std::string* last_progress = nullptr,
+                                         std::vector<std::string>* warnings = nullptr);
 
 // The message of the exception of type E `f` throws ("" when it throws none); by default a
 // std::logic_error: a declaration the registry refuses, a programming error.

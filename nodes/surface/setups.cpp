@@ -105,6 +105,7 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
   // without meeting it (an overhang hides the patch from that axis; the ball's width is the gouge
   // guard's matter). hidden[c][p] counts the samples it does not, where c may cut p at all.
   std::vector<std::vector<std::size_t>> hidden(candidates.size(), std::vector<std::size_t>(np, 0));
+  std::vector<std::vector<Eigen::Vector3d>> hidden_sum(candidates.size(), std::vector<Eigen::Vector3d>(np, Eigen::Vector3d::Zero()));
   if (part.num_faces() > 0) {
     Eigen::Vector3d lo = points[0], hi = points[0];
     for (const auto& q : points) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
@@ -113,18 +114,21 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
     // call every patch hidden (measured on the fandisk at 0.002: all 289 samples of 7 patches).
     const double offset = 1e-2 * (hi - lo).norm();
     const MeshDistance mesh(part);
-    // Hidden samples of patch p along a, counted up to limit.
-    const auto count_hidden = [&](const Eigen::Vector3d& a, std::size_t p, std::size_t limit) {
+    // Hidden samples of patch p along a, counted up to limit; their positions summed into sum.
+    const auto count_hidden = [&](const Eigen::Vector3d& a, std::size_t p, std::size_t limit, Eigen::Vector3d* sum) {
       std::size_t n = 0;
       for (std::size_t k = 0; k < positions[p].size() && n < limit; ++k)
-        n += std::isfinite(mesh.ray_distance(positions[p][k] + offset * a, a));
+        if (std::isfinite(mesh.ray_distance(positions[p][k] + offset * a, a))) {
+          ++n;
+          if (sum) *sum += positions[p][k];
+        }
       return n;
     };
     const auto measure_from = [&](std::size_t first) {
       const std::size_t count = (candidates.size() - first) * np;
       tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
         const std::size_t c = first + i / np, p = i % np;
-        if (c == own[p] || low[c][p] >= threshold[p]) hidden[c][p] = count_hidden(candidates[c], p, positions[p].size());
+        if (c == own[p] || low[c][p] >= threshold[p]) hidden[c][p] = count_hidden(candidates[c], p, positions[p].size(), &hidden_sum[c][p]);
       });
     };
     measure_from(0);
@@ -145,7 +149,7 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
       for (const Eigen::Vector3d& a : sphere) {
         const double l = smallest_dot(normals[p], a);
         if (l < threshold[p] || (around[i] && l <= best_low && fewest == 0)) continue;
-        const std::size_t h = count_hidden(a, p, fewest + 1);
+        const std::size_t h = count_hidden(a, p, fewest + 1, nullptr);
         if (h < fewest || (h == fewest && around[i] && l > best_low)) around[i] = a, fewest = h, best_low = l;
       }
     });
@@ -156,6 +160,7 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
         candidates.push_back(*around[i]);
         add_low_row(*around[i]);
         hidden.emplace_back(np, 0);
+        hidden_sum.emplace_back(np, Eigen::Vector3d::Zero());
       }
     measure_from(first_around);
   }
@@ -212,7 +217,10 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
       if (can[chosen[s]][p] && (home == chosen.size() || low[chosen[s]][p] > low[chosen[home]][p])) home = s;
     setups[home].patches.push_back(static_cast<std::uint32_t>(p));
     setups[home].min_normal_dot = std::min(setups[home].min_normal_dot, low[chosen[home]][p]);
-    setups[home].hidden_samples += hidden[chosen[home]][p];
+    if (const std::size_t h = hidden[chosen[home]][p]; h > 0) {
+      setups[home].hidden_samples += h;
+      setups[home].hidden_patches.push_back({static_cast<std::uint32_t>(p), h, hidden_sum[chosen[home]][p] / double(h)});
+    }
   }
   // A setup every patch of which fits better elsewhere: dropped, the rest renumbered.
   std::erase_if(setups, [](const Setup& s) { return s.patches.empty(); });
@@ -226,6 +234,17 @@ nlohmann::json part_to_machine(const Setup& s) {
   return m;
 }
 
+namespace {
+
+nlohmann::json hidden_patches_report(const std::vector<HiddenPatch>& hidden) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const HiddenPatch& h : hidden)
+    list.push_back({{"patch", h.patch}, {"samples", h.samples}, {"at", {h.at.x(), h.at.y(), h.at.z()}}});
+  return list;
+}
+
+}  // namespace
+
 nlohmann::json setups_report(const std::vector<Setup>& setups) {
   nlohmann::json list = nlohmann::json::array();
   for (const Setup& s : setups)
@@ -234,7 +253,8 @@ nlohmann::json setups_report(const std::vector<Setup>& setups) {
                     {"part_to_machine", part_to_machine(s)},
                     {"patches", s.patches},
                     {"min_normal_dot", s.min_normal_dot},
-                    {"hidden_samples", s.hidden_samples}});
+                    {"hidden_samples", s.hidden_samples},
+                    {"hidden_patches", hidden_patches_report(s.hidden_patches)}});
   return list;
 }
 

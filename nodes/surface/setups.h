@@ -54,6 +54,14 @@ struct SetupOptions {
   bool any_axis = false;        // also 2000 axes spread over the sphere (clampings at compound angles)
 };
 
+// A patch the part hides in part from its setup's axis (the best found for it): those places
+// cannot be reached from this clamping, and are left as stock.
+struct HiddenPatch {
+  std::uint32_t patch = 0;
+  std::size_t samples = 0;  // of the 17 x 17 hidden
+  Eigen::Vector3d at;       // their mean position, part frame
+};
+
 struct Setup {
   std::string name;                       // "1: +z", "2: -x", "3: (0.707, 0.000, 0.707)": order, axis
   Eigen::Vector3d axis;                   // unit tool axis, part frame
@@ -62,6 +70,7 @@ struct Setup {
   std::vector<std::uint32_t> patches;     // indices into Surfaces::patches, increasing
   double min_normal_dot = 1;              // smallest n . axis over those patches
   std::size_t hidden_samples = 0;         // samples of those patches the axis cannot reach (see above)
+  std::vector<HiddenPatch> hidden_patches;  // the patches they belong to
 };
 
 // part  the whole part (its mesh): where it hides a patch from an axis, and where it stands in
@@ -74,7 +83,8 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
 nlohmann::json part_to_machine(const Setup& setup);
 
 // The setups as surface.setups reports them: [{name, axis, part_to_machine, patches,
-// min_normal_dot, hidden_samples}], and back. Reading throws std::invalid_argument for a malformed
+// min_normal_dot, hidden_samples, hidden_patches: [{patch, samples, at}]}], and back (without
+// hidden_patches). Reading throws std::invalid_argument for a malformed
 // report (naming the setup), a part_to_machine whose R is not a rotation (|R^T R - I| > 1e-6 or
 // det R < 0, as verify_part.py refuses it) or a patch index not below `patches`.
 nlohmann::json setups_report(const std::vector<Setup>& setups);

@@ -1,3 +1,4 @@
+#include <cstdio>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -25,7 +26,8 @@ NodeDecl make_setups_node() {
              false)
       .output("report", "Report",
               "{setups: [{name, axis (part frame, towards the spindle), part_to_machine (3 x 4 [R|t], as "
-              "scallop-setups/1), patches, min_normal_dot, hidden_samples}], patches (count), min_normal_dot (the option)}");
+              "scallop-setups/1), patches, min_normal_dot, hidden_samples, hidden_patches: [{patch, samples (of 289 "
+              "per patch), at (their mean, part frame)}]}], patches (count), min_normal_dot (the option)}");
   d.options<SetupOptions>().number("min_normal_dot", &SetupOptions::min_normal_dot, 1e-6, 1, "",
                                    "a setup cuts a patch when n . axis is at least this over it (0.2: walls up to "
                                    "about 78 degrees), or when the axis is the patch's own direction")
@@ -43,6 +45,14 @@ NodeDecl make_setups_node() {
     } catch (const std::invalid_argument& e) {
       throw NodeError(std::string("surface.setups: ") + e.what());
     }
+    for (const Setup& st : setups)
+      for (const HiddenPatch& h : st.hidden_patches) {
+        char where[96];
+        std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", h.at.x(), h.at.y(), h.at.z());
+        ctx.warn("setup '" + st.name + "': the part hides " + std::to_string(h.samples) + " of 289 samples of patch " +
+                 std::to_string(h.patch) + " from this axis (around " + where +
+                 ", part frame): the ball does not reach those places from this clamping, they are left as stock");
+      }
     Report report;
     report.data = {{"setups", setups_report(setups)}, {"patches", surfaces->patches.size()}, {"min_normal_dot", o.min_normal_dot}};
     ctx.set("report", std::move(report));

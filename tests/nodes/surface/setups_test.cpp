@@ -128,9 +128,9 @@ TEST(Setups, AWallSteeperThanTheLimitGetsItsOwnClamping) {
 }
 
 // A bore along x (radius 10, x from 0 to 20, wall in 36 flat faces) and, as a patch, the third
-// of its wall at the bottom (angles 210 to 330 degrees), faces and patch alike turned towards the
-// bore's axis: its own direction is +z, where the bore's top is in the way.
-std::pair<Surfaces, Mesh> bore_bottom() {
+// of its wall at the bottom (angles 210 to 330 degrees, x from x0 to x1), faces and patch alike
+// turned towards the bore's axis: its own direction is +z, where the bore's top is in the way.
+std::pair<Surfaces, Mesh> bore_bottom(double x0 = 0, double x1 = 20) {
   const double R = 10, L = 20;
   const auto at = [&](double x, double deg) {
     const double t = deg * M_PI / 180;
@@ -147,7 +147,7 @@ std::pair<Surfaces, Mesh> bore_bottom() {
   p.surface.poles_u = 13, p.surface.poles_v = 2;
   p.surface.knots_u = clamped_uniform_knots(13, 1);
   p.surface.knots_v = {0, 0, 1, 1};
-  for (const double x : {0.0, L})
+  for (const double x : {x0, x1})
     for (int k = 0; k < 13; ++k) p.surface.poles.push_back(at(x, 210 + 10 * k));
   p.direction = V::UnitZ();
   Surfaces s;
@@ -169,6 +169,37 @@ TEST(Setups, ABoresWallHiddenFromItsOwnDirectionIsReachedFromTheBoresEnd) {
   EXPECT_GE(tilted[0].min_normal_dot, 0.2);
   EXPECT_GT(std::abs(tilted[0].axis.x()), 0.3);
   EXPECT_GT(tilted[0].axis.z(), 0.3);
+  EXPECT_TRUE(tilted[0].hidden_patches.empty());
+}
+
+TEST(Setups, ABlindBoresWallIsReportedHiddenWithWhere) {
+  // The bore closed at both ends: no direction reaches the wall (x from 2 to 18, clear of the
+  // ends); the patch keeps its own, and the report and the node say what is hidden and where.
+  auto [surfaces, bore] = bore_bottom(2, 18);
+  for (const double x : {0.0, 20.0}) {
+    const auto centre = static_cast<std::uint32_t>(bore.vertices.size());
+    bore.vertices.push_back(V(x, 0, 0));
+    for (std::uint32_t k = 0; k < 36; ++k) bore.add_face({centre, 2 * k + (x > 0), 2 * ((k + 1) % 36) + (x > 0)});
+  }
+  const auto setups = plan_setups(surfaces, bore);
+  ASSERT_EQ(setups.size(), 1u);
+  EXPECT_EQ(setups[0].name, "1: +z");
+  EXPECT_EQ(setups[0].hidden_samples, 289u);
+  ASSERT_EQ(setups[0].hidden_patches.size(), 1u);
+  EXPECT_EQ(setups[0].hidden_patches[0].patch, 0u);
+  EXPECT_EQ(setups[0].hidden_patches[0].samples, 289u);
+  EXPECT_NEAR(setups[0].hidden_patches[0].at.x(), 10.0, 1e-9);
+  EXPECT_NEAR(setups[0].hidden_patches[0].at.y(), 0.0, 1e-9);
+  EXPECT_LT(setups[0].hidden_patches[0].at.z(), -8.0);
+  std::vector<std::string> warnings;
+  auto out = test::run_node(surface_nodes::make_setups_node(), nlohmann::json::object(),
+                            {{"surfaces", std::make_shared<Surfaces>(surfaces)}, {"mesh", std::make_shared<Mesh>(bore)}},
+                            nullptr, &warnings);
+  const auto& r = std::dynamic_pointer_cast<const Report>(out.at("report"))->data;
+  EXPECT_EQ(r["setups"][0]["hidden_patches"][0]["samples"], 289);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("setup '1: +z': the part hides 289 of 289 samples of patch 0 from this axis (around (10.00, "),
+            std::string::npos);
 }
 
 TEST(Setups, ARotationTakesEveryAxisToZ) {
