@@ -56,6 +56,15 @@ struct Contour {
   std::unique_ptr<SegmentIndex> index;   // over c, once the contour is complete
 };
 
+// The segments of one contour whose midpoints lie within `radius` of `centre`, kept for the
+// samples of a strip near it (within `margin`): one tree search for many samples.
+struct Near {
+  double margin = 0;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double radius = -kInf;  // nothing collected yet
+  std::vector<std::uint32_t> segments;
+};
+
 // Side s of a rectangle, walked counter-clockwise in (u, v): 0 bottom (v = v0), 1 right (u = u1),
 // 2 top (v = v1), 3 left (u = u0). A side along u steps across in v, and the other way round.
 std::array<Eigen::Vector2d, 2> side_ends(const Rect& r, int s) {
@@ -144,9 +153,12 @@ class ContourPlanner {
     const int along = std::clamp(static_cast<int>(std::ceil(8 * length / std::max(width, 1e-12))) + 1,
                                  2 * o_.side_samples, 20000),
               across = 9;
+    // Samples within about a strip's width of each other share their tree searches.
+    Near near_a, near_b;
+    near_a.margin = near_b.margin = width > 0.05 ? std::min(width, 2.0) : 0.05;  // NaN too
     auto scallop = [&](double t, double f) {
       const SurfaceSample x = f_(at(t, f));
-      return std::min(scallop_at(x, ca), scallop_at(x, cb));
+      return std::min(scallop_at(x, ca, near_a), scallop_at(x, cb, near_b));
     };
     // The worst sample overall and within a strip's width of either end (where the inner contour
     // turns a corner, the scallop peaks at a point where three distance fields meet, and falls
@@ -250,21 +262,35 @@ class ContourPlanner {
   // The ray cannot enter a capsule sooner than its distance from the segment, less r, which is
   // at least (distance to the midpoint) - (half length) - r: the segments with midpoints within
   // rho + r + the longest half length are looked at, rho growing until the entry found is below
-  // it (then no farther segment can come first) or every segment was looked at.
-  double scallop_at(const SurfaceSample& x, const Contour& c) const {
+  // it (then no farther segment can come first) or every segment was looked at. The segments
+  // found within a wider ball around an earlier x (`near`, for x within its margin) serve the
+  // samples nearby: a superset of those within reach, so the least entry is the same.
+  double scallop_at(const SurfaceSample& x, const Contour& c, Near& near) const {
     const SegmentIndex& index = *c.index;
     double best = kInf;
     if (index.mid.empty()) return best;
-    thread_local std::vector<std::uint32_t> near;
     const double everything = (x.position - index.centre).norm() + index.extent;
     for (double rho = 2 * o_.scallop_height;; rho *= 4) {
       const double radius = rho + r_ + index.half_max;
-      CollectWithin found{radius * radius, &near};
-      near.clear();
-      index.tree.findNeighbors(found, x.position.data(), nanoflann::SearchParams(32, 0, false));
-      for (std::uint32_t k : near) {
-        const double reach = (index.mid[k] - x.position).norm() - index.half[k] - r_;
-        if (reach >= best) continue;
+      if (!((x.position - near.centre).norm() + radius <= near.radius)) {
+        near.centre = x.position;
+        near.radius = radius + near.margin;
+        CollectWithin found{near.radius * near.radius, &near.segments};
+        near.segments.clear();
+        index.tree.findNeighbors(found, x.position.data(), nanoflann::SearchParams(32, 0, false));
+      }
+      // The segment with the nearest midpoint first (its entry is nearly always the least), then
+      // only segments that could beat it: the entry into a capsule is at least the distance to its
+      // segment less r, and that at least the distance to its midpoint less its half length.
+      std::uint32_t first = 0;
+      double first_d2 = kInf;
+      for (std::uint32_t k : near.segments)
+        if (const double d2 = (index.mid[k] - x.position).squaredNorm(); d2 < first_d2) first_d2 = d2, first = k;
+      if (first_d2 < kInf) best = std::min(best, ray_capsule_entry(x.position, x.normal, c.c[first], c.c[first + 1], r_));
+      for (std::uint32_t k : near.segments) {
+        if (k == first || (index.mid[k] - x.position).norm() - index.half[k] - r_ >= best ||
+            segment_distance(x.position, c.c[k], c.c[k + 1]) - r_ >= best)
+          continue;
         best = std::min(best, ray_capsule_entry(x.position, x.normal, c.c[k], c.c[k + 1], r_));
       }
       if (best <= rho || radius > everything) return best;
