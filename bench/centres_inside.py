@@ -40,11 +40,12 @@ M = np.array(setup["part_to_machine"]); R, t = M[:, :3], M[:, 3]
 kind = "G0" if a.rapids else "G1"
 pos, centres, motions = np.zeros(3), [], 0
 for line in open(a.out + "/" + setup["gcode"]):
-    if not line.startswith(("G0", "G1")): continue
+    words = line.split()
+    if not words or words[0] not in ("G0", "G1"): continue  # G17 and the like are not motions
     motions += 1
     new = pos.copy()
     for ax, val in re.findall(r"([XYZ])(-?[\d.]+)", line): new["XYZ".index(ax)] = float(val)
-    if line.startswith(kind) and not (a.rapids and motions <= 2):
+    if words[0] == kind and not (a.rapids and motions <= 2):
         n = max(1, int(np.ceil(np.linalg.norm(new - pos) / a.step)))
         centres += [pos + s * (new - pos) for s in np.linspace(0, 1, n + 1)]
     pos = new
