@@ -15,6 +15,7 @@
 
 #include "nodes/cloud/knn.h"
 #include "nodes/geom/kd_tree.h"
+#include "nodes/geom/point_text.h"
 
 namespace scallop {
 
@@ -94,12 +95,6 @@ std::string percent(double fraction) {
   char buf[32];
   const double p = 100.0 * fraction;
   std::snprintf(buf, sizeof buf, p >= 10 || p == 0 ? "%.0f %%" : "%.1f %%", p);
-  return buf;
-}
-
-std::string point_text(const Eigen::Vector3d& p) {
-  char buf[96];
-  std::snprintf(buf, sizeof buf, "(%.1f, %.1f, %.1f)", p.x(), p.y(), p.z());
   return buf;
 }
 
@@ -283,7 +278,7 @@ std::string height_field_problem(const HeightFieldStats& s, const HeightFieldLim
     // Where the second part is tells the user which one to remove.
     std::string where;
     if (s.component_centroids.size() > 1)
-      where = "; the second centred near " + point_text(s.component_centroids[1]);
+      where = "; the second centred near " + point_text(s.component_centroids[1], 1);
     const std::string plan =
         limits.max_components == 1
             ? "scallop plans one patch at a time"
@@ -297,14 +292,14 @@ std::string height_field_problem(const HeightFieldStats& s, const HeightFieldLim
            percent(static_cast<double>(s.layered_points) / n) +
            ") lie under other points of the cloud (a closed object, an overhang or several "
            "layers), e.g. near " +
-           point_text(s.layered_example) + " with a layer " + number_text(s.layered_example_gap) +
+           point_text(s.layered_example, 1) + " with a layer " + number_text(s.layered_example_gap) +
            " mm above it; a 3-axis machine cannot reach them";
   if (static_cast<double>(s.steep_points) > limits.max_steep_fraction * n)
     return "walls steeper than " + number_text(limits.max_slope_deg, "%g") +
            "°: " + std::to_string(s.steep_points) + " points (" +
            percent(static_cast<double>(s.steep_points) / n) + ", more than the " +
            percent(limits.max_steep_fraction) + " allowed), up to " + number_text(s.max_slope_deg) +
-           "° near " + point_text(s.steepest) +
+           "° near " + point_text(s.steepest, 1) +
            "; a ball-end cutter coming from +Z cannot finish them; turn the part to face +Z "
            "or raise max_slope";
   return {};

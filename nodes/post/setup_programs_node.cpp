@@ -1,10 +1,10 @@
 #include <algorithm>
-#include <cstdio>
 #include <stdexcept>
 #include <string>
 
 #include "engine/node.h"
 #include "engine/output_path.h"
+#include "nodes/geom/point_text.h"
 #include "nodes/io/write_support.h"
 #include "nodes/post/setup_programs.h"
 #include "nodes/types/document.h"
@@ -90,12 +90,9 @@ NodeDecl make_setup_programs_node() {
                  "written for it, and its patches are stock the certificate counts");
     for (const SetupProgram& p : programs)
       if (p.high_lifts > 0) {
-        const Eigen::Vector3d& a = p.high_lift_at;
-        char where[96];
-        std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", a.x(), a.y(), a.z());
         ctx.warn("setup '" + p.name + "': " + std::to_string(p.high_lifts) +
                  " ball positions were lifted more than the tool's radius to keep them off the part (up to " +
-                 std::to_string(p.high_lift_max) + " mm, planned at " + where +
+                 std::to_string(p.high_lift_max) + " mm, planned at " + point_text(p.high_lift_at, 2) +
                  " in the part's frame): from this direction the part is in the way there, and what they were "
                  "to cut is stock the certificate counts");
       }

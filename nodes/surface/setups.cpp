@@ -45,6 +45,13 @@ double smallest_dot(const std::vector<Eigen::Vector3d>& normals, const Eigen::Ve
   return m;
 }
 
+nlohmann::json hidden_patches_report(const std::vector<HiddenPatch>& hidden) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const HiddenPatch& h : hidden)
+    list.push_back({{"patch", h.patch}, {"samples", h.samples}, {"at", {h.at.x(), h.at.y(), h.at.z()}}});
+  return list;
+}
+
 }  // namespace
 
 Eigen::Matrix3d rotation_to_z(const Eigen::Vector3d& a) {
@@ -233,17 +240,6 @@ nlohmann::json part_to_machine(const Setup& s) {
   for (int r = 0; r < 3; ++r) m.push_back({s.rotation(r, 0), s.rotation(r, 1), s.rotation(r, 2), s.translation[r]});
   return m;
 }
-
-namespace {
-
-nlohmann::json hidden_patches_report(const std::vector<HiddenPatch>& hidden) {
-  nlohmann::json list = nlohmann::json::array();
-  for (const HiddenPatch& h : hidden)
-    list.push_back({{"patch", h.patch}, {"samples", h.samples}, {"at", {h.at.x(), h.at.y(), h.at.z()}}});
-  return list;
-}
-
-}  // namespace
 
 nlohmann::json setups_report(const std::vector<Setup>& setups) {
   nlohmann::json list = nlohmann::json::array();

@@ -1,9 +1,9 @@
-#include <cstdio>
 #include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "engine/node.h"
+#include "nodes/geom/point_text.h"
 #include "nodes/surface/setups.h"
 #include "nodes/types/document.h"
 #include "nodes/types/mesh.h"
@@ -47,10 +47,8 @@ NodeDecl make_setups_node() {
     }
     for (const Setup& st : setups)
       for (const HiddenPatch& h : st.hidden_patches) {
-        char where[96];
-        std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", h.at.x(), h.at.y(), h.at.z());
         ctx.warn("setup '" + st.name + "': the part hides " + std::to_string(h.samples) + " of 289 samples of patch " +
-                 std::to_string(h.patch) + " from this axis (around " + where +
+                 std::to_string(h.patch) + " from this axis (around " + point_text(h.at, 2) +
                  ", part frame): the ball does not reach those places from this clamping, they are left as stock");
       }
     Report report;
