@@ -226,4 +226,12 @@ SetupBaseResult setup_base(const Mesh& mesh, const SetupBaseOptions& o) {
   return r;
 }
 
+Eigen::Vector3d base_direction_of(const nlohmann::json& report) {
+  const auto it = report.find("base_direction");
+  if (it == report.end() || !it->is_array() || it->size() != 3 || !(*it)[0].is_number() || !(*it)[1].is_number() ||
+      !(*it)[2].is_number())
+    throw std::invalid_argument("the input 'base' has no base_direction [x, y, z]: give mesh.setup_base's report");
+  return {(*it)[0].get<double>(), (*it)[1].get<double>(), (*it)[2].get<double>()};
+}
+
 }  // namespace scallop

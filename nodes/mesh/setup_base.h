@@ -44,6 +44,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -108,5 +109,9 @@ struct SetupBaseResult {
 // std::runtime_error when no cluster has a flat part of min_area (the message says so and asks
 // for the direction) or when the base is the whole mesh.
 SetupBaseResult setup_base(const Mesh& mesh, const SetupBaseOptions& options);
+
+// The base direction of mesh.setup_base's report (its base_direction [x, y, z]); throws
+// std::invalid_argument when the report has none.
+Eigen::Vector3d base_direction_of(const nlohmann::json& report);
 
 }  // namespace scallop

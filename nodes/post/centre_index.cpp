@@ -8,6 +8,14 @@
 
 namespace scallop {
 
+double centre_piece_length(const std::vector<CentreSegment>& feed, double spacing, double r) {
+  std::vector<double> lengths;
+  lengths.reserve(feed.size());
+  for (const auto& s : feed) lengths.push_back((s.b - s.a).norm());
+  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() * 9 / 10, lengths.end());
+  return std::clamp(lengths[lengths.size() * 9 / 10], spacing, std::max(spacing, r / 2));
+}
+
 // The capsule is the union of a finite cylinder and two balls; the flat ends of the cylinder lie
 // inside the balls, so the first entry is the least of the side entry (when its foot falls on
 // the segment) and the two ball entries.

@@ -55,6 +55,11 @@ class CentreIndex {
   std::unique_ptr<KdTree<Eigen::Vector3d, 3>> tree_;
 };
 
+// The piece length a cut's CentreIndex is built with: the 90th percentile of the segments'
+// lengths, within [spacing, max(spacing, r / 2)] (the sample spacing, the tool radius). `feed`
+// must not be empty.
+double centre_piece_length(const std::vector<CentreSegment>& feed, double spacing, double r);
+
 // Area-weighted statistics of (value, weight) pairs: NaN when there is none.
 struct WeightedStats {
   double max, p99, mean;

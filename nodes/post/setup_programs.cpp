@@ -11,292 +11,30 @@
 #include <stdexcept>
 
 #include "nodes/mesh/mesh_distance.h"
+#include "nodes/post/keep_off_part.h"
+#include "nodes/post/rest_passes.h"
 #include "nodes/path/step_size.h"
 
 namespace scallop {
-namespace {
-
-// The ball centre c lifted along +z until the part is at least r - tolerance from it and nothing
-// of the part lies straight above it (the tool comes down from +z: it cannot reach under an
-// overhang); returns the lift.
-double lift_clear(Eigen::Vector3d& c, const MeshDistance& part, double r, double tolerance) {
-  double lift = 0;
-  for (int it = 0; it < 400; ++it) {
-    const double d = part(c);
-    double step = 0;
-    if (d < r - tolerance)
-      step = r - d + 1e-6;  // the surface is no nearer than d: at least this far to clear
-    else if (const double above = part.ray_distance(c, Eigen::Vector3d::UnitZ()); std::isfinite(above))
-      step = above + r;  // over the face above, then again
-    else
-      break;
-    c.z() += step;
-    lift += step;
-  }
-  return lift;
-}
-
-// The ball centre c lowered along -z, at most max_drop, until the part is r from it: where the
-// surface the pass was planned on lies above the part (a smooth B-spline over a faceted STL's
-// flat facets, or one that bulges between its quads), the ball comes down onto the part instead
-// of leaving that much stock. Each step is the distance beyond r, so the ball never comes nearer
-// than r (the distance is 1-Lipschitz). Returns the drop.
-double drop_onto(Eigen::Vector3d& c, const MeshDistance& part, double r, double max_drop) {
-  double drop = 0;
-  for (int it = 0; it < 64 && drop < max_drop; ++it) {
-    const double step = std::min(part(c) - r, max_drop - drop);
-    if (!(step > 1e-6)) break;
-    c.z() -= step;
-    drop += step;
-  }
-  return drop;
-}
-
-struct LiftStats {
-  std::size_t lifted = 0;   // ball positions (and inserted move middles) lifted
-  double lift_max = 0;      // mm
-  std::size_t dropped = 0;  // ball positions left out: no clear way to them (the pass split there)
-  std::size_t splits = 0;   // passes cut in two there
-  std::size_t lowered = 0;  // ball positions lowered onto the part
-  double lower_max = 0;     // mm
-  std::size_t high = 0;     // planned balls lifted more than the ball's radius
-  double high_max = 0;      // mm, the largest such lift
-  Eigen::Vector3d high_at = Eigen::Vector3d::Zero();  // its planned contact (machine frame)
-};
-
-// Every ball centre of one pass (machine frame, ball radius r) kept off the whole part, and the
-// middles of its moves: a middle that reaches in gets a lifted point of its own, its halves
-// checked again (up to 6 times); first each ball is lowered onto the part by at most max_drop.
-// Returns the pass as pieces: split where a move could not be kept off the part.
-std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const MeshDistance& part, double part_top_z,
-                                             double tolerance, double max_drop, LiftStats& stats) {
-  // A pass's ends: the tool comes down onto its start and leaves its end straight along +z, so the
-  // ball must pass the part on the way, not only its centre line (a compound-angle clamping put
-  // an overhang 0.33 mm into a ball plunging onto a fandisk contour): the end is raised to the
-  // lowest height from which the vertical up to above the part stays r - tolerance off it
-  // (bisection: clear from a height, clear from any above it).
-  const double top = part_top_z + r + 1;
-  // Whether the ball goes straight up clear from centre height z at (x, y) of c.
-  auto goes_up_clear = [&](const Eigen::Vector3d& c, double z) {
-    Eigen::Vector3d nearest;
-    std::size_t evaluations = 0;
-    return z >= top || part.least_along(Eigen::Vector3d(c.x(), c.y(), z), Eigen::Vector3d(c.x(), c.y(), top), r / 4,
-                                        r - tolerance, 1e-4, nearest, evaluations, false) >= r - tolerance;
-  };
-  auto clear_above = [&](Eigen::Vector3d& contact, const Eigen::Vector3d& n) {
-    const Eigen::Vector3d c = contact + r * n;
-    auto clear_from = [&](double z) { return goes_up_clear(c, z); };
-    if (clear_from(c.z())) return;
-    double low = c.z(), high = top;
-    while (high - low > 1e-4) (clear_from(0.5 * (low + high)) ? high : low) = 0.5 * (low + high);
-    contact.z() += high - c.z();
-    ++stats.lifted;
-    stats.lift_max = std::max(stats.lift_max, high - c.z());
-  };
-  auto lift_point = [&](Eigen::Vector3d& contact, const Eigen::Vector3d& n) {
-    Eigen::Vector3d c = contact + r * n;
-    const double lift = lift_clear(c, part, r, tolerance);
-    if (lift > 0) {
-      contact = c - r * n;
-      ++stats.lifted;
-      stats.lift_max = std::max(stats.lift_max, lift);
-    }
-  };
-  const std::vector<Eigen::Vector3d> planned = pass.contact;  // before any lift, for the report
-  for (std::size_t k = 0; k < pass.contact.size(); ++k) {
-    if (max_drop > 0) {
-      Eigen::Vector3d c = pass.contact[k] + r * pass.normal[k];
-      if (const double drop = drop_onto(c, part, r, max_drop); drop > 0) {
-        pass.contact[k] = c - r * pass.normal[k];
-        ++stats.lowered;
-        stats.lower_max = std::max(stats.lower_max, drop);
-      }
-    }
-    lift_point(pass.contact[k], pass.normal[k]);
-  }
-  if (!pass.contact.empty()) {
-    clear_above(pass.contact.front(), pass.normal.front());
-    clear_above(pass.contact.back(), pass.normal.back());
-  }
-  ToolpathPass out;
-  constexpr std::size_t kMiddle = SIZE_MAX;
-  std::vector<std::size_t> origin;  // per ball of out: the pass's ball it is, or kMiddle (a move middle)
-  // A ball centre the tool cannot be at: too near the part, or under it (inside the solid or
-  // under an overhang: the unsigned distance alone misses a centre deep inside).
-  auto blocked = [&](const Eigen::Vector3d& c) {
-    return part(c) < r - tolerance || std::isfinite(part.ray_distance(c, Eigen::Vector3d::UnitZ()));
-  };
-  // How far the move between ball centres ca and cb must go up: what it lacks in distance, or,
-  // where a point of it lies under the part, what that point needs to clear it; 0 when clear.
-  auto lacks = [&](const Eigen::Vector3d& ca, const Eigen::Vector3d& cb) {
-    Eigen::Vector3d nearest;
-    std::size_t evaluations = 0;
-    const double least = part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false);
-    double need = least < r - tolerance ? r - tolerance - least : 0;
-    for (int q = 1; q < 8 && need == 0; ++q) {
-      Eigen::Vector3d c = ca + (cb - ca) * (q / 8.0);
-      if (blocked(c)) need = lift_clear(c, part, r, tolerance);
-    }
-    return need;
-  };
-  std::function<void(const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&,
-                     int)>
-      middle = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& na, const Eigen::Vector3d& b,
-                   const Eigen::Vector3d& nb, int depth) {
-        if (depth == 0) return;
-        const Eigen::Vector3d ca = a + r * na, cb = b + r * nb;
-        // Where the move comes nearest the part, if nearer than r - tolerance (found exactly,
-        // MeshDistance::least_along, unsigned: the part may be open); else where a point of it
-        // lies under the part.
-        double q = -1;
-        Eigen::Vector3d nearest;
-        std::size_t evaluations = 0;
-        if (part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false) < r - tolerance) {
-          const double len2 = (cb - ca).squaredNorm();
-          q = len2 > 0 ? std::clamp((nearest - ca).dot(cb - ca) / len2, 1.0 / 16, 15.0 / 16) : 0.5;
-        } else {
-          for (double f : {0.5, 0.25, 0.75, 0.125, 0.375, 0.625, 0.875})
-            if (std::isfinite(part.ray_distance((1 - f) * ca + f * cb, Eigen::Vector3d::UnitZ()))) {
-              q = f;
-              break;
-            }
-        }
-        if (q < 0) return;
-        const Eigen::Vector3d n = ((1 - q) * na + q * nb).normalized();
-        if (!n.allFinite()) return;
-        Eigen::Vector3d m = (1 - q) * ca + q * cb - r * n;
-        lift_point(m, n);
-        middle(a, na, m, n, depth - 1);
-        out.contact.push_back(m), out.normal.push_back(n), origin.push_back(kMiddle);
-        if (!pass.uv.empty()) out.uv.push_back(out.uv.back());
-        middle(m, n, b, nb, depth - 1);
-      };
-  for (std::size_t k = 0; k < pass.contact.size(); ++k) {
-    if (k > 0) middle(pass.contact[k - 1], pass.normal[k - 1], pass.contact[k], pass.normal[k], 6);
-    out.contact.push_back(pass.contact[k]), out.normal.push_back(pass.normal[k]), origin.push_back(k);
-    if (!pass.uv.empty()) out.uv.push_back(pass.uv[k]);
-  }
-  // Where a move still reaches in (a narrow neck above a free pocket: its ends clear, its
-  // middle not), its lower end is raised to its upper end's height, until no move does.
-  // A sweep checks the moves next to a point the previous one raised (the first, all of them).
-  std::vector<char> check(out.contact.size(), 1), next(out.contact.size(), 0);  // move k-1 -> k
-  for (int sweep = 0; sweep < 50; ++sweep) {
-    bool raised = false;
-    std::fill(next.begin(), next.end(), 0);
-    for (std::size_t k = 1; k < out.contact.size(); ++k) {
-      if (!check[k]) continue;
-      const Eigen::Vector3d ca = out.contact[k - 1] + r * out.normal[k - 1], cb = out.contact[k] + r * out.normal[k];
-      const double need = lacks(ca, cb);
-      if (!(need > 0)) continue;
-      // The lower end goes up to the upper end's height; ends already level (raised so before)
-      // both go up by what the move lacks: raising one end to the other's height no longer
-      // moves it (a move beside a slope kept 0.01 mm of a fandisk's side that way).
-      std::vector<std::size_t> ends;
-      double rise;
-      if (std::abs(cb.z() - ca.z()) > 1e-3) {
-        ends = {ca.z() < cb.z() ? k - 1 : k};
-        rise = std::abs(cb.z() - ca.z()) + 1e-6;
-      } else {
-        ends = {k - 1, k};
-        rise = std::max(need, 1e-4) + 1e-6;
-      }
-      for (std::size_t e : ends) {
-        out.contact[e].z() += rise;
-        lift_point(out.contact[e], out.normal[e]);
-        ++stats.lifted;
-        stats.lift_max = std::max(stats.lift_max, rise);
-        next[e] = 1;
-        if (e + 1 < next.size()) next[e + 1] = 1;
-      }
-      raised = true;
-    }
-    if (!raised) break;
-    check.swap(next);
-  }
-  // Balls lifted more than their radius touch nothing near where they were planned: from this
-  // direction the part is in the way there (the walls of the block's bores had whole setups
-  // lifted 125 mm over the part). They are counted for the report; the certificate measures the
-  // stock they leave. (Leaving them out would also drop the raised ends and the balls over rough
-  // ground that keep the tool clear.)
-  for (std::size_t k = 0; k < out.contact.size(); ++k) {
-    if (origin[k] == kMiddle) continue;
-    const double lift = out.contact[k].z() - planned[origin[k]].z();
-    if (lift > r) {
-      ++stats.high;
-      if (lift > stats.high_max) stats.high_max = lift, stats.high_at = planned[origin[k]];
-    }
-  }
-  // What the raising could not clear within its sweeps (a stretch under an overhang, which it
-  // climbs over one ball at a time: a fandisk clamping kept a 39 mm vertical move through the
-  // part that way) is not cut. The pass is split at every move that still reaches in, and each
-  // piece's ends, where the tool comes down and goes up along +z, are trimmed back to balls whose
-  // vertical is clear; the linker takes the tool between the pieces above the part.
-  std::vector<ToolpathPass> pieces;
-  auto centre = [&](std::size_t k) -> Eigen::Vector3d { return out.contact[k] + r * out.normal[k]; };
-  auto add_piece = [&](std::size_t first, std::size_t last) {  // balls first..last-1
-    const std::size_t balls = last - first;
-    while (first < last && !goes_up_clear(centre(first), centre(first).z())) ++first;
-    while (last > first && !goes_up_clear(centre(last - 1), centre(last - 1).z())) --last;
-    stats.dropped += balls - (last - first);
-    if (first == last) return;
-    ToolpathPass piece;
-    piece.contact.assign(out.contact.begin() + std::ptrdiff_t(first), out.contact.begin() + std::ptrdiff_t(last));
-    piece.normal.assign(out.normal.begin() + std::ptrdiff_t(first), out.normal.begin() + std::ptrdiff_t(last));
-    if (!out.uv.empty()) piece.uv.assign(out.uv.begin() + std::ptrdiff_t(first), out.uv.begin() + std::ptrdiff_t(last));
-    pieces.push_back(std::move(piece));
-  };
-  std::size_t start = 0;
-  for (std::size_t k = 1; k < out.contact.size(); ++k)
-    if (lacks(centre(k - 1), centre(k)) > 0) {
-      ++stats.splits;
-      add_piece(start, k);
-      start = k;
-    }
-  add_piece(start, out.contact.size());
-  return pieces;
-}
-
-// The passes of `path` kept off the part, side by side (each on its own: the same result in any
-// order).
-void keep_off_part(Toolpath& path, const std::vector<double>& max_drop, const MeshDistance& part, double part_top_z,
-                   double tolerance, SetupProgram& stats) {
-  tbb::combinable<LiftStats> local;
-  std::vector<std::vector<ToolpathPass>> pieces(path.passes.size());
-  tbb::parallel_for(std::size_t(0), path.passes.size(), [&](std::size_t i) {
-    pieces[i] = keep_pass_off_part(std::move(path.passes[i]), path.tool_radius, part, part_top_z, tolerance,
-                                   max_drop[i], local.local());
-  });
-  path.passes.clear();
-  for (auto& p : pieces)
-    for (auto& piece : p) path.passes.push_back(std::move(piece));
-  local.combine_each([&](const LiftStats& l) {
-    stats.lifted += l.lifted;
-    stats.lift_max = std::max(stats.lift_max, l.lift_max);
-    stats.dropped += l.dropped;
-    stats.splits += l.splits;
-    stats.lowered += l.lowered;
-    stats.lower_max = std::max(stats.lower_max, l.lower_max);
-    stats.high_lifts += l.high;
-    if (l.high_max > stats.high_lift_max) stats.high_lift_max = l.high_max, stats.high_lift_at = l.high_at;
-  });
-}
-
-}  // namespace
 
 std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector<std::size_t>& passes_per_patch,
                                          const std::vector<Setup>& setups, const Mesh& part,
                                          const LinkOptions& link, const GCodeOptions& gcode,
-                                         const std::vector<double>& patch_off_part) {
+                                         const std::vector<double>& patch_off_part, const RestOptions* rest,
+                                         RestResult* rest_result) {
   if (std::accumulate(passes_per_patch.begin(), passes_per_patch.end(), std::size_t(0)) != path.passes.size())
     throw std::invalid_argument("the patches' pass counts do not add up to the toolpath's " +
                                 std::to_string(path.passes.size()) + " passes");
   std::vector<std::size_t> first(passes_per_patch.size() + 1, 0);
   for (std::size_t p = 0; p < passes_per_patch.size(); ++p) first[p + 1] = first[p] + passes_per_patch[p];
 
-  std::vector<SetupProgram> out;
+  // Each setup's passes in its machine frame, kept off the whole part.
+  std::vector<Toolpath> cuts(setups.size());
+  std::vector<SetupProgram> progs(setups.size());
+  const double tolerance = part_clearance_tolerance(path.chord_error);
   for (std::size_t index = 0; index < setups.size(); ++index) {
     const Setup& s = setups[index];
-    Toolpath local;
+    Toolpath& local = cuts[index];
     local.tool_radius = path.tool_radius;
     local.scallop_height = path.scallop_height;
     local.chord_error = path.chord_error;
@@ -315,22 +53,44 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
         max_drop.push_back(p < patch_off_part.size() ? 5 * patch_off_part[p] : 0.0);
       }
     }
+    if (local.passes.empty() || part.num_faces() == 0) continue;
+    Mesh placed = part;
+    for (auto& v : placed.vertices) v = s.rotation * v + s.translation;
+    double top_z = -std::numeric_limits<double>::infinity();
+    for (const auto& v : placed.vertices) top_z = std::max(top_z, v.z());
+    const KeepOffStats kept = keep_off_part(local, max_drop, MeshDistance(placed), top_z, tolerance);
+    SetupProgram& prog = progs[index];
+    prog.lifted = kept.lifted, prog.lift_max = kept.lift_max, prog.dropped = kept.dropped, prog.splits = kept.splits;
+    prog.lowered = kept.lowered, prog.lower_max = kept.lower_max;
+    prog.high_lifts = kept.high, prog.high_lift_max = kept.high_max;
+    prog.high_lift_at = s.rotation.transpose() * (kept.high_at - s.translation);  // to the part's frame
+  }
+
+  // What they leave, cut again from the setups that reach it.
+  if (rest && rest->rounds > 0 && part.num_faces() > 0) {
+    RestOptions o = *rest;
+    o.tool_radius = path.tool_radius, o.scallop = path.scallop_height, o.chord = path.chord_error;
+    RestResult result = add_rest_passes(part, setups, cuts, o);
+    for (std::size_t index = 0; index < setups.size(); ++index)
+      progs[index].rest_passes = result.passes[index], progs[index].rest_length = result.length[index];
+    if (rest_result) *rest_result = std::move(result);
+  }
+
+  // Linked and written.
+  std::vector<SetupProgram> out;
+  for (std::size_t index = 0; index < setups.size(); ++index) {
+    const Setup& s = setups[index];
+    Toolpath& local = cuts[index];
+    // Every ball left out (no clear way to any of them; an ABC plate's noisy cloud had such a
+    // clamping, and linking nothing stopped the whole part): no program for this setup.
     if (local.passes.empty()) continue;
     Mesh placed = part;
     for (auto& v : placed.vertices) v = s.rotation * v + s.translation;
-    SetupProgram prog;
+    SetupProgram& prog = progs[index];
     prog.setup = index;
-    const double tolerance = part_clearance_tolerance(path.chord_error);
     const MeshDistance distance(placed);
     LinkOptions linking = link;
     if (placed.num_faces() > 0) {
-      double top_z = -std::numeric_limits<double>::infinity();
-      for (const auto& v : placed.vertices) top_z = std::max(top_z, v.z());
-      keep_off_part(local, max_drop, distance, top_z, tolerance, prog);
-      prog.high_lift_at = s.rotation.transpose() * (prog.high_lift_at - s.translation);  // to the part's frame
-      // Every ball left out (no clear way to any of them; an ABC plate's noisy cloud had such a
-      // clamping, and linking nothing stopped the whole part): no program for this setup.
-      if (local.passes.empty()) continue;
       // Links kept as far off the part as the balls: checked against its faces, not only its
       // vertices.
       const double r = path.tool_radius;

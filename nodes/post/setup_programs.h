@@ -5,19 +5,9 @@
 // A part point p is at R p + t in setup s's frame ([R|t] = its part_to_machine), a normal n at
 // R n. Where the patch's surface stands above the part (patch_off_part), each ball is first
 // lowered along -z until it touches the part. The balls are kept off the whole part, not only off
-// the patch they cut: where the part (its mesh, in that frame) comes closer than
-// r - max(e/4, 0.001) to a ball centre, or lies straight above it (the tool comes down along +z:
-// it cannot reach under an overhang, and a centre inside the solid is far from its surface), the
-// ball is lifted along +z until clear. A move's nearest approach to the part is found exactly
-// (MeshDistance::least_along), and where it is too near (or, checked at eighths, a point of it
-// lies under the part) a lifted point is inserted and both halves are checked again (6 times at
-// most); a move that still reaches in (a narrow neck above a free pocket) has its lower end raised
-// to its upper end's height, and a move that is still too near after that is not cut: the pass
-// is split there and the pieces' ends trimmed back to balls that go straight up clear (splits,
-// dropped). A pass's first and last ball, where the tool comes down and goes up along +z, is
-// raised until that vertical keeps the ball as far off the part (an overhang beside it, not only
-// above it). The lifts are counted (stock left). Links are kept as far off the part (checked
-// against its vertices and its faces), and the clearance plane set above its points (link.h).
+// the patch they cut (keep_off_part.h); the lifts are counted (stock left). Links are kept as far
+// off the part (checked against its vertices and its faces), and the clearance plane set above
+// its points (link.h).
 #pragma once
 
 #include <Eigen/Core>
@@ -28,6 +18,7 @@
 
 #include "nodes/post/gcode.h"
 #include "nodes/post/link.h"
+#include "nodes/post/rest_passes.h"
 #include "nodes/surface/setups.h"
 #include "nodes/types/mesh.h"
 #include "nodes/types/toolpath.h"
@@ -55,6 +46,8 @@ struct SetupProgram {
   std::size_t high_lifts = 0;
   double high_lift_max = 0;
   Eigen::Vector3d high_lift_at = Eigen::Vector3d::Zero();
+  std::size_t rest_passes = 0;  // passes added where the others left material (rest_passes.h)
+  double rest_length = 0;       // mm, their length
 };
 
 // setups        the clampings (plan_setups, or setups_from_report of surface.setups' report)
@@ -65,13 +58,17 @@ struct SetupProgram {
 //               part_distance_max; empty: 0): where the surface stands above the part, a ball is
 //               lowered along -z onto it by up to 5 times that (a setup's patch is at most that
 //               steep), so that it touches the part and leaves no such stock
+// rest          where given (and rest->rounds > 0), what the passes leave over the scallop limit
+//               is cut again from the setups that reach it (rest_passes.h; tool, h and e from
+//               `path`), and rest_result gets what was found
 // Returns one program per setup that cuts anything (a setup none of whose balls could be kept off
 // the part gets none). Throws std::invalid_argument when the counts
 // do not add up; link_passes' and write_gcode's errors pass through.
 std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector<std::size_t>& passes_per_patch,
                                          const std::vector<Setup>& setups, const Mesh& part,
                                          const LinkOptions& link, const GCodeOptions& gcode,
-                                         const std::vector<double>& patch_off_part = {});
+                                         const std::vector<double>& patch_off_part = {},
+                                         const RestOptions* rest = nullptr, RestResult* rest_result = nullptr);
 
 // The setups file: {"format": "scallop-setups/1", "units": "mm", "setups": [{name, gcode,
 // part_to_machine}]}.

@@ -6,6 +6,7 @@
 #include "engine/output_path.h"
 #include "nodes/geom/point_text.h"
 #include "nodes/io/write_support.h"
+#include "nodes/mesh/setup_base.h"
 #include "nodes/post/setup_programs.h"
 #include "nodes/types/document.h"
 #include "nodes/types/mesh.h"
@@ -18,13 +19,15 @@ struct SetupProgramsOptions {
   std::string dialect = "linuxcnc";
   double feed = 1000, plunge_feed = 300, spindle_rpm = 10000;
   double safety = 5;
+  int rest_rounds = 3;
+  double base_angle = 10;
 };
 }  // namespace
 
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 9;  // 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
+  d.version = 10;  // 10: rest passes where the others leave material; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
                   // 3: moves and links kept off the part's faces exactly (MeshDistance::least_along)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), linked "
@@ -34,6 +37,9 @@ NodeDecl make_setup_programs_node() {
       .input("contours", "Report", "path.contour_grid's report: how many passes each patch has")
       .input("setups", "Report", "surface.setups' report: the clampings, their part_to_machine and patches")
       .input("mesh", "Mesh", "the whole part: links avoid it and the clearance plane clears it in every setup")
+      .input("base", "Report",
+             "mesh.setup_base's report: faces within base_angle of its base_direction sit on the table, and rest "
+             "passes leave them; absent: every face may get rest passes", false)
       .output("file", "File", "the setups file")
       .output("programs", "SetupPaths", "each program's moves with its part_to_machine (post.simulate_part)")
       .output("report", "Report", "{setups: [{name, gcode, passes, moves, clearance_z (mm, machine frame), lifted (ball positions kept off "
@@ -41,7 +47,10 @@ NodeDecl make_setup_programs_node() {
               "positions left out there), lowered (ball positions lowered onto the part where the patch's surface "
               "stands above it), lower_max (mm), high_lifts (planned ball positions lifted more than the tool's radius: "
               "from this setup the part is in the way there), high_lift_max (mm), high_lift_at (its planned contact, "
-              "part frame)}]}")
+              "part frame), rest_passes (passes added where the others left material), rest_length (mm)}], rest: {rounds, "
+              "spacing, measured_area, left_area_before (mm² the setups' own passes leave over 0.85 h or uncut, by the "
+              "rest search's samples), left_area_after, unreached_area (left where no setup's axis comes down clear), "
+              "unreached_at [[x, y, z], ...] (part frame)}}")
       .param_output_path("path", "the setups file to write, relative to the output folder (-o); the programs "
                                  "(setup_1.ngc, ...) go beside it");
   d.options<SetupProgramsOptions>()
@@ -50,7 +59,13 @@ NodeDecl make_setup_programs_node() {
       .number("plunge_feed", &SetupProgramsOptions::plunge_feed, 1e-3, 1e6, "mm/min", "feed rate of plunges")
       .number("spindle_rpm", &SetupProgramsOptions::spindle_rpm, 0, 1e6, "rpm", "spindle speed; 0: no spindle words")
       .number("safety", &SetupProgramsOptions::safety, 0, 1e3, "mm",
-              "clearance plane height above the part's highest point in each setup");
+              "clearance plane height above the part's highest point in each setup")
+      .integer("rest_rounds", &SetupProgramsOptions::rest_rounds, 0, 10, "",
+               "rounds of rest passes: what every setup's passes leave over the scallop limit is found on the part "
+               "and cut again by a raster of balls dropped onto it, from the setup whose axis reaches it best, the "
+               "raster finer each round; 0: none")
+      .number("base_angle", &SetupProgramsOptions::base_angle, 0, 90, "deg",
+              "faces within this of the base direction are on the table");
   d.run = [](NodeContext& ctx) {
     auto path = ctx.input<Toolpath>("toolpath");
     const auto& contours = ctx.input<Report>("contours")->data;
@@ -69,11 +84,22 @@ NodeDecl make_setup_programs_node() {
     link.safety = o.safety;
     GCodeOptions g;
     g.dialect = o.dialect, g.feed = o.feed, g.plunge_feed = o.plunge_feed, g.spindle_rpm = o.spindle_rpm;
+    RestOptions rest;
+    rest.rounds = o.rest_rounds;
+    rest.base_angle = o.base_angle;
+    if (ctx.has_input("base")) {
+      try {
+        rest.base_normal = base_direction_of(ctx.input<Report>("base")->data);
+      } catch (const std::invalid_argument& e) {
+        throw NodeError(e.what());
+      }
+    }
+    RestResult rest_result;
     std::vector<Setup> setups;
     std::vector<SetupProgram> programs;
     try {
       setups = setups_from_report(setups_report, counts.size());
-      programs = setup_programs(*path, counts, setups, *mesh, link, g, off_part);
+      programs = setup_programs(*path, counts, setups, *mesh, link, g, off_part, &rest, &rest_result);
     } catch (const std::exception& e) {
       throw NodeError(std::string("post.setup_programs: ") + e.what());
     }
@@ -101,19 +127,35 @@ NodeDecl make_setup_programs_node() {
         ctx.warn("setup '" + p.name + "': " + std::to_string(p.splits) +
                  " moves could not be kept off the part (under an overhang): the passes are cut there and " +
                  std::to_string(p.dropped) + " ball positions left out (stock the certificate counts)");
+    if (rest_result.unreached_area > 0)
+      ctx.warn(std::to_string(rest_result.unreached_area) + " mm² of the part is left over the scallop limit where no "
+               "setup's axis comes down to it clear of the part (around " +
+               point_text(rest_result.unreached_at.front(), 2) +
+               " in the part's frame): stock the certificate counts; a clamping facing it would reach it");
     nlohmann::json list = nlohmann::json::array();
     for (const SetupProgram& p : programs)
       list.push_back({{"name", p.name}, {"gcode", p.file}, {"passes", p.passes}, {"moves", p.moves},
                       {"clearance_z", p.clearance_z}, {"lifted", p.lifted}, {"lift_max", p.lift_max},
                       {"splits", p.splits}, {"dropped", p.dropped}, {"lowered", p.lowered},
                       {"lower_max", p.lower_max}, {"high_lifts", p.high_lifts}, {"high_lift_max", p.high_lift_max},
-                      {"high_lift_at", {p.high_lift_at.x(), p.high_lift_at.y(), p.high_lift_at.z()}}});
+                      {"high_lift_at", {p.high_lift_at.x(), p.high_lift_at.y(), p.high_lift_at.z()}},
+                      {"rest_passes", p.rest_passes}, {"rest_length", p.rest_length}});
     SetupPaths paths;
     for (const SetupProgram& p : programs)
       paths.setups.push_back({p.name, p.file, setups[p.setup].rotation, setups[p.setup].translation, p.linked});
     ctx.set("programs", std::move(paths));
     Report report;
-    report.data = {{"setups", list}};
+    nlohmann::json unreached = nlohmann::json::array();
+    for (const auto& p : rest_result.unreached_at) unreached.push_back({p.x(), p.y(), p.z()});
+    report.data = {{"setups", list},
+                   {"rest",
+                    {{"rounds", rest_result.rounds},
+                     {"spacing", rest_result.spacing},
+                     {"measured_area", rest_result.measured_area},
+                     {"left_area_before", rest_result.left_area_before},
+                     {"left_area_after", rest_result.left_area_after},
+                     {"unreached_area", rest_result.unreached_area},
+                     {"unreached_at", unreached}}}};
     ctx.set("report", std::move(report));
   };
   return d;

@@ -245,12 +245,9 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
     return i >= 0 && j >= 0 && i < nu && j < nu && inside[std::size_t(j) * nu + std::size_t(i)];
   };
 
-  std::vector<double> lengths;
   double cut_length = 0;
-  for (const auto& s : feed) lengths.push_back((s.b - s.a).norm()), cut_length += lengths.back();
-  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() * 9 / 10, lengths.end());
-  const double piece = std::clamp(lengths[lengths.size() * 9 / 10], spacing, std::max(spacing, r / 2));
-  CentreIndex index(feed, piece);
+  for (const auto& s : feed) cut_length += (s.b - s.a).norm();
+  CentreIndex index(feed, centre_piece_length(feed, spacing, r));
 
   Simulation res;
   res.spacing = spacing;

@@ -19,6 +19,7 @@
 #include <utility>
 
 #include "nodes/mesh/mesh_distance.h"
+#include "nodes/post/part_samples.h"
 
 namespace scallop {
 namespace {
@@ -26,71 +27,11 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kPi = 3.14159265358979323846;
 
-// A triangle of the part (a polygon fanned from its first corner) with its polygon.
-struct Triangle {
-  Eigen::Vector3d a, b, c, n;  // n: outward unit normal
-  std::uint32_t face;
-  std::array<std::uint32_t, 3> corner;  // a, b, c's vertex indices
-};
-
-// The point of another mesh with the same faces (moved vertices V) at p's place in t: the same
-// barycentric coordinates.
-Eigen::Vector3d same_place(const Triangle& t, const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& V) {
-  const Eigen::Vector3d e1 = t.b - t.a, e2 = t.c - t.a, q = p - t.a;
-  const double d11 = e1.dot(e1), d12 = e1.dot(e2), d22 = e2.dot(e2), q1 = q.dot(e1), q2 = q.dot(e2);
-  const double det = d11 * d22 - d12 * d12;
-  const double u = (d22 * q1 - d12 * q2) / det, v = (d11 * q2 - d12 * q1) / det;
-  return (1 - u - v) * V[t.corner[0]] + u * V[t.corner[1]] + v * V[t.corner[2]];
-}
-
-std::vector<Triangle> triangles_of(const Mesh& m) {
-  std::vector<Triangle> out;
-  for (std::size_t f = 0; f < m.num_faces(); ++f)
-    for (std::size_t k = 1; k + 1 < m.face_size(f); ++k) {
-      Triangle t{m.vertices[m.face(f)[0]], m.vertices[m.face(f)[k]], m.vertices[m.face(f)[k + 1]], {}, std::uint32_t(f),
-                 {m.face(f)[0], m.face(f)[k], m.face(f)[k + 1]}};
-      const Eigen::Vector3d n = (t.b - t.a).cross(t.c - t.a);
-      if (!(n.norm() > 0)) continue;  // a degenerate triangle stands for no area
-      t.n = n.normalized();
-      out.push_back(t);
-    }
-  return out;
-}
-
-int subdivisions(const Triangle& t, double spacing) {
-  const double longest = std::max({(t.b - t.a).norm(), (t.c - t.b).norm(), (t.a - t.c).norm()});
-  return std::max(1, static_cast<int>(std::ceil(longest / (1.5 * spacing))));
-}
-
-struct Sample {
-  Eigen::Vector3d p;
-  double weight;
-  std::uint32_t tri;
-};
-
-// n² centroids of the triangle cut into n² equal ones, each standing for 1/n² of its area.
-void sample_triangle(const Triangle& t, std::uint32_t index, int n, std::vector<Sample>& out) {
-  const double w = 0.5 * (t.b - t.a).cross(t.c - t.a).norm() / (double(n) * n);
-  const Eigen::Vector3d du = (t.b - t.a) / n, dv = (t.c - t.a) / n;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; i + j < n; ++j) {
-      out.push_back({t.a + (i + 1.0 / 3) * du + (j + 1.0 / 3) * dv, w, index});
-      if (i + j + 1 < n) out.push_back({t.a + (i + 2.0 / 3) * du + (j + 2.0 / 3) * dv, w, index});
-    }
-}
-
-bool in_triangle(const Triangle& t, const Eigen::Vector3d& p) {
-  const Eigen::Vector3d e[3] = {t.b - t.a, t.c - t.b, t.a - t.c}, v[3] = {t.a, t.b, t.c};
-  for (int k = 0; k < 3; ++k)
-    if (e[k].cross(p - v[k]).dot(t.n) < 0) return false;
-  return true;
-}
-
 // Border edges and edges whose two faces' normals differ by more than `angle`, as segments.
-std::vector<CentreSegment> edges_to_keep_off(const Mesh& m, const std::vector<Triangle>& tris, double angle) {
+std::vector<CentreSegment> edges_to_keep_off(const Mesh& m, const std::vector<PartTriangle>& tris, double angle) {
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<Eigen::Vector3d>> normals;
   std::vector<Eigen::Vector3d> face_normal(m.num_faces(), Eigen::Vector3d::Zero());
-  for (const Triangle& t : tris) face_normal[t.face] += t.n;
+  for (const PartTriangle& t : tris) face_normal[t.face] += t.n;
   for (std::size_t f = 0; f < m.num_faces(); ++f) {
     const std::size_t k = m.face_size(f);
     for (std::size_t i = 0; i < k; ++i) {
@@ -151,7 +92,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     feed_setup.insert(feed_setup.end(), setups[s].feed.size(), std::uint32_t(s));
   }
   if (feed.empty()) throw std::invalid_argument("no setup has a feed move");
-  const std::vector<Triangle> tris = triangles_of(part);
+  const std::vector<PartTriangle> tris = part_triangles(part);
   if (tris.empty()) throw std::invalid_argument("the part's mesh has no face with an area");
   const double tol = std::max(o.chord, 1e-3);
   const double nominal = std::sqrt(8 * r * H);
@@ -159,17 +100,8 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   const double T = 20 * H;
 
   // Spacing: raised until the samples fit max_samples.
-  double spacing = o.spacing > 0 ? o.spacing : nominal / 8;
-  auto count_at = [&](double s) {
-    std::size_t c = 0;
-    for (const Triangle& t : tris) c += std::size_t(subdivisions(t, s)) * subdivisions(t, s);
-    return c;
-  };
-  if (o.spacing <= 0)
-    for (int it = 0; it < 40 && count_at(spacing) > o.max_samples; ++it) spacing *= 1.15;
-  std::vector<Sample> samples;
-  samples.reserve(count_at(spacing));
-  for (std::size_t i = 0; i < tris.size(); ++i) sample_triangle(tris[i], std::uint32_t(i), subdivisions(tris[i], spacing), samples);
+  const double spacing = o.spacing > 0 ? o.spacing : part_sample_spacing(tris, nominal / 8, o.max_samples);
+  std::vector<PartSample> samples = sample_part(tris, spacing);
   if (progress) progress(0.05);
 
   const MeshDistance distance(part);
@@ -180,19 +112,14 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   const std::unique_ptr<const MeshDistance> outer_distance = outer ? std::make_unique<const MeshDistance>(*outer) : nullptr;
   const MeshDistance& gouge_distance = outer ? *outer_distance : distance;  // what balls must stay off
   const CentreIndex keep_off(edges_to_keep_off(part, tris, o.feature_angle), std::max(spacing, margin / 2));
-  std::vector<double> lengths;
-  for (const auto& s : feed) lengths.push_back((s.b - s.a).norm());
-  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() * 9 / 10, lengths.end());
-  const double piece = std::clamp(lengths[lengths.size() * 9 / 10], spacing, std::max(spacing, r / 2));
-  const CentreIndex centres(feed, piece);
+  const CentreIndex centres(feed, centre_piece_length(feed, spacing, r));
 
   // Classify and trace every sample: 0 measured, 1 base, 2 unreachable.
   const bool has_base = o.base_normal.norm() > 0;
   const Eigen::Vector3d base_n = has_base ? Eigen::Vector3d(o.base_normal.normalized()) : Eigen::Vector3d::Zero();
   const double cos_base = std::cos(o.base_angle * kPi / 180);
-  // The sample itself is within `radius` of the centre: the search starts from it.
   auto reaches = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& n, double radius) {
-    return distance(p + radius * n, p) >= radius - tol;
+    return ball_reaches(distance, p, n, radius, tol);
   };
   struct Traced {
     int kind = 0;
@@ -202,7 +129,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   };
   std::vector<Traced> traced(samples.size());
   std::atomic<std::size_t> done{0};
-  auto trace_one = [&](const Sample& s, Traced& out, std::vector<std::uint32_t>& cand) {
+  auto trace_one = [&](const PartSample& s, Traced& out, std::vector<std::uint32_t>& cand) {
     const Eigen::Vector3d& n = tris[s.tri].n;
     if (has_base && n.dot(base_n) >= cos_base) {
       out.kind = 1;
@@ -261,20 +188,20 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
     if (seeds.empty()) break;
     const int m = 4;  // (2m+1)² points per seed
-    std::vector<Sample> extra(seeds.size() * (2 * m + 1) * (2 * m + 1));
+    std::vector<PartSample> extra(seeds.size() * (2 * m + 1) * (2 * m + 1));
     std::vector<Traced> extra_traced(extra.size());
     std::vector<std::uint8_t> valid(extra.size(), 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size()), [&](const tbb::blocked_range<std::size_t>& rg) {
       std::vector<std::uint32_t> cand;
       for (std::size_t si = rg.begin(); si < rg.end(); ++si) {
-        const Sample seed = samples[seeds[si]];
-        const Triangle& t = tris[seed.tri];
+        const PartSample seed = samples[seeds[si]];
+        const PartTriangle& t = tris[seed.tri];
         const Eigen::Vector3d e1 = (t.b - t.a).normalized(), e2 = t.n.cross(e1);
         for (int a = -m; a <= m; ++a)
           for (int b = -m; b <= m; ++b) {
             const std::size_t slot = (si * (2 * m + 1) + (a + m)) * (2 * m + 1) + (b + m);
             const Eigen::Vector3d p = seed.p + level.second * spacing * (a * e1 + b * e2) / m;
-            if (!in_triangle(t, p)) continue;
+            if (!in_part_triangle(t, p)) continue;
             extra[slot] = {p, 0, seed.tri};
             trace_one(extra[slot], extra_traced[slot], cand);
             if (no_interior) extra_traced[slot].interior = true;
@@ -356,7 +283,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   std::vector<std::pair<double, double>> all, inner;
   std::size_t n_measured = 0, n_interior = 0;
   for (std::size_t i = 0; i < samples.size(); ++i) {
-    const Sample& s = samples[i];
+    const PartSample& s = samples[i];
     const Traced& t = traced[i];
     const bool grid = i < n_grid;
     if (grid) {

@@ -2,6 +2,7 @@
 #include <stdexcept>
 
 #include "engine/node.h"
+#include "nodes/mesh/setup_base.h"
 #include "nodes/post/simulate_part.h"
 #include "nodes/types/document.h"
 #include "nodes/types/mesh.h"
@@ -51,11 +52,11 @@ NodeDecl make_simulate_part_node() {
     o.base_angle = ctx.number("base_angle");
     o.feature_angle = ctx.number("feature_angle");
     if (ctx.has_input("base")) {
-      const auto& b = ctx.input<Report>("base")->data;
-      const auto it = b.find("base_direction");
-      if (it == b.end() || !it->is_array() || it->size() != 3)
-        throw NodeError("the input 'base' has no base_direction [x, y, z]: give mesh.setup_base's report");
-      o.base_normal = {(*it)[0].get<double>(), (*it)[1].get<double>(), (*it)[2].get<double>()};
+      try {
+        o.base_normal = base_direction_of(ctx.input<Report>("base")->data);
+      } catch (const std::invalid_argument& e) {
+        throw NodeError(e.what());
+      }
     }
     if (programs->setups.empty()) throw NodeError("the input 'programs' has no setup");
     std::vector<PartSetupCut> cuts;

@@ -1,0 +1,252 @@
+#include "nodes/post/rest_passes.h"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+#include <utility>
+
+#include "nodes/mesh/mesh_distance.h"
+#include "nodes/path/step_size.h"
+#include "nodes/post/centre_index.h"
+#include "nodes/post/keep_off_part.h"
+#include "nodes/post/part_samples.h"
+
+namespace scallop {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The ball-centre segments of a setup's passes (machine frame), taken back to the part's frame.
+void part_frame_centres(const Setup& s, const std::vector<ToolpathPass>& passes, double r,
+                        std::vector<CentreSegment>& out) {
+  for (const ToolpathPass& p : passes) {
+    Eigen::Vector3d prev;
+    for (std::size_t k = 0; k < p.contact.size(); ++k) {
+      const Eigen::Vector3d c = s.rotation.transpose() * (p.contact[k] + r * p.normal[k] - s.translation);
+      if (k > 0 || p.contact.size() == 1) out.push_back({k > 0 ? prev : c, c});
+      prev = c;
+    }
+  }
+}
+
+// The material over each sample left by the cut (NaN: uncut), traced as post.simulate_part does.
+void trace_left(const std::vector<PartSample>& samples, const std::vector<PartTriangle>& tris,
+                const std::vector<std::uint32_t>& which, const std::vector<CentreSegment>& feed, double spacing,
+                double r, double T, std::vector<double>& scallop) {
+  if (feed.empty()) return;
+  const CentreIndex index(feed, centre_piece_length(feed, spacing, r));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, which.size(), 256), [&](const auto& range) {
+    std::vector<std::uint32_t> scratch;
+    for (std::size_t k = range.begin(); k < range.end(); ++k) {
+      const PartSample& s = samples[which[k]];
+      double gouge = 0, left = std::numeric_limits<double>::quiet_NaN();
+      index.trace(s.p, tris[s.tri].n, r, T, 0, gouge, left, scratch);
+      double& old = scallop[which[k]];
+      if (std::isnan(old) || (!std::isnan(left) && left < old)) old = left;
+    }
+  });
+}
+
+}  // namespace
+
+RestResult add_rest_passes(const Mesh& part, const std::vector<Setup>& setups, std::vector<Toolpath>& cuts,
+                           const RestOptions& o) {
+  const double r = o.tool_radius, H = o.scallop;
+  if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
+  if (!(H > 0) || !(H < r)) throw std::invalid_argument("the scallop limit must be > 0 and below the tool radius");
+  if (cuts.size() != setups.size()) throw std::invalid_argument("one cut per setup is needed");
+  RestResult res;
+  res.passes.assign(setups.size(), 0);
+  res.length.assign(setups.size(), 0);
+  const std::vector<PartTriangle> tris = part_triangles(part);
+  if (o.rounds <= 0 || tris.empty() || setups.empty()) return res;
+  const double tol_reach = std::max(o.chord, 1e-3);                 // verify_part.py's
+  const double tol_keep = part_clearance_tolerance(o.chord);        // how near balls are kept
+  const double nominal = std::sqrt(8 * r * H), T = 20 * H, limit = 0.8 * H;
+  res.spacing = part_sample_spacing(tris, nominal / 6, o.max_samples);
+  std::vector<PartSample> samples = sample_part(tris, res.spacing);
+  const MeshDistance distance(part);
+
+  // Samples measured (not base, reachable) and what the setups' own passes leave there.
+  const bool has_base = o.base_normal.norm() > 0;
+  const Eigen::Vector3d base_n = has_base ? Eigen::Vector3d(o.base_normal.normalized()) : Eigen::Vector3d::Zero();
+  const double cos_base = std::cos(o.base_angle * kPi / 180);
+  std::vector<char> measured(samples.size(), 0);
+  tbb::parallel_for(std::size_t(0), samples.size(), [&](std::size_t i) {
+    const Eigen::Vector3d& n = tris[samples[i].tri].n;
+    measured[i] = !(has_base && n.dot(base_n) >= cos_base) && ball_reaches(distance, samples[i].p, n, r, tol_reach);
+  });
+  std::vector<std::uint32_t> left;
+  for (std::size_t i = 0; i < samples.size(); ++i)
+    if (measured[i]) left.push_back(std::uint32_t(i)), res.measured_area += samples[i].weight;
+  std::vector<double> scallop(samples.size(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<CentreSegment> feed;
+  for (std::size_t s = 0; s < setups.size(); ++s) part_frame_centres(setups[s], cuts[s].passes, r, feed);
+  trace_left(samples, tris, left, feed, res.spacing, r, T, scallop);
+  // Between samples the material may stand higher than at them (a cusp's crest between two rows
+  // falls off about as fast as the rows are apart over r): around every sample over 3/4 h, a 5 x 5
+  // grid a fifth of the spacing apart (in its triangle) is traced too, sharing its area.
+  {
+    std::vector<PartSample> extra;
+    for (std::uint32_t i : left) {
+      if (!(std::isnan(scallop[i]) || scallop[i] > 0.65 * H)) continue;
+      const PartSample& seed = samples[i];
+      const PartTriangle& t = tris[seed.tri];
+      const Eigen::Vector3d e1 = (t.b - t.a).normalized(), e2 = t.n.cross(e1);
+      const std::size_t from = extra.size();
+      for (int a = -2; a <= 2; ++a)
+        for (int b = -2; b <= 2; ++b) {
+          const Eigen::Vector3d p = seed.p + res.spacing * (a * e1 + b * e2) / 5;
+          if ((a != 0 || b != 0) && in_part_triangle(t, p)) extra.push_back({p, 0, seed.tri});
+        }
+      const double share = seed.weight / double(extra.size() - from + 1);
+      samples[i].weight = share;
+      for (std::size_t k = from; k < extra.size(); ++k) extra[k].weight = share;
+    }
+    std::vector<std::uint32_t> which(extra.size());
+    std::iota(which.begin(), which.end(), std::uint32_t(samples.size()));
+    samples.insert(samples.end(), extra.begin(), extra.end());
+    scallop.resize(samples.size(), std::numeric_limits<double>::quiet_NaN());
+    trace_left(samples, tris, which, feed, res.spacing, r, T, scallop);
+    left.insert(left.end(), which.begin(), which.end());
+  }
+  auto still_left = [&](std::uint32_t i) { return std::isnan(scallop[i]) || scallop[i] > limit; };
+  auto area_of = [&](const std::vector<std::uint32_t>& list) {
+    double a = 0;
+    for (std::uint32_t i : list) a += samples[i].weight;
+    return a;
+  };
+  left.erase(std::remove_if(left.begin(), left.end(), [&](std::uint32_t i) { return !still_left(i); }), left.end());
+  res.left_area_before = area_of(left);
+
+  // Each left place's setup: the largest n . a whose axis comes down to it clear of the part.
+  std::vector<Eigen::Vector3d> axis(setups.size());
+  std::vector<double> highest(setups.size(), -INFINITY);  // the part's highest point along each axis
+  for (std::size_t s = 0; s < setups.size(); ++s) {
+    axis[s] = setups[s].rotation.row(2).transpose();  // the machine's +z in the part's frame
+    for (const auto& v : part.vertices) highest[s] = std::max(highest[s], v.dot(axis[s]));
+  }
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> setup_of(left.size(), kNone);
+  tbb::parallel_for(std::size_t(0), left.size(), [&](std::size_t k) {
+    const PartSample& sample = samples[left[k]];
+    const Eigen::Vector3d& n = tris[sample.tri].n;
+    const Eigen::Vector3d c = sample.p + r * n;
+    std::vector<std::pair<double, std::uint32_t>> order;
+    for (std::size_t s = 0; s < setups.size(); ++s)
+      if (n.dot(axis[s]) >= o.min_normal_dot) order.emplace_back(-n.dot(axis[s]), std::uint32_t(s));
+    std::sort(order.begin(), order.end());
+    for (const auto& [dot, s] : order) {
+      const Eigen::Vector3d top = c + (highest[s] - c.dot(axis[s]) + r + 1) * axis[s];
+      Eigen::Vector3d where;
+      std::size_t evaluations = 0;
+      if (distance.least_along(c, top, r / 4, r - tol_keep, 1e-4, where, evaluations, false) >= r - tol_keep) {
+        setup_of[k] = s;
+        break;
+      }
+    }
+  });
+
+  for (int round = 0; round < o.rounds && !left.empty(); ++round) {
+    std::vector<CentreSegment> added;
+    for (std::size_t s = 0; s < setups.size(); ++s) {
+      const Setup& setup = setups[s];
+      std::vector<Eigen::Vector3d> targets;  // ball centres, machine frame
+      double least_nz = 1;
+      for (std::size_t k = 0; k < left.size(); ++k) {
+        if (setup_of[k] != s || !still_left(left[k])) continue;
+        const PartSample& sample = samples[left[k]];
+        const Eigen::Vector3d n = setup.rotation * tris[sample.tri].n;
+        targets.push_back(setup.rotation * sample.p + setup.translation + r * n);
+        least_nz = std::min(least_nz, n.z());
+      }
+      if (targets.empty()) continue;
+      const double pitch = 0.9 * nominal * std::max(0.25, least_nz) / double(1 << round);
+      const double step = std::min(pitch, std::sqrt(8 * r * tol_keep));
+      // The raster's cells within a pitch of a target's centre.
+      std::vector<std::pair<long, long>> cells;  // (row, column)
+      for (const Eigen::Vector3d& c : targets)
+        for (long j = long(std::ceil((c.y() - pitch) / pitch)); j <= long(std::floor((c.y() + pitch) / pitch)); ++j)
+          for (long i = long(std::ceil((c.x() - pitch - step) / step)); i <= long(std::floor((c.x() + pitch + step) / step));
+               ++i)
+            cells.emplace_back(j, i);
+      std::sort(cells.begin(), cells.end());
+      cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+
+      Mesh placed = part;
+      for (auto& v : placed.vertices) v = setup.rotation * v + setup.translation;
+      double top_z = -INFINITY, bottom_z = INFINITY;
+      for (const auto& v : placed.vertices) top_z = std::max(top_z, v.z()), bottom_z = std::min(bottom_z, v.z());
+      const MeshDistance placed_distance(placed);
+      // Each cell's ball dropped from above the part; kept where it touches the part.
+      std::vector<Eigen::Vector3d> centre(cells.size());
+      std::vector<char> touches(cells.size(), 0);
+      tbb::parallel_for(std::size_t(0), cells.size(), [&](std::size_t q) {
+        Eigen::Vector3d c(cells[q].second * step, cells[q].first * pitch, top_z + r + 1);
+        drop_onto(c, placed_distance, r, top_z - bottom_z + 2 * r + 2, 400);
+        centre[q] = c;
+        touches[q] = std::abs(placed_distance(c) - r) <= 1e-3;
+      });
+      Toolpath rest;
+      rest.tool_radius = r, rest.scallop_height = H, rest.chord_error = o.chord, rest.pattern = "rest";
+      for (std::size_t q = 0; q < cells.size();) {
+        std::size_t end = q + 1;  // a run of neighbouring cells of one row
+        while (end < cells.size() && cells[end].first == cells[q].first && cells[end].second == cells[end - 1].second + 1)
+          ++end;
+        ToolpathPass pass;
+        for (std::size_t k = q; k <= end; ++k) {
+          if (k < end && touches[k]) {
+            const Eigen::Vector3d contact = placed_distance.closest_point(centre[k]);
+            const Eigen::Vector3d n = (centre[k] - contact).normalized();
+            if (n.allFinite()) {
+              pass.contact.push_back(centre[k] - r * n), pass.normal.push_back(n);
+              continue;
+            }
+          }
+          if (!pass.contact.empty()) {
+            if (cells[q].first % 2 != 0) {  // every other row the other way: a zig-zag
+              std::reverse(pass.contact.begin(), pass.contact.end());
+              std::reverse(pass.normal.begin(), pass.normal.end());
+            }
+            rest.passes.push_back(std::move(pass));
+            pass = ToolpathPass();
+          }
+        }
+        q = end;
+      }
+      if (rest.passes.empty()) continue;
+      keep_off_part(rest, {}, placed_distance, top_z, tol_keep);
+      res.passes[s] += rest.passes.size();
+      const std::size_t from = added.size();
+      part_frame_centres(setup, rest.passes, r, added);
+      for (std::size_t k = from; k < added.size(); ++k) res.length[s] += (added[k].b - added[k].a).norm();
+      for (auto& p : rest.passes) cuts[s].passes.push_back(std::move(p));
+    }
+    if (added.empty()) break;
+    ++res.rounds;
+    const double before = area_of(left);
+    trace_left(samples, tris, left, added, res.spacing, r, T, scallop);
+    std::vector<std::uint32_t> kept, kept_setup;
+    for (std::size_t k = 0; k < left.size(); ++k)
+      if (still_left(left[k])) kept.push_back(left[k]), kept_setup.push_back(setup_of[k]);
+    left.swap(kept), setup_of.swap(kept_setup);
+    if (area_of(left) > 0.9 * before) break;
+  }
+  res.left_area_after = area_of(left);
+  for (std::size_t k = 0; k < left.size(); ++k) {
+    if (setup_of[k] != kNone) continue;
+    res.unreached_area += samples[left[k]].weight;
+    const Eigen::Vector3d& p = samples[left[k]].p;
+    if (res.unreached_at.size() < 10 &&
+        std::none_of(res.unreached_at.begin(), res.unreached_at.end(), [&](const auto& q) { return (q - p).norm() < 2 * r; }))
+      res.unreached_at.push_back(p);
+  }
+  return res;
+}
+
+}  // namespace scallop
