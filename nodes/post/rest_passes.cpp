@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -54,7 +55,7 @@ void trace_left(const std::vector<PartSample>& samples, const std::vector<PartTr
 
 }  // namespace
 
-RestResult add_rest_passes(const Mesh& part, const std::vector<Setup>& setups, std::vector<Toolpath>& cuts,
+RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::vector<Toolpath>& cuts,
                            const RestOptions& o) {
   const double r = o.tool_radius, H = o.scallop;
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
@@ -125,32 +126,83 @@ RestResult add_rest_passes(const Mesh& part, const std::vector<Setup>& setups, s
   res.left_area_before = area_of(left);
 
   // Each left place's setup: the largest n . a whose axis comes down to it clear of the part.
-  std::vector<Eigen::Vector3d> axis(setups.size());
-  std::vector<double> highest(setups.size(), -INFINITY);  // the part's highest point along each axis
-  for (std::size_t s = 0; s < setups.size(); ++s) {
-    axis[s] = setups[s].rotation.row(2).transpose();  // the machine's +z in the part's frame
-    for (const auto& v : part.vertices) highest[s] = std::max(highest[s], v.dot(axis[s]));
-  }
+  std::vector<Eigen::Vector3d> axis;
+  std::vector<double> highest;  // the part's highest point along each axis
+  auto add_axis = [&](const Eigen::Vector3d& a) {
+    axis.push_back(a);
+    highest.push_back(-INFINITY);
+    for (const auto& v : part.vertices) highest.back() = std::max(highest.back(), v.dot(a));
+  };
+  for (const Setup& s : setups) add_axis(s.rotation.row(2).transpose());  // the machine's +z in the part's frame
+  // Whether the ball tangent at left place k goes straight up along axis s clear of the part.
+  auto comes_down = [&](std::size_t k, std::size_t s) {
+    const PartSample& sample = samples[left[k]];
+    const Eigen::Vector3d& n = tris[sample.tri].n;
+    if (!(n.dot(axis[s]) >= o.min_normal_dot)) return false;
+    const Eigen::Vector3d c = sample.p + r * n;
+    const Eigen::Vector3d top = c + (highest[s] - c.dot(axis[s]) + r + 1) * axis[s];
+    Eigen::Vector3d where;
+    std::size_t evaluations = 0;
+    return distance.least_along(c, top, r / 4, r - tol_keep, 1e-4, where, evaluations, false) >= r - tol_keep;
+  };
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> setup_of(left.size(), kNone);
   tbb::parallel_for(std::size_t(0), left.size(), [&](std::size_t k) {
-    const PartSample& sample = samples[left[k]];
-    const Eigen::Vector3d& n = tris[sample.tri].n;
-    const Eigen::Vector3d c = sample.p + r * n;
+    const Eigen::Vector3d& n = tris[samples[left[k]].tri].n;
     std::vector<std::pair<double, std::uint32_t>> order;
-    for (std::size_t s = 0; s < setups.size(); ++s)
-      if (n.dot(axis[s]) >= o.min_normal_dot) order.emplace_back(-n.dot(axis[s]), std::uint32_t(s));
+    for (std::size_t s = 0; s < setups.size(); ++s) order.emplace_back(-n.dot(axis[s]), std::uint32_t(s));
     std::sort(order.begin(), order.end());
-    for (const auto& [dot, s] : order) {
-      const Eigen::Vector3d top = c + (highest[s] - c.dot(axis[s]) + r + 1) * axis[s];
-      Eigen::Vector3d where;
-      std::size_t evaluations = 0;
-      if (distance.least_along(c, top, r / 4, r - tol_keep, 1e-4, where, evaluations, false) >= r - tol_keep) {
+    for (const auto& [dot, s] : order)
+      if (comes_down(k, s)) {
         setup_of[k] = s;
         break;
       }
-    }
   });
+  // Places no setup comes down to: new clampings, each along the direction of a 2000-point
+  // lattice over the sphere that comes down to the most of them (counted on up to 200 of them,
+  // among directions within 60 degrees of their normals), while one comes down to any.
+  const std::vector<Eigen::Vector3d> lattice = sphere_lattice(2000);
+  for (int added = 0; added < o.max_new_setups; ++added) {
+    std::vector<std::size_t> unreached;
+    for (std::size_t k = 0; k < left.size(); ++k)
+      if (setup_of[k] == kNone) unreached.push_back(k);
+    if (unreached.empty()) break;
+    std::vector<std::size_t> probe;
+    for (std::size_t q = 0; q < 200 && q < unreached.size(); ++q) probe.push_back(unreached[q * unreached.size() / std::min<std::size_t>(200, unreached.size())]);
+    const std::size_t first_axis = axis.size();
+    for (const auto& a : lattice) add_axis(a);
+    std::vector<std::pair<std::size_t, double>> score(lattice.size(), {0, 0.0});  // places, their sum of n . a
+    tbb::parallel_for(std::size_t(0), lattice.size(), [&](std::size_t d) {
+      for (std::size_t k : probe) {
+        const double dot = tris[samples[left[k]].tri].n.dot(lattice[d]);
+        if (dot >= 0.5 && comes_down(k, first_axis + d)) ++score[d].first, score[d].second += dot;
+      }
+    });
+    const std::size_t best = std::max_element(score.begin(), score.end()) - score.begin();
+    axis.resize(first_axis), highest.resize(first_axis);
+    if (score[best].first == 0) break;
+    Setup s;
+    s.axis = lattice[best];
+    s.rotation = rotation_to_z(s.axis);
+    // Placed as surface.setups places a setup: the part's box centred in x and y, its lowest point at z = 0.
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+    for (const auto& v : part.vertices) lo = lo.cwiseMin(s.rotation * v), hi = hi.cwiseMax(s.rotation * v);
+    s.translation = Eigen::Vector3d(-(lo.x() + hi.x()) / 2, -(lo.y() + hi.y()) / 2, -lo.z());
+    char name[96];
+    std::snprintf(name, sizeof name, "%zu: rest (%.3f, %.3f, %.3f)", setups.size() + 1, s.axis.x(), s.axis.y(), s.axis.z());
+    s.name = name;
+    s.min_normal_dot = 0.5;
+    setups.push_back(s);
+    Toolpath cut;
+    cut.tool_radius = r, cut.scallop_height = H, cut.chord_error = o.chord, cut.pattern = "rest";
+    cuts.push_back(cut);
+    res.passes.push_back(0), res.length.push_back(0);
+    add_axis(s.axis);
+    ++res.new_setups;
+    tbb::parallel_for(std::size_t(0), unreached.size(), [&](std::size_t q) {
+      if (comes_down(unreached[q], setups.size() - 1)) setup_of[unreached[q]] = std::uint32_t(setups.size() - 1);
+    });
+  }
 
   for (int round = 0; round < o.rounds && !left.empty(); ++round) {
     std::vector<CentreSegment> added;

@@ -15,7 +15,9 @@
 // along -z from above the part until it touches it (the drop-cutter: it touches nothing else),
 // and the rows are kept off the part like every pass (keep_off_part.h). What is left is traced
 // again against the new passes; up to `rounds` rounds, the pitch halved each time, while the left
-// area falls by a tenth or more.
+// area falls by a tenth or more. Places no setup comes down to get a clamping of their own (up to
+// max_new_setups), along the direction that comes down to the most of them, if one does; what is
+// left after that is reported (unreached).
 #pragma once
 
 #include <Eigen/Core>
@@ -37,12 +39,15 @@ struct RestOptions {
   int rounds = 3;                  // 0: no rest passes
   double min_normal_dot = 0.05;    // the steepest place a setup is asked to reach
   std::size_t max_samples = 1000000;
+  int max_new_setups = 2;          // clampings added for places no setup comes down to
 };
 
 struct RestResult {
   std::vector<std::size_t> passes;   // per setup, rest passes added (after keeping them off the part)
   std::vector<double> length;        // per setup, their ball centres' length (mm)
   int rounds = 0;                    // rounds made
+  std::size_t new_setups = 0;        // clampings added (the last ones of `setups`)
+  std::vector<Setup> added_setups;   // post.setup_programs: those clampings
   double spacing = 0;                // the samples' spacing (mm)
   double measured_area = 0;          // mm²: not base, reachable
   double left_area_before = 0;       // mm² left over 0.85 h (or uncut) by the setups' own passes
@@ -52,11 +57,11 @@ struct RestResult {
 };
 
 // part    the whole part in its own frame, faces outward (closed or open)
-// setups  the clampings (rotation, translation; axis in the part frame)
+// setups  the clampings (rotation, translation; axis in the part frame); new ones are appended
 // cuts    per setup, its passes in its machine frame, already kept off the part; the rest passes
-//         are appended to them (machine frame, kept off the part)
+//         are appended to them (machine frame, kept off the part), and a cut per new setup
 // Throws std::invalid_argument for r <= 0, h <= 0, h >= r, or cuts and setups of different counts.
-RestResult add_rest_passes(const Mesh& part, const std::vector<Setup>& setups, std::vector<Toolpath>& cuts,
+RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::vector<Toolpath>& cuts,
                            const RestOptions& options);
 
 }  // namespace scallop

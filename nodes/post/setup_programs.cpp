@@ -66,20 +66,25 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     prog.high_lift_at = s.rotation.transpose() * (kept.high_at - s.translation);  // to the part's frame
   }
 
-  // What they leave, cut again from the setups that reach it.
+  // What they leave, cut again from the setups that reach it (and from new ones).
+  std::vector<Setup> all;
   if (rest && rest->rounds > 0 && part.num_faces() > 0) {
     RestOptions o = *rest;
     o.tool_radius = path.tool_radius, o.scallop = path.scallop_height, o.chord = path.chord_error;
-    RestResult result = add_rest_passes(part, setups, cuts, o);
-    for (std::size_t index = 0; index < setups.size(); ++index)
+    all.assign(setups.begin(), setups.end());
+    RestResult result = add_rest_passes(part, all, cuts, o);
+    progs.resize(all.size());
+    for (std::size_t index = 0; index < all.size(); ++index)
       progs[index].rest_passes = result.passes[index], progs[index].rest_length = result.length[index];
+    result.added_setups.assign(all.begin() + std::ptrdiff_t(setups.size()), all.end());
     if (rest_result) *rest_result = std::move(result);
   }
 
   // Linked and written.
+  if (all.empty()) all = setups;
   std::vector<SetupProgram> out;
-  for (std::size_t index = 0; index < setups.size(); ++index) {
-    const Setup& s = setups[index];
+  for (std::size_t index = 0; index < all.size(); ++index) {
+    const Setup& s = all[index];
     Toolpath& local = cuts[index];
     // Every ball left out (no clear way to any of them; an ABC plate's noisy cloud had such a
     // clamping, and linking nothing stopped the whole part): no program for this setup.

@@ -60,7 +60,9 @@ struct SetupProgram {
 //               steep), so that it touches the part and leaves no such stock
 // rest          where given (and rest->rounds > 0), what the passes leave over the scallop limit
 //               is cut again from the setups that reach it (rest_passes.h; tool, h and e from
-//               `path`), and rest_result gets what was found
+//               `path`; places no setup comes down to may get setups of their own, numbered
+//               after `setups`: SetupProgram::setup indexes setups then rest_result->added_setups),
+//               and rest_result gets what was found
 // Returns one program per setup that cuts anything (a setup none of whose balls could be kept off
 // the part gets none). Throws std::invalid_argument when the counts
 // do not add up; link_passes' and write_gcode's errors pass through.

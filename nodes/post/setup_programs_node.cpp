@@ -20,6 +20,7 @@ struct SetupProgramsOptions {
   double feed = 1000, plunge_feed = 300, spindle_rpm = 10000;
   double safety = 5;
   int rest_rounds = 3;
+  int rest_setups = 2;
   double base_angle = 10;
 };
 }  // namespace
@@ -27,7 +28,7 @@ struct SetupProgramsOptions {
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 10;  // 10: rest passes where the others leave material; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
+  d.version = 10;  // 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
                   // 3: moves and links kept off the part's faces exactly (MeshDistance::least_along)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), linked "
@@ -47,7 +48,7 @@ NodeDecl make_setup_programs_node() {
               "positions left out there), lowered (ball positions lowered onto the part where the patch's surface "
               "stands above it), lower_max (mm), high_lifts (planned ball positions lifted more than the tool's radius: "
               "from this setup the part is in the way there), high_lift_max (mm), high_lift_at (its planned contact, "
-              "part frame), rest_passes (passes added where the others left material), rest_length (mm)}], rest: {rounds, "
+              "part frame), rest_passes (passes added where the others left material), rest_length (mm)}], rest: {rounds, new_setups (clampings added for places no other setup's axis comes down to), "
               "spacing, measured_area, left_area_before (mm² the setups' own passes leave over 0.85 h or uncut, by the "
               "rest search's samples), left_area_after, unreached_area (left where no setup's axis comes down clear), "
               "unreached_at [[x, y, z], ...] (part frame)}}")
@@ -64,6 +65,9 @@ NodeDecl make_setup_programs_node() {
                "rounds of rest passes: what every setup's passes leave over the scallop limit is found on the part "
                "and cut again by a raster of balls dropped onto it, from the setup whose axis reaches it best, the "
                "raster finer each round; 0: none")
+      .integer("rest_setups", &SetupProgramsOptions::rest_setups, 0, 10, "",
+               "clampings the rest passes may add for places no setup's axis comes down to (each along the direction "
+               "that comes down to the most of them); 0: such places are left as stock and reported")
       .number("base_angle", &SetupProgramsOptions::base_angle, 0, 90, "deg",
               "faces within this of the base direction are on the table");
   d.run = [](NodeContext& ctx) {
@@ -86,6 +90,7 @@ NodeDecl make_setup_programs_node() {
     g.dialect = o.dialect, g.feed = o.feed, g.plunge_feed = o.plunge_feed, g.spindle_rpm = o.spindle_rpm;
     RestOptions rest;
     rest.rounds = o.rest_rounds;
+    rest.max_new_setups = o.rest_setups;
     rest.base_angle = o.base_angle;
     if (ctx.has_input("base")) {
       try {
@@ -103,6 +108,7 @@ NodeDecl make_setup_programs_node() {
     } catch (const std::exception& e) {
       throw NodeError(std::string("post.setup_programs: ") + e.what());
     }
+    setups.insert(setups.end(), rest_result.added_setups.begin(), rest_result.added_setups.end());
     const nlohmann::json file = setups_file(programs, setups);
     std::vector<std::pair<std::string, std::string>> beside;
     for (const SetupProgram& p : programs) beside.emplace_back(p.file, p.gcode);
@@ -127,6 +133,9 @@ NodeDecl make_setup_programs_node() {
         ctx.warn("setup '" + p.name + "': " + std::to_string(p.splits) +
                  " moves could not be kept off the part (under an overhang): the passes are cut there and " +
                  std::to_string(p.dropped) + " ball positions left out (stock the certificate counts)");
+    for (const Setup& s : rest_result.added_setups)
+      ctx.warn("setup '" + s.name + "' added: no other setup's axis comes down to places its rest passes cut; one "
+               "more clamping for the machinist (rest_rounds=0 or max_new_setups=0 to leave them as stock)");
     if (rest_result.unreached_area > 0)
       ctx.warn(std::to_string(rest_result.unreached_area) + " mm² of the part is left over the scallop limit where no "
                "setup's axis comes down to it clear of the part (around " +
@@ -150,6 +159,7 @@ NodeDecl make_setup_programs_node() {
     report.data = {{"setups", list},
                    {"rest",
                     {{"rounds", rest_result.rounds},
+                     {"new_setups", rest_result.new_setups},
                      {"spacing", rest_result.spacing},
                      {"measured_area", rest_result.measured_area},
                      {"left_area_before", rest_result.left_area_before},

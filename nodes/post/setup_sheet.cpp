@@ -54,10 +54,20 @@ SetupSheet setup_sheet(const SetupPaths& programs, const std::vector<Setup>& set
         "clamping, Z0 on the table under the part (its lowest point). Cut the setups in this order:\n\n";
   md += "| # | program | turn the part so that this direction points up | patches | moves | cut length (mm) | "
         "clearance Z (mm) |\n|---|---|---|---|---|---|---|\n";
+  // A clamping post.setup_programs added for its rest passes is not in the report: it cuts no
+  // patch of its own, its axis is its part_to_machine's.
+  std::vector<Setup> added(programs.setups.size());
   std::vector<const Setup*> of(programs.setups.size(), nullptr);
   for (std::size_t k = 0; k < programs.setups.size(); ++k) {
     for (const Setup& s : setups)
       if (s.name == programs.setups[k].name) of[k] = &s;
+    if (!of[k] && programs.setups[k].name.find(": rest ") != std::string::npos) {
+      added[k].name = programs.setups[k].name;
+      added[k].rotation = programs.setups[k].rotation;
+      added[k].translation = programs.setups[k].translation;
+      added[k].axis = added[k].rotation.row(2).transpose();
+      of[k] = &added[k];
+    }
     if (!of[k]) throw std::invalid_argument("program '" + programs.setups[k].file + "' is for setup '" +
                                             programs.setups[k].name + "', which the setups report does not have");
   }
@@ -85,11 +95,17 @@ SetupSheet setup_sheet(const SetupPaths& programs, const std::vector<Setup>& set
     for (int r = 0; r < 3; ++r)
       md += std::string(r ? "," : "") + " [" + fixed(s.rotation(r, 0), 4) + ", " + fixed(s.rotation(r, 1), 4) + ", " +
             fixed(s.rotation(r, 2), 4) + " | " + fixed(s.translation[r], 3) + "]";
-    md += ".\n- **Cuts** " + std::to_string(s.patches.size()) + " patch" + (s.patches.size() == 1 ? "" : "es") + " (";
-    for (std::size_t i = 0; i < s.patches.size(); ++i) md += (i ? ", " : "") + std::to_string(s.patches[i]);
-    md += "), steepest surface at " + fixed(std::acos(std::clamp(s.min_normal_dot, -1.0, 1.0)) * 180 / 3.14159265358979, 0) +
-          "° from the tool axis; " + fixed(cut_length(p.path), 0) + " mm of cut; rapids at Z " +
-          fixed(p.path.clearance_z, 2) + ".\n";
+    if (s.patches.empty()) {
+      md += ".\n- **Cuts** only what the other setups leave (rest passes, no patch of its own); " +
+            fixed(cut_length(p.path), 0) + " mm of cut; rapids at Z " + fixed(p.path.clearance_z, 2) + ".\n";
+    } else {
+      md += ".\n- **Cuts** " + std::to_string(s.patches.size()) + " patch" + (s.patches.size() == 1 ? "" : "es") + " (";
+      for (std::size_t i = 0; i < s.patches.size(); ++i) md += (i ? ", " : "") + std::to_string(s.patches[i]);
+      md += "), steepest surface at " +
+            fixed(std::acos(std::clamp(s.min_normal_dot, -1.0, 1.0)) * 180 / 3.14159265358979, 0) +
+            "° from the tool axis; " + fixed(cut_length(p.path), 0) + " mm of cut; rapids at Z " +
+            fixed(p.path.clearance_z, 2) + ".\n";
+    }
     if (certificate && certificate->contains("setups"))
       for (const auto& c : (*certificate)["setups"])
         if (c.value("name", "") == p.name)

@@ -29,16 +29,6 @@ std::string axis_name(const Eigen::Vector3d& a) {
   return buf;
 }
 
-// n directions spread evenly over the sphere (a Fibonacci lattice).
-std::vector<Eigen::Vector3d> sphere_lattice(int n) {
-  std::vector<Eigen::Vector3d> out;
-  for (int k = 0; k < n; ++k) {
-    const double z = 1 - (2 * k + 1.0) / n, rho = std::sqrt(1 - z * z), phi = k * M_PI * (3 - std::sqrt(5.0));
-    out.emplace_back(rho * std::cos(phi), rho * std::sin(phi), z);
-  }
-  return out;
-}
-
 double smallest_dot(const std::vector<Eigen::Vector3d>& normals, const Eigen::Vector3d& a) {
   double m = std::numeric_limits<double>::infinity();
   for (const auto& n : normals) m = std::min(m, n.dot(a));
@@ -53,6 +43,15 @@ nlohmann::json hidden_patches_report(const std::vector<HiddenPatch>& hidden) {
 }
 
 }  // namespace
+
+std::vector<Eigen::Vector3d> sphere_lattice(int n) {
+  std::vector<Eigen::Vector3d> out;
+  for (int k = 0; k < n; ++k) {
+    const double z = 1 - (2 * k + 1.0) / n, rho = std::sqrt(1 - z * z), phi = k * M_PI * (3 - std::sqrt(5.0));
+    out.emplace_back(rho * std::cos(phi), rho * std::sin(phi), z);
+  }
+  return out;
+}
 
 Eigen::Matrix3d rotation_to_z(const Eigen::Vector3d& a) {
   const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();

@@ -90,6 +90,9 @@ nlohmann::json part_to_machine(const Setup& setup);
 nlohmann::json setups_report(const std::vector<Setup>& setups);
 std::vector<Setup> setups_from_report(const nlohmann::json& report, std::size_t patches);
 
+// n directions spread evenly over the sphere (a Fibonacci lattice).
+std::vector<Eigen::Vector3d> sphere_lattice(int n);
+
 // The smallest rotation taking unit vector a to +z (a half turn about x for a = -z).
 Eigen::Matrix3d rotation_to_z(const Eigen::Vector3d& a);
 

@@ -70,7 +70,7 @@ RestOptions options() {
 
 TEST(RestPasses, AHalfCutPlateIsFinishedByRestPassesWithinH) {
   const Mesh part = plate();
-  const std::vector<scallop::Setup> setups = {setup_along(V(0, 0, 1))};
+  std::vector<scallop::Setup> setups = {setup_along(V(0, 0, 1))};
   std::vector<Toolpath> cuts = {half_cut()};
   const std::size_t before = cuts[0].passes.size();
   const RestResult res = add_rest_passes(part, setups, cuts, options());
@@ -113,14 +113,36 @@ TEST(RestPasses, AHalfCutPlateIsFinishedByRestPassesWithinH) {
   EXPECT_NEAR(half.report["uncut_fraction"].get<double>(), (10 - 1.26) / 20, 0.01);
 }
 
-TEST(RestPasses, APlaceNoSetupComesDownToIsReportedUnreached) {
+TEST(RestPasses, APlaceNoSetupComesDownToGetsAClampingOfItsOwn) {
   // The plate faces +z; the only clamping comes down along -z, from under it.
   const Mesh part = plate();
-  const std::vector<scallop::Setup> setups = {setup_along(V(0, 0, -1))};
+  std::vector<scallop::Setup> setups = {setup_along(V(0, 0, -1))};
   std::vector<Toolpath> cuts(1);
   cuts[0].tool_radius = kR, cuts[0].scallop_height = kH, cuts[0].chord_error = kE;
-  const RestResult res = add_rest_passes(part, setups, cuts, options());
+  RestOptions o = options();
+  o.scallop = 0.1;  // a coarser raster: the whole plate is cut by it
+  const RestResult res = add_rest_passes(part, setups, cuts, o);
   EXPECT_NEAR(res.left_area_before, 400, 1e-6);  // uncut everywhere
+  EXPECT_EQ(res.new_setups, 1u);
+  ASSERT_EQ(setups.size(), 2u);
+  ASSERT_EQ(cuts.size(), 2u);
+  EXPECT_GT(setups[1].axis.z(), 0.999);  // the lattice's direction nearest +z
+  EXPECT_EQ(setups[1].name.substr(0, 9), "2: rest (");
+  EXPECT_NEAR((setups[1].rotation * setups[1].axis - V(0, 0, 1)).norm(), 0, 1e-12);
+  EXPECT_EQ(res.passes[0], 0u);
+  EXPECT_GT(res.passes[1], 0u);
+  EXPECT_EQ(res.left_area_after, 0);
+  EXPECT_EQ(res.unreached_area, 0);
+}
+
+TEST(RestPasses, APlaceNoSetupComesDownToIsReportedUnreachedWithoutNewClampings) {
+  const Mesh part = plate();
+  std::vector<scallop::Setup> setups = {setup_along(V(0, 0, -1))};
+  std::vector<Toolpath> cuts(1);
+  cuts[0].tool_radius = kR, cuts[0].scallop_height = kH, cuts[0].chord_error = kE;
+  RestOptions o = options();
+  o.max_new_setups = 0;
+  const RestResult res = add_rest_passes(part, setups, cuts, o);
   EXPECT_NEAR(res.left_area_after, 400, 1e-6);
   EXPECT_NEAR(res.unreached_area, 400, 1e-6);
   ASSERT_FALSE(res.unreached_at.empty());
@@ -130,16 +152,18 @@ TEST(RestPasses, APlaceNoSetupComesDownToIsReportedUnreached) {
       EXPECT_GE((res.unreached_at[a] - res.unreached_at[b]).norm(), 2 * kR);
   EXPECT_EQ(res.passes[0], 0u);
   EXPECT_TRUE(cuts[0].passes.empty());
+  EXPECT_EQ(setups.size(), 1u);
 }
 
 TEST(RestPasses, BadToolOrCountsAreRefused) {
   const Mesh part = plate();
+  std::vector<scallop::Setup> setups = {setup_along(V(0, 0, 1))};
   std::vector<Toolpath> cuts(1);
   RestOptions o = options();
   o.scallop = 3;  // above r
-  EXPECT_THROW(add_rest_passes(part, std::vector<scallop::Setup>{setup_along(V(0, 0, 1))}, cuts, o), std::invalid_argument);
+  EXPECT_THROW(add_rest_passes(part, setups, cuts, o), std::invalid_argument);
   std::vector<Toolpath> two(2);
-  EXPECT_THROW(add_rest_passes(part, std::vector<scallop::Setup>{setup_along(V(0, 0, 1))}, two, options()), std::invalid_argument);
+  EXPECT_THROW(add_rest_passes(part, setups, two, options()), std::invalid_argument);
 }
 
 }  // namespace
