@@ -92,6 +92,8 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
   // Between samples the material may stand higher than at them (a cusp's crest between two rows
   // falls off about as fast as the rows are apart over r): around every sample over 3/4 h, a 5 x 5
   // grid a fifth of the spacing apart (in its triangle) is traced too, sharing its area.
+  std::vector<std::uint32_t> root(samples.size());  // a refinement sample's seed; the others themselves
+  std::iota(root.begin(), root.end(), std::uint32_t(0));
   {
     std::vector<PartSample> extra;
     for (std::uint32_t i : left) {
@@ -103,7 +105,7 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
       for (int a = -2; a <= 2; ++a)
         for (int b = -2; b <= 2; ++b) {
           const Eigen::Vector3d p = seed.p + res.spacing * (a * e1 + b * e2) / 5;
-          if ((a != 0 || b != 0) && in_part_triangle(t, p)) extra.push_back({p, 0, seed.tri});
+          if ((a != 0 || b != 0) && in_part_triangle(t, p)) extra.push_back({p, 0, seed.tri}), root.push_back(i);
         }
       const double share = seed.weight / double(extra.size() - from + 1);
       samples[i].weight = share;
@@ -125,7 +127,8 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
   left.erase(std::remove_if(left.begin(), left.end(), [&](std::uint32_t i) { return !still_left(i); }), left.end());
   res.left_area_before = area_of(left);
 
-  // Each left place's setup: the largest n . a whose axis comes down to it clear of the part.
+  // Each left place's setup: the largest n . a whose axis comes down to it clear of the part,
+  // found for the grid's samples (a refinement sample takes its seed's).
   std::vector<Eigen::Vector3d> axis;
   std::vector<double> highest;  // the part's highest point along each axis
   auto add_axis = [&](const Eigen::Vector3d& a) {
@@ -134,48 +137,57 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
     for (const auto& v : part.vertices) highest.back() = std::max(highest.back(), v.dot(a));
   };
   for (const Setup& s : setups) add_axis(s.rotation.row(2).transpose());  // the machine's +z in the part's frame
-  // Whether the ball tangent at left place k goes straight up along axis s clear of the part.
-  auto comes_down = [&](std::size_t k, std::size_t s) {
-    const PartSample& sample = samples[left[k]];
-    const Eigen::Vector3d& n = tris[sample.tri].n;
+  // Whether the ball tangent at sample i goes straight up along axis s clear of the part.
+  auto comes_down = [&](std::uint32_t i, std::size_t s) {
+    const Eigen::Vector3d& n = tris[samples[i].tri].n;
     if (!(n.dot(axis[s]) >= o.min_normal_dot)) return false;
-    const Eigen::Vector3d c = sample.p + r * n;
+    const Eigen::Vector3d c = samples[i].p + r * n;
+    if (std::isfinite(distance.ray_distance(c, axis[s]))) return false;  // its centre line meets the part
     const Eigen::Vector3d top = c + (highest[s] - c.dot(axis[s]) + r + 1) * axis[s];
     Eigen::Vector3d where;
     std::size_t evaluations = 0;
     return distance.least_along(c, top, r / 4, r - tol_keep, 1e-4, where, evaluations, false) >= r - tol_keep;
   };
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-  std::vector<std::uint32_t> setup_of(left.size(), kNone);
-  tbb::parallel_for(std::size_t(0), left.size(), [&](std::size_t k) {
-    const Eigen::Vector3d& n = tris[samples[left[k]].tri].n;
+  std::vector<std::uint32_t> roots;
+  for (std::uint32_t i : left) roots.push_back(root[i]);
+  std::sort(roots.begin(), roots.end());
+  roots.erase(std::unique(roots.begin(), roots.end()), roots.end());
+  // setup_at: the setup that comes down clear; nearest: the setup facing it best (n . a >= 0.5),
+  // whose rows a place no setup comes down to gets, as near as the ball goes.
+  std::vector<std::uint32_t> setup_at(samples.size(), kNone), nearest(samples.size(), kNone);
+  tbb::parallel_for(std::size_t(0), roots.size(), [&](std::size_t q) {
+    const std::uint32_t i = roots[q];
+    const Eigen::Vector3d& n = tris[samples[i].tri].n;
     std::vector<std::pair<double, std::uint32_t>> order;
     for (std::size_t s = 0; s < setups.size(); ++s) order.emplace_back(-n.dot(axis[s]), std::uint32_t(s));
     std::sort(order.begin(), order.end());
+    if (!order.empty() && -order.front().first >= 0.5) nearest[i] = order.front().second;
     for (const auto& [dot, s] : order)
-      if (comes_down(k, s)) {
-        setup_of[k] = s;
+      if (comes_down(i, s)) {
+        setup_at[i] = s;
         break;
       }
   });
   // Places no setup comes down to: new clampings, each along the direction of a 2000-point
-  // lattice over the sphere that comes down to the most of them (counted on up to 200 of them,
+  // lattice over the sphere that comes down to the most of them (counted on up to 64 of them,
   // among directions within 60 degrees of their normals), while one comes down to any.
   const std::vector<Eigen::Vector3d> lattice = sphere_lattice(2000);
   for (int added = 0; added < o.max_new_setups; ++added) {
-    std::vector<std::size_t> unreached;
-    for (std::size_t k = 0; k < left.size(); ++k)
-      if (setup_of[k] == kNone) unreached.push_back(k);
+    std::vector<std::uint32_t> unreached;
+    for (std::uint32_t i : roots)
+      if (setup_at[i] == kNone) unreached.push_back(i);
     if (unreached.empty()) break;
-    std::vector<std::size_t> probe;
-    for (std::size_t q = 0; q < 200 && q < unreached.size(); ++q) probe.push_back(unreached[q * unreached.size() / std::min<std::size_t>(200, unreached.size())]);
+    std::vector<std::uint32_t> probe;
+    const std::size_t probes = std::min<std::size_t>(64, unreached.size());
+    for (std::size_t q = 0; q < probes; ++q) probe.push_back(unreached[q * unreached.size() / probes]);
     const std::size_t first_axis = axis.size();
     for (const auto& a : lattice) add_axis(a);
     std::vector<std::pair<std::size_t, double>> score(lattice.size(), {0, 0.0});  // places, their sum of n . a
     tbb::parallel_for(std::size_t(0), lattice.size(), [&](std::size_t d) {
-      for (std::size_t k : probe) {
-        const double dot = tris[samples[left[k]].tri].n.dot(lattice[d]);
-        if (dot >= 0.5 && comes_down(k, first_axis + d)) ++score[d].first, score[d].second += dot;
+      for (std::uint32_t i : probe) {
+        const double dot = tris[samples[i].tri].n.dot(lattice[d]);
+        if (dot >= 0.5 && comes_down(i, first_axis + d)) ++score[d].first, score[d].second += dot;
       }
     });
     const std::size_t best = std::max_element(score.begin(), score.end()) - score.begin();
@@ -200,8 +212,13 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
     add_axis(s.axis);
     ++res.new_setups;
     tbb::parallel_for(std::size_t(0), unreached.size(), [&](std::size_t q) {
-      if (comes_down(unreached[q], setups.size() - 1)) setup_of[unreached[q]] = std::uint32_t(setups.size() - 1);
+      if (comes_down(unreached[q], setups.size() - 1)) setup_at[unreached[q]] = std::uint32_t(setups.size() - 1);
     });
+  }
+  std::vector<std::uint32_t> setup_of(left.size());
+  for (std::size_t k = 0; k < left.size(); ++k) {
+    const std::uint32_t i = root[left[k]];
+    setup_of[k] = setup_at[i] != kNone ? setup_at[i] : nearest[i];
   }
 
   for (int round = 0; round < o.rounds && !left.empty(); ++round) {
@@ -290,10 +307,10 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
     if (area_of(left) > 0.9 * before) break;
   }
   res.left_area_after = area_of(left);
-  for (std::size_t k = 0; k < left.size(); ++k) {
-    if (setup_of[k] != kNone) continue;
-    res.unreached_area += samples[left[k]].weight;
-    const Eigen::Vector3d& p = samples[left[k]].p;
+  for (std::uint32_t i : left) {
+    if (setup_at[root[i]] != kNone) continue;
+    res.unreached_area += samples[i].weight;
+    const Eigen::Vector3d& p = samples[i].p;
     if (res.unreached_at.size() < 10 &&
         std::none_of(res.unreached_at.begin(), res.unreached_at.end(), [&](const auto& q) { return (q - p).norm() < 2 * r; }))
       res.unreached_at.push_back(p);

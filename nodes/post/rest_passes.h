@@ -8,7 +8,8 @@
 // traced too, since a cusp's crest may pass between samples). Each left place goes to the setup whose axis a makes the largest n . a (at least
 // min_normal_dot) among those from which the ball tangent there goes straight up along a, r -
 // tolerance clear of the part (tolerance = part_clearance_tolerance(e)): a 3-axis tool comes down
-// that way. In that setup's machine frame a raster of balls covers the left places' ball centres:
+// that way (a refinement sample takes its seed's setup). A place none comes down to goes to the
+// setup facing it best (n . a >= 0.5), whose rows come as near as the ball goes. In that setup's machine frame a raster of balls covers the left places' ball centres:
 // rows along x, `pitch` apart in y (0.9 sqrt(8 r h) times the smallest n_z of those places, at
 // least a quarter of it), balls sqrt(8 r tolerance) apart along a row (the sagitta of a ball's
 // path over a sharp convex edge, radius r, is then at most the tolerance); each ball comes down

@@ -62,6 +62,13 @@ PartSetupCut part_frame_cut(const Setup& s, const Toolpath& t) {
   return cut;
 }
 
+// One setup's cut with no pass.
+std::vector<Toolpath> no_cut() {
+  std::vector<Toolpath> cuts(1);
+  cuts[0].tool_radius = kR, cuts[0].scallop_height = kH, cuts[0].chord_error = kE;
+  return cuts;
+}
+
 RestOptions options() {
   RestOptions o;
   o.tool_radius = kR, o.scallop = kH, o.chord = kE;
@@ -117,8 +124,7 @@ TEST(RestPasses, APlaceNoSetupComesDownToGetsAClampingOfItsOwn) {
   // The plate faces +z; the only clamping comes down along -z, from under it.
   const Mesh part = plate();
   std::vector<scallop::Setup> setups = {setup_along(V(0, 0, -1))};
-  std::vector<Toolpath> cuts(1);
-  cuts[0].tool_radius = kR, cuts[0].scallop_height = kH, cuts[0].chord_error = kE;
+  std::vector<Toolpath> cuts = no_cut();
   RestOptions o = options();
   o.scallop = 0.1;  // a coarser raster: the whole plate is cut by it
   const RestResult res = add_rest_passes(part, setups, cuts, o);
@@ -138,8 +144,7 @@ TEST(RestPasses, APlaceNoSetupComesDownToGetsAClampingOfItsOwn) {
 TEST(RestPasses, APlaceNoSetupComesDownToIsReportedUnreachedWithoutNewClampings) {
   const Mesh part = plate();
   std::vector<scallop::Setup> setups = {setup_along(V(0, 0, -1))};
-  std::vector<Toolpath> cuts(1);
-  cuts[0].tool_radius = kR, cuts[0].scallop_height = kH, cuts[0].chord_error = kE;
+  std::vector<Toolpath> cuts = no_cut();
   RestOptions o = options();
   o.max_new_setups = 0;
   const RestResult res = add_rest_passes(part, setups, cuts, o);
