@@ -4,8 +4,8 @@
 // The places are found as post.simulate_part finds them (part_samples.h, CentreIndex::trace): a
 // sample is left when the ball tangent there reaches it (verify_part.py's test), it is not on the
 // base, and the material over it is more than 0.85 h (the samples are coarser than the
-// certificate's: around each sample over 3/4 h a 5 x 5 grid a fifth of the spacing apart is
-// traced too, since a cusp's crest may pass between samples). Each left place goes to the setup whose axis a makes the largest n . a (at least
+// certificate's: around each sample over 0.65 h, and the 3000 highest of the others, a 5 x 5 grid
+// a fifth of the spacing apart is traced too, since a cusp's crest may pass between samples). Each left place goes to the setup whose axis a makes the largest n . a (at least
 // min_normal_dot) among those from which the ball tangent there goes straight up along a, r -
 // tolerance clear of the part (tolerance = part_clearance_tolerance(e)): a 3-axis tool comes down
 // that way (a refinement sample takes its seed's setup). A place none comes down to goes to the
