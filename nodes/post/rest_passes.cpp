@@ -98,14 +98,16 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
     std::vector<std::uint32_t> seeds;
     for (std::uint32_t i : left)
       if (std::isnan(scallop[i]) || scallop[i] > 0.65 * H) seeds.push_back(i);
-    // ... and around the 3000 highest of the others, as the certificate refines its highest.
+    // ... and around the highest of the others (3000, or 1 % of them on a large part), as the
+    // certificate refines its highest.
     std::vector<std::uint32_t> others;
     for (std::uint32_t i : left)
       if (!(std::isnan(scallop[i]) || scallop[i] > 0.65 * H)) others.push_back(i);
-    if (others.size() > 3000) {
-      std::nth_element(others.begin(), others.begin() + 3000, others.end(),
+    const std::size_t highest_others = std::max<std::size_t>(3000, others.size() / 100);
+    if (others.size() > highest_others) {
+      std::nth_element(others.begin(), others.begin() + std::ptrdiff_t(highest_others), others.end(),
                        [&](std::uint32_t a, std::uint32_t b) { return scallop[a] > scallop[b]; });
-      others.resize(3000);
+      others.resize(highest_others);
     }
     seeds.insert(seeds.end(), others.begin(), others.end());
     std::vector<PartSample> extra;

@@ -4,7 +4,7 @@
 // The places are found as post.simulate_part finds them (part_samples.h, CentreIndex::trace): a
 // sample is left when the ball tangent there reaches it (verify_part.py's test), it is not on the
 // base, and the material over it is more than 0.85 h (the samples are coarser than the
-// certificate's: around each sample over 0.65 h, and the 3000 highest of the others, a 5 x 5 grid
+// certificate's: around each sample over 0.65 h, and the highest of the others (3000 or 1 %), a 5 x 5 grid
 // a fifth of the spacing apart is traced too, since a cusp's crest may pass between samples). Each left place goes to the setup whose axis a makes the largest n . a (at least
 // min_normal_dot) among those from which the ball tangent there goes straight up along a, r -
 // tolerance clear of the part (tolerance = part_clearance_tolerance(e)): a 3-axis tool comes down
@@ -39,7 +39,7 @@ struct RestOptions {
   double base_angle = 10;          // degrees
   int rounds = 3;                  // 0: no rest passes
   double min_normal_dot = 0.05;    // the steepest place a setup is asked to reach
-  std::size_t max_samples = 1000000;
+  std::size_t max_samples = 1500000;  // as the certificate's
   int max_new_setups = 2;          // clampings added for places no setup comes down to
 };
 
