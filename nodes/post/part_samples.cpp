@@ -20,14 +20,45 @@ std::vector<PartTriangle> part_triangles(const Mesh& m) {
   return out;
 }
 
-int part_subdivisions(const PartTriangle& t, double spacing) {
-  const double longest = std::max({(t.b - t.a).norm(), (t.c - t.b).norm(), (t.a - t.c).norm()});
-  return std::max(1, static_cast<int>(std::ceil(longest / (1.5 * spacing))));
+namespace {
+
+// The triangle as its longest edge (from `from`, along `edge`, length L) and the apex.
+struct Strips {
+  Eigen::Vector3d from, to, apex;
+  double length, height;
+};
+
+Strips strips_of(const PartTriangle& t) {
+  const Eigen::Vector3d v[3] = {t.a, t.b, t.c};
+  int k = 0;
+  double longest = -1;
+  for (int e = 0; e < 3; ++e)
+    if (const double l = (v[(e + 1) % 3] - v[e]).norm(); l > longest) longest = l, k = e;
+  const Eigen::Vector3d& p0 = v[k];
+  const Eigen::Vector3d& p1 = v[(k + 1) % 3];
+  const Eigen::Vector3d& q = v[(k + 2) % 3];
+  return {p0, p1, q, longest, (p1 - p0).cross(q - p0).norm() / longest};
 }
+
+int strip_count(const Strips& s, double spacing) {
+  return std::max(1, static_cast<int>(std::ceil(s.height / spacing)));
+}
+
+// Points on strip i's mid-line: the width there over the spacing, at least one.
+int strip_points(const Strips& s, int strips, int i, double spacing) {
+  const double t = (i + 0.5) / strips;
+  return std::max(1, static_cast<int>(std::ceil(s.length * (1 - t) / spacing)));
+}
+
+}  // namespace
 
 std::size_t part_sample_count(const std::vector<PartTriangle>& tris, double spacing) {
   std::size_t c = 0;
-  for (const PartTriangle& t : tris) c += std::size_t(part_subdivisions(t, spacing)) * part_subdivisions(t, spacing);
+  for (const PartTriangle& t : tris) {
+    const Strips s = strips_of(t);
+    const int k = strip_count(s, spacing);
+    for (int i = 0; i < k; ++i) c += std::size_t(strip_points(s, k, i, spacing));
+  }
   return c;
 }
 
@@ -39,17 +70,21 @@ double part_sample_spacing(const std::vector<PartTriangle>& tris, double spacing
 std::vector<PartSample> sample_part(const std::vector<PartTriangle>& tris, double spacing) {
   std::vector<PartSample> out;
   out.reserve(part_sample_count(tris, spacing));
-  for (std::size_t i = 0; i < tris.size(); ++i) {
-    // n² centroids of the triangle cut into n² equal ones, each standing for 1/n² of its area.
-    const PartTriangle& t = tris[i];
-    const int n = part_subdivisions(t, spacing);
-    const double w = 0.5 * (t.b - t.a).cross(t.c - t.a).norm() / (double(n) * n);
-    const Eigen::Vector3d du = (t.b - t.a) / n, dv = (t.c - t.a) / n;
-    for (int a = 0; a < n; ++a)
-      for (int b = 0; a + b < n; ++b) {
-        out.push_back({t.a + (a + 1.0 / 3) * du + (b + 1.0 / 3) * dv, w, std::uint32_t(i)});
-        if (a + b + 1 < n) out.push_back({t.a + (a + 2.0 / 3) * du + (b + 2.0 / 3) * dv, w, std::uint32_t(i)});
-      }
+  for (std::size_t index = 0; index < tris.size(); ++index) {
+    const PartTriangle& t = tris[index];
+    const Strips s = strips_of(t);
+    const double area = 0.5 * (t.b - t.a).cross(t.c - t.a).norm();
+    const int k = strip_count(s, spacing);
+    for (int i = 0; i < k; ++i) {
+      // The strip between heights i / k and (i + 1) / k of the way to the apex, its area a
+      // difference of the similar triangles above its two sides.
+      const double t0 = double(i) / k, t1 = double(i + 1) / k, tm = (i + 0.5) / k;
+      const double strip_area = area * ((1 - t0) * (1 - t0) - (1 - t1) * (1 - t1));
+      const Eigen::Vector3d m0 = s.from + tm * (s.apex - s.from), m1 = s.to + tm * (s.apex - s.to);
+      const int m = strip_points(s, k, i, spacing);
+      for (int j = 0; j < m; ++j)
+        out.push_back({m0 + (j + 0.5) / m * (m1 - m0), strip_area / m, std::uint32_t(index)});
+    }
   }
   return out;
 }

@@ -3,9 +3,9 @@
 // ../shared/tools/verify_part.py (README there), so that the product's verdict and that judge's
 // can be compared number for number.
 //
-// Samples: every face of the mesh (polygons fanned from their first corner) is cut into n² equal
-// triangles, n = ceil(longest edge / (1.5 spacing)) (about spacing² each on a well-shaped
-// triangle), one sample at each centroid standing for its area; the normal is the face's, outward (corners counter-clockwise seen from outside).
+// Samples: every face of the mesh in strips parallel to its longest edge, about one sample per
+// spacing² of area, each standing for its share (part_samples.h, as verify_part.py samples);
+// normals the faces', outward (corners counter-clockwise seen from outside).
 // - base: samples whose normal is within base_angle of base_normal sit on the table: not measured.
 // - unreachable: a ball of radius r tangent at p (centre p + r n) comes nearer than r - tol to
 //   the part elsewhere: not measured; reported with the largest radius that would reach it.
