@@ -167,8 +167,11 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
 
   // Local refinement around the highest scallops, inside their own triangles (verify_part.py's
   // levels: seeds, half-width / spacing; a cusp's slope makes the maximum's error linear in the
-  // finest step, spacing / 1024).
-  const std::pair<int, double> levels[] = {{1000, 1.0}, {100, 0.25}, {30, 1.0 / 16}, {10, 1.0 / 64}, {10, 1.0 / 256}};
+  // finest step, spacing / 1024). The first level seeds from the highest 1 % where that is more
+  // than the judge's 1000: after rest passes many crests stand near the top, and on the ABC plate
+  // the judge's highest 1000 held one the certificate's did not (0.0178 against 0.0166).
+  const int first_seeds = static_cast<int>(std::max<std::size_t>(1000, n_grid / 100));
+  const std::pair<int, double> levels[] = {{first_seeds, 1.0}, {100, 0.25}, {30, 1.0 / 16}, {10, 1.0 / 64}, {10, 1.0 / 256}};
   for (const auto& level : levels) {
     std::vector<std::size_t> seeds;
     for (bool interior_only : {true, false}) {
