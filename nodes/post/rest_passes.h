@@ -3,22 +3,27 @@
 //
 // The places are found as post.simulate_part finds them (part_samples.h, CentreIndex::trace): a
 // sample is left when the ball tangent there reaches it (verify_part.py's test), it is not on the
-// base, and the material over it is more than 0.85 h (the samples are coarser than the
-// certificate's: around each sample over 0.65 h, and the highest of the others (3000 or 1 %), a 5 x 5 grid
-// a fifth of the spacing apart is traced too, since a cusp's crest may pass between samples). Each left place goes to the setup whose axis a makes the largest n . a (at least
+// base, and the material over it is more than 0.8 h. Around each sample over 0.65 h, and around
+// the highest of the others (3000 or 1 %), a 5 x 5 grid a fifth of the spacing apart is traced
+// too: a cusp's crest may pass between samples.
+//
+// Each left place goes to the setup whose axis a makes the largest n . a (at least
 // min_normal_dot) among those from which the ball tangent there goes straight up along a, r -
 // tolerance clear of the part (tolerance = part_clearance_tolerance(e)): a 3-axis tool comes down
 // that way (a refinement sample takes its seed's setup). A place none comes down to goes to the
-// setup facing it best (n . a >= 0.5), whose rows come as near as the ball goes. In that setup's machine frame a raster of balls covers the left places' ball centres:
-// rows along x, `pitch` apart in y (0.9 sqrt(8 r h) times the smallest n_z of those places, at
-// least a quarter of it), balls sqrt(8 r tolerance) apart along a row (the sagitta of a ball's
-// path over a sharp convex edge, radius r, is then at most the tolerance); each ball comes down
-// along -z from above the part until it touches it (the drop-cutter: it touches nothing else),
-// and the rows are kept off the part like every pass (keep_off_part.h). What is left is traced
-// again against the new passes; up to `rounds` rounds, the pitch halved each time, while the left
-// area falls by a tenth or more. Places no setup comes down to get a clamping of their own (up to
-// max_new_setups), along the direction that comes down to the most of them, if one does; what is
-// left after that is reported (unreached).
+// setup facing it best (n . a >= 0.5), whose rows come as near as the ball goes; and up to
+// max_new_setups new clampings are added, each along the direction of a 2000-point lattice that
+// comes down to the most of such places, while one comes down to any. What is left after that is
+// reported (unreached).
+//
+// In a setup's machine frame a raster of balls covers its left places' ball centres: rows along
+// x, `pitch` apart in y (0.9 sqrt(8 r h) times the smallest n_z of those places, at least a
+// quarter of it), balls sqrt(8 r tolerance) apart along a row (the sagitta of a ball's path over
+// a sharp convex edge, radius r, is then at most the tolerance); each ball comes down along -z
+// from above the part until it touches it (the drop-cutter: it touches nothing else), and the
+// rows are kept off the part like every pass (keep_off_part.h). What is left is traced again
+// against the new passes; up to `rounds` rounds, the pitch halved each time, while the left area
+// falls by a tenth or more.
 #pragma once
 
 #include <Eigen/Core>
@@ -51,7 +56,7 @@ struct RestResult {
   std::vector<Setup> added_setups;   // post.setup_programs: those clampings
   double spacing = 0;                // the samples' spacing (mm)
   double measured_area = 0;          // mm²: not base, reachable
-  double left_area_before = 0;       // mm² left over 0.85 h (or uncut) by the setups' own passes
+  double left_area_before = 0;       // mm² left over 0.8 h (or uncut) by the setups' own passes
   double left_area_after = 0;        // mm² still left after the rest passes
   double unreached_area = 0;         // mm² of that no setup's axis comes down to
   std::vector<Eigen::Vector3d> unreached_at;  // up to 10 such places (part frame), 2 r apart

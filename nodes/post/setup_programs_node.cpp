@@ -31,8 +31,9 @@ NodeDecl make_setup_programs_node() {
   d.version = 10;  // 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
                   // 3: moves and links kept off the part's faces exactly (MeshDistance::least_along)
   d.description =
-      "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), linked "
-      "against the whole part, and the setups file (scallop-setups/1) naming them";
+      "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), kept off "
+      "and linked against the whole part, rest passes where they leave material over the scallop limit, and the "
+      "setups file (scallop-setups/1) naming them";
   d.cache_on_disk = false;  // it writes files
   d.input("toolpath", "Toolpath", "the passes of every patch, patch by patch (path.contour_grid)")
       .input("contours", "Report", "path.contour_grid's report: how many passes each patch has")
@@ -49,7 +50,7 @@ NodeDecl make_setup_programs_node() {
               "stands above it), lower_max (mm), high_lifts (planned ball positions lifted more than the tool's radius: "
               "from this setup the part is in the way there), high_lift_max (mm), high_lift_at (its planned contact, "
               "part frame), rest_passes (passes added where the others left material), rest_length (mm)}], rest: {rounds, new_setups (clampings added for places no other setup's axis comes down to), "
-              "spacing, measured_area, left_area_before (mm² the setups' own passes leave over 0.85 h or uncut, by the "
+              "spacing, measured_area, left_area_before (mm² the setups' own passes leave over 0.8 h or uncut, by the "
               "rest search's samples), left_area_after, unreached_area (left where no setup's axis comes down clear), "
               "unreached_at [[x, y, z], ...] (part frame)}}")
       .param_output_path("path", "the setups file to write, relative to the output folder (-o); the programs "
