@@ -79,6 +79,56 @@ std::vector<double> move_clearances(const std::vector<V>& t, const Mesh& part, d
   return out;
 }
 
+// The box [0, X] x [0, Y] x [0, Z] on its base: top and four sides, a patch each.
+Surfaces box_patches(double X, double Y, double Z) {
+  Surfaces s;
+  s.patches.push_back(test::flat_patch({0, 0, Z}, {X, 0, Z}, {0, Y, Z}, {X, Y, Z}, {0, 0, 1}));
+  s.patches.push_back(test::flat_patch({0, 0, 0}, {0, Y, 0}, {0, 0, Z}, {0, Y, Z}, {-1, 0, 0}));
+  s.patches.push_back(test::flat_patch({X, 0, 0}, {X, Y, 0}, {X, 0, Z}, {X, Y, Z}, {1, 0, 0}));
+  s.patches.push_back(test::flat_patch({0, 0, 0}, {X, 0, 0}, {0, 0, Z}, {X, 0, Z}, {0, -1, 0}));
+  s.patches.push_back(test::flat_patch({0, Y, 0}, {X, Y, 0}, {0, Y, Z}, {X, Y, Z}, {0, 1, 0}));
+  s.base_direction = {0, 0, -1};
+  return s;
+}
+
+// The programs' feed moves as ball centres in the part's frame, read back from their G-code
+// (p = R^T (q - t)).
+std::vector<test::Segment> feed_centres(const std::vector<SetupProgram>& programs,
+                                        const std::vector<scallop::Setup>& setups, double r) {
+  std::vector<test::Segment> moves;
+  for (const SetupProgram& program : programs) {
+    const scallop::Setup& setup = setups[program.setup];
+    std::istringstream in(program.gcode);
+    V at(0, 0, 0), prev(0, 0, 0);
+    bool have = false;
+    for (std::string line; std::getline(in, line);) {
+      const bool feed = line.rfind("G1 ", 0) == 0, rapid = line.rfind("G0 ", 0) == 0;
+      if (!feed && !rapid) continue;
+      for (char axis : {'X', 'Y', 'Z'})
+        if (const auto i = line.find(axis); i != std::string::npos) at[axis - 'X'] = std::stod(line.substr(i + 1));
+      const V centre = setup.rotation.transpose() * (at + V(0, 0, r) - setup.translation);
+      if (feed && have) moves.push_back({prev, centre});
+      prev = centre, have = true;
+    }
+  }
+  return moves;
+}
+
+// The largest scallop the moves leave on a 25 x 25 grid of every patch (sphere tracing along
+// its normal); a place no move reaches counts as what traced_scallop gives it.
+double worst_scallop(const Surfaces& s, const std::vector<test::Segment>& moves, double r) {
+  double worst = 0;
+  for (const auto& sp : s.patches) {
+    const BSplinePatch face(sp.surface, sp.direction);
+    for (int i = 0; i <= 24; ++i)
+      for (int j = 0; j <= 24; ++j) {
+        const SurfaceSample x = face({i / 24.0, j / 24.0});
+        worst = std::max(worst, test::traced_scallop(x.position, x.normal, moves, r));
+      }
+  }
+  return worst;
+}
+
 TEST(SetupPrograms, EachClampingCutsItsPatchFromAboveInItsOwnFrame) {
   const Block b;
   ASSERT_EQ(b.setups.size(), 2u);
@@ -188,13 +238,7 @@ TEST(SetupPrograms, ABoxInFiveClampingsHasEveryFaceButItsBaseCutWithinH) {
   // frame (p = R^T (q - t)), leave at most h on a grid of every face (sphere tracing along the
   // face's normal against the feed moves of all programs).
   const double X = 40, Y = 30, Z = 12, r = 2, h = 0.05;
-  Surfaces s;
-  s.patches.push_back(test::flat_patch({0, 0, Z}, {X, 0, Z}, {0, Y, Z}, {X, Y, Z}, {0, 0, 1}));
-  s.patches.push_back(test::flat_patch({0, 0, 0}, {0, Y, 0}, {0, 0, Z}, {0, Y, Z}, {-1, 0, 0}));
-  s.patches.push_back(test::flat_patch({X, 0, 0}, {X, Y, 0}, {X, 0, Z}, {X, Y, Z}, {1, 0, 0}));
-  s.patches.push_back(test::flat_patch({0, 0, 0}, {X, 0, 0}, {0, 0, Z}, {X, 0, Z}, {0, -1, 0}));
-  s.patches.push_back(test::flat_patch({0, Y, 0}, {X, Y, 0}, {0, Y, Z}, {X, Y, Z}, {0, 1, 0}));
-  s.base_direction = {0, 0, -1};
+  const Surfaces s = box_patches(X, Y, Z);
   const Mesh part = box({0, 0, 0}, {X, Y, Z});
   ContourGridOptions o;
   o.tool_radius = r, o.scallop_height = h, o.chord_error = 0.01;
@@ -210,31 +254,47 @@ TEST(SetupPrograms, ABoxInFiveClampingsHasEveryFaceButItsBaseCutWithinH) {
   ASSERT_EQ(setups.size(), 5u);
   const auto programs = setup_programs(path, counts, setups, part, {}, {});
   ASSERT_EQ(programs.size(), 5u);
-  std::vector<test::Segment> moves;  // feed moves' ball centres, part frame
-  for (std::size_t k = 0; k < 5; ++k) {
-    std::istringstream in(programs[k].gcode);
-    V at(0, 0, 0), prev(0, 0, 0);
-    bool have = false;
-    for (std::string line; std::getline(in, line);) {
-      const bool feed = line.rfind("G1 ", 0) == 0, rapid = line.rfind("G0 ", 0) == 0;
-      if (!feed && !rapid) continue;
-      for (char axis : {'X', 'Y', 'Z'})
-        if (const auto i = line.find(axis); i != std::string::npos) at[axis - 'X'] = std::stod(line.substr(i + 1));
-      const V centre = setups[k].rotation.transpose() * (at + V(0, 0, r) - setups[k].translation);
-      if (feed && have) moves.push_back({prev, centre});
-      prev = centre, have = true;
+  EXPECT_LE(worst_scallop(s, feed_centres(programs, setups, r), r), h * 1.01);
+}
+
+TEST(SetupPrograms, FacesThePassesMissAreCutByRestPasses) {
+  // The box above with passes on its top and two of its sides only: the rest passes cut the
+  // other two sides from their own clampings (which have no pass of their own), within h.
+  const double X = 40, Y = 30, Z = 12, r = 2, h = 0.05;
+  const Surfaces s = box_patches(X, Y, Z);
+  const Mesh part = box({0, 0, 0}, {X, Y, Z});
+  ContourGridOptions o;
+  o.tool_radius = r, o.scallop_height = h, o.chord_error = 0.01;
+  Toolpath path;
+  path.tool_radius = r, path.scallop_height = h, path.chord_error = 0.01;
+  std::vector<std::size_t> counts;
+  for (std::size_t p = 0; p < s.patches.size(); ++p) {
+    if (p >= 3) {
+      counts.push_back(0);
+      continue;
     }
+    const ContourGridResult g = plan_contour_grid(BSplinePatch(s.patches[p].surface, s.patches[p].direction), o);
+    counts.push_back(g.passes.size());
+    path.passes.insert(path.passes.end(), g.passes.begin(), g.passes.end());
   }
-  double worst = 0;
-  for (const auto& sp : s.patches) {
-    const BSplinePatch face(sp.surface, sp.direction);
-    for (int i = 0; i <= 24; ++i)
-      for (int j = 0; j <= 24; ++j) {
-        const SurfaceSample x = face({i / 24.0, j / 24.0});
-        worst = std::max(worst, test::traced_scallop(x.position, x.normal, moves, r));
-      }
-  }
-  EXPECT_LE(worst, h * 1.01);
+  const auto setups = plan_setups(s, part);
+  ASSERT_EQ(setups.size(), 5u);
+  const auto without = setup_programs(path, counts, setups, part, {}, {});
+  EXPECT_EQ(without.size(), 3u);
+  EXPECT_GT(worst_scallop(s, feed_centres(without, setups, r), r), 1.0);  // two sides uncut
+
+  RestOptions rest;
+  rest.base_normal = {0, 0, -1};
+  RestResult found;
+  const auto programs = setup_programs(path, counts, setups, part, {}, {}, {}, &rest, &found);
+  ASSERT_EQ(programs.size(), 5u);
+  EXPECT_EQ(found.new_setups, 0u);
+  EXPECT_NEAR(found.measured_area, X * Y + 2 * (X + Y) * Z, 1e-6);
+  EXPECT_GT(found.left_area_before, 2 * X * Z * 0.9);  // the two sides at least
+  EXPECT_EQ(found.left_area_after, 0);
+  for (const auto& p : programs)
+    if (setups[p.setup].patches.front() >= 3) EXPECT_GT(p.rest_passes, 0u) << p.name;
+  EXPECT_LE(worst_scallop(s, feed_centres(programs, setups, r), r), h * 1.01);
 }
 
 TEST(SetupPrograms, EveryMoveOverRoughGroundKeepsTheBallOffThePart) {
