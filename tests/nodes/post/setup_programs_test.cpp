@@ -91,6 +91,23 @@ Surfaces box_patches(double X, double Y, double Z) {
   return s;
 }
 
+// Contour grids (e = 0.01) on the first `planned` patches, none on the others.
+void plan_patches(const Surfaces& s, double r, double h, std::size_t planned, Toolpath& path,
+                  std::vector<std::size_t>& counts) {
+  ContourGridOptions o;
+  o.tool_radius = r, o.scallop_height = h, o.chord_error = 0.01;
+  path.tool_radius = r, path.scallop_height = h, path.chord_error = 0.01;
+  for (std::size_t p = 0; p < s.patches.size(); ++p) {
+    if (p >= planned) {
+      counts.push_back(0);
+      continue;
+    }
+    const ContourGridResult g = plan_contour_grid(BSplinePatch(s.patches[p].surface, s.patches[p].direction), o);
+    counts.push_back(g.passes.size());
+    path.passes.insert(path.passes.end(), g.passes.begin(), g.passes.end());
+  }
+}
+
 // The programs' feed moves as ball centres in the part's frame, read back from their G-code
 // (p = R^T (q - t)).
 std::vector<test::Segment> feed_centres(const std::vector<SetupProgram>& programs,
@@ -240,16 +257,9 @@ TEST(SetupPrograms, ABoxInFiveClampingsHasEveryFaceButItsBaseCutWithinH) {
   const double X = 40, Y = 30, Z = 12, r = 2, h = 0.05;
   const Surfaces s = box_patches(X, Y, Z);
   const Mesh part = box({0, 0, 0}, {X, Y, Z});
-  ContourGridOptions o;
-  o.tool_radius = r, o.scallop_height = h, o.chord_error = 0.01;
   Toolpath path;
-  path.tool_radius = r, path.scallop_height = h, path.chord_error = 0.01;
   std::vector<std::size_t> counts;
-  for (const auto& sp : s.patches) {
-    const ContourGridResult g = plan_contour_grid(BSplinePatch(sp.surface, sp.direction), o);
-    counts.push_back(g.passes.size());
-    path.passes.insert(path.passes.end(), g.passes.begin(), g.passes.end());
-  }
+  plan_patches(s, r, h, s.patches.size(), path, counts);
   const auto setups = plan_setups(s, part);
   ASSERT_EQ(setups.size(), 5u);
   const auto programs = setup_programs(path, counts, setups, part, {}, {});
@@ -263,20 +273,9 @@ TEST(SetupPrograms, FacesThePassesMissAreCutByRestPasses) {
   const double X = 40, Y = 30, Z = 12, r = 2, h = 0.05;
   const Surfaces s = box_patches(X, Y, Z);
   const Mesh part = box({0, 0, 0}, {X, Y, Z});
-  ContourGridOptions o;
-  o.tool_radius = r, o.scallop_height = h, o.chord_error = 0.01;
   Toolpath path;
-  path.tool_radius = r, path.scallop_height = h, path.chord_error = 0.01;
   std::vector<std::size_t> counts;
-  for (std::size_t p = 0; p < s.patches.size(); ++p) {
-    if (p >= 3) {
-      counts.push_back(0);
-      continue;
-    }
-    const ContourGridResult g = plan_contour_grid(BSplinePatch(s.patches[p].surface, s.patches[p].direction), o);
-    counts.push_back(g.passes.size());
-    path.passes.insert(path.passes.end(), g.passes.begin(), g.passes.end());
-  }
+  plan_patches(s, r, h, 3, path, counts);
   const auto setups = plan_setups(s, part);
   ASSERT_EQ(setups.size(), 5u);
   const auto without = setup_programs(path, counts, setups, part, {}, {});
