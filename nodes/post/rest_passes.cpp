@@ -303,6 +303,20 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
         q = end;
       }
       if (rest.passes.empty()) continue;
+      // A run that starts within two pitches of where the one before it ends (the next row of a
+      // zig-zag) continues it: one pass, not a retract and a plunge per row. The move between
+      // them is kept off the part like any other.
+      std::vector<ToolpathPass> joined;
+      for (ToolpathPass& p : rest.passes) {
+        auto ball = [&](const ToolpathPass& q, std::size_t k) { return Eigen::Vector3d(q.contact[k] + r * q.normal[k]); };
+        if (!joined.empty() && (ball(joined.back(), joined.back().contact.size() - 1) - ball(p, 0)).norm() <= 2 * pitch) {
+          joined.back().contact.insert(joined.back().contact.end(), p.contact.begin(), p.contact.end());
+          joined.back().normal.insert(joined.back().normal.end(), p.normal.begin(), p.normal.end());
+        } else {
+          joined.push_back(std::move(p));
+        }
+      }
+      rest.passes = std::move(joined);
       keep_off_part(rest, {}, placed_distance, top_z, tol_keep);
       res.passes[s] += rest.passes.size();
       const std::size_t from = added.size();
