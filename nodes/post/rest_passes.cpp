@@ -4,11 +4,13 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "nodes/mesh/mesh_distance.h"
@@ -53,6 +55,18 @@ void trace_left(const std::vector<PartSample>& samples, const std::vector<PartTr
   });
 }
 
+// Each face's outward unit normal (Newell's, so a polygon's too; corners counter-clockwise seen
+// from outside).
+std::vector<Eigen::Vector3d> face_normals(const Mesh& m) {
+  std::vector<Eigen::Vector3d> out(m.num_faces(), Eigen::Vector3d::Zero());
+  for (std::size_t f = 0; f < m.num_faces(); ++f) {
+    for (std::size_t i = 0, k = m.face_size(f); i < k; ++i)
+      out[f] += m.vertices[m.face(f)[i]].cross(m.vertices[m.face(f)[(i + 1) % k]]);
+    out[f].normalize();
+  }
+  return out;
+}
+
 }  // namespace
 
 RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::vector<Toolpath>& cuts,
@@ -66,6 +80,7 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
   res.length.assign(setups.size(), 0);
   const std::vector<PartTriangle> tris = part_triangles(part);
   if (o.rounds <= 0 || tris.empty() || setups.empty()) return res;
+
   const double tol_reach = std::max(o.chord, 1e-3);                 // verify_part.py's
   const double tol_keep = part_clearance_tolerance(o.chord);        // how near balls are kept
   const double nominal = std::sqrt(8 * r * H), T = 20 * H, limit = 0.8 * H;
@@ -266,15 +281,24 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
       double top_z = -INFINITY, bottom_z = INFINITY;
       for (const auto& v : placed.vertices) top_z = std::max(top_z, v.z()), bottom_z = std::min(bottom_z, v.z());
       const MeshDistance placed_distance(placed);
-      // Each cell's ball dropped from above the part; kept where it touches the part.
+      const std::vector<Eigen::Vector3d> placed_normal = face_normals(placed);
+      // Each cell's ball dropped from above the part; kept where it touches the part from the
+      // outside of the face it touches (through a hole in the mesh, a ball would fall onto the
+      // inside of the part's far side: a cloud's reconstruction has holes). On an edge the nearest
+      // face may be the one the ball's direction is square to: 0 counts as outside.
       std::vector<Eigen::Vector3d> centre(cells.size());
       std::vector<char> touches(cells.size(), 0);
+      std::atomic<std::size_t> inside_drops{0};
       tbb::parallel_for(std::size_t(0), cells.size(), [&](std::size_t q) {
         Eigen::Vector3d c(cells[q].second * step, cells[q].first * pitch, top_z + r + 1);
         drop_onto(c, placed_distance, r, top_z - bottom_z + 2 * r + 2, 400);
         centre[q] = c;
-        touches[q] = std::abs(placed_distance(c) - r) <= 1e-3;
+        const Eigen::Vector3d contact = placed_distance.closest_point(c);
+        touches[q] = std::abs((c - contact).norm() - r) <= 1e-3 &&
+                     (c - contact).dot(placed_normal[placed_distance.closest_face(c)]) > -1e-6 * r;
+        if (std::abs((c - contact).norm() - r) <= 1e-3 && !touches[q]) ++inside_drops;
       });
+      res.inside_drops += inside_drops;
       Toolpath rest;
       rest.tool_radius = r, rest.scallop_height = H, rest.chord_error = o.chord, rest.pattern = "rest";
       for (std::size_t q = 0; q < cells.size();) {

@@ -23,7 +23,9 @@
 // from above the part until it touches it (the drop-cutter: it touches nothing else), and the
 // rows are kept off the part like every pass (keep_off_part.h). What is left is traced again
 // against the new passes; up to `rounds` rounds, the pitch halved each time, while the left area
-// falls by a tenth or more.
+// falls by a tenth or more. A dropped ball is kept only where it rests on the outside of the face
+// it touches: through a hole in the mesh (a cloud's reconstruction has them) it would fall onto
+// the inside of the part's far side (inside_drops counts those).
 #pragma once
 
 #include <Eigen/Core>
@@ -60,6 +62,7 @@ struct RestResult {
   double left_area_after = 0;        // mm² still left after the rest passes
   double unreached_area = 0;         // mm² of that no setup's axis comes down to
   std::vector<Eigen::Vector3d> unreached_at;  // up to 10 such places (part frame), 2 r apart
+  std::size_t inside_drops = 0;      // balls left out: they came to rest on the inside of a face
 };
 
 // part    the whole part in its own frame, faces outward (closed or open)

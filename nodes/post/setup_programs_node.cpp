@@ -49,7 +49,7 @@ NodeDecl make_setup_programs_node() {
               "positions left out there), lowered (ball positions lowered onto the part where the patch's surface "
               "stands above it), lower_max (mm), high_lifts (planned ball positions lifted more than the tool's radius: "
               "from this setup the part is in the way there), high_lift_max (mm), high_lift_at (its planned contact, "
-              "part frame), rest_passes (passes added where the others left material), rest_length (mm)}], rest: {rounds, new_setups (clampings added for places no other setup's axis comes down to), "
+              "part frame), rest_passes (passes added where the others left material), rest_length (mm)}], rest: {rounds, inside_drops (rest balls left out: they fell through a hole in the mesh onto the inside of a face), new_setups (clampings added for places no other setup's axis comes down to), "
               "spacing, measured_area, left_area_before (mm² the setups' own passes leave over 0.8 h or uncut, by the "
               "rest search's samples), left_area_after, unreached_area (left where no setup's axis comes down clear), "
               "unreached_at [[x, y, z], ...] (part frame)}}")
@@ -134,6 +134,9 @@ NodeDecl make_setup_programs_node() {
         ctx.warn("setup '" + p.name + "': " + std::to_string(p.splits) +
                  " moves could not be kept off the part (under an overhang): the passes are cut there and " +
                  std::to_string(p.dropped) + " ball positions left out (stock the certificate counts)");
+    if (rest_result.inside_drops > 0)
+      ctx.warn(std::to_string(rest_result.inside_drops) + " rest balls came to rest on the inside of a face (through "
+               "a hole in the mesh) and were left out");
     for (const Setup& s : rest_result.added_setups)
       ctx.warn("setup '" + s.name + "' added: no other setup's axis comes down to places its rest passes cut; one "
                "more clamping for the machinist (rest_rounds=0 or max_new_setups=0 to leave them as stock)");
@@ -160,6 +163,7 @@ NodeDecl make_setup_programs_node() {
     report.data = {{"setups", list},
                    {"rest",
                     {{"rounds", rest_result.rounds},
+                     {"inside_drops", rest_result.inside_drops},
                      {"new_setups", rest_result.new_setups},
                      {"spacing", rest_result.spacing},
                      {"measured_area", rest_result.measured_area},

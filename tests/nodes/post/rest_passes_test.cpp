@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 
 #include "nodes/mesh/mesh_distance.h"
@@ -158,6 +160,56 @@ TEST(RestPasses, APlaceNoSetupComesDownToIsReportedUnreachedWithoutNewClampings)
   EXPECT_EQ(res.passes[0], 0u);
   EXPECT_TRUE(cuts[0].passes.empty());
   EXPECT_EQ(setups.size(), 1u);
+}
+
+// A closed 20 x 20 x 10 box but for a 10 x 10 hole in the middle of its top (a 4 x 4 grid of
+// quads, the middle four left out): a 4 mm ball falls through it.
+Mesh box_with_a_hole_in_its_top() {
+  Mesh m;
+  auto top = [](int i, int j) { return std::uint32_t(j * 5 + i); };
+  for (int j = 0; j <= 4; ++j)
+    for (int i = 0; i <= 4; ++i) m.vertices.push_back(V(5.0 * i, 5.0 * j, 10));
+  const std::uint32_t b = 25;  // the bottom's corners
+  for (const V& v : {V(0, 0, 0), V(20, 0, 0), V(20, 20, 0), V(0, 20, 0)}) m.vertices.push_back(v);
+  std::vector<std::vector<std::uint32_t>> faces;
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i)
+      if (!((i == 1 || i == 2) && (j == 1 || j == 2))) faces.push_back({top(i, j), top(i + 1, j), top(i + 1, j + 1), top(i, j + 1)});
+  faces.push_back({b, b + 3, b + 2, b + 1});
+  faces.push_back({b, b + 1, top(4, 0), top(3, 0), top(2, 0), top(1, 0), top(0, 0)});
+  faces.push_back({b + 1, b + 2, top(4, 4), top(4, 3), top(4, 2), top(4, 1), top(4, 0)});
+  faces.push_back({b + 2, b + 3, top(0, 4), top(1, 4), top(2, 4), top(3, 4), top(4, 4)});
+  faces.push_back({b + 3, b, top(0, 0), top(0, 1), top(0, 2), top(0, 3), top(0, 4)});
+  const V centre(10, 10, 5);
+  for (auto& f : faces) {  // wound counter-clockwise seen from outside
+    V n = V::Zero(), mid = V::Zero();
+    for (std::size_t k = 0; k < f.size(); ++k)
+      n += m.vertices[f[k]].cross(m.vertices[f[(k + 1) % f.size()]]), mid += m.vertices[f[k]] / double(f.size());
+    if (n.dot(mid - centre) < 0) std::reverse(f.begin(), f.end());
+    m.add_face_range(f);
+  }
+  return m;
+}
+
+TEST(RestPasses, ABallThatFallsThroughAHoleIsLeftOut) {
+  // The clamping leans 60 degrees: the balls tangent to the top by the hole's rim stand over the
+  // hole, and some of the raster's balls fall through it onto the inside of the box.
+  const Mesh part = box_with_a_hole_in_its_top();
+  std::vector<scallop::Setup> setups = {setup_along(V(0, std::sin(1.0472), std::cos(1.0472)))};
+  std::vector<Toolpath> cuts = no_cut();
+  RestOptions o = options();
+  o.scallop = 0.1, o.max_new_setups = 0, o.base_normal = V(0, 0, -1);
+  const RestResult res = add_rest_passes(part, setups, cuts, o);
+  EXPECT_GT(res.inside_drops, 0u);
+  ASSERT_FALSE(cuts[0].passes.empty());
+  const MeshDistance distance(part);
+  for (const auto& pass : cuts[0].passes)
+    for (std::size_t k = 0; k < pass.contact.size(); ++k) {
+      const V c = setups[0].rotation.transpose() * (pass.contact[k] + kR * pass.normal[k] - setups[0].translation);
+      const bool inside = c.x() > 0 && c.x() < 20 && c.y() > 0 && c.y() < 20 && c.z() > 0 && c.z() < 10;
+      EXPECT_FALSE(inside) << c.transpose();
+      EXPECT_GE(distance(c), kR - std::max(kE / 4, 1e-3) - 1e-9);
+    }
 }
 
 TEST(RestPasses, BadToolOrCountsAreRefused) {
