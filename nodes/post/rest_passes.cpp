@@ -13,6 +13,7 @@
 #include <string>
 #include <utility>
 
+#include "nodes/mesh/face_geometry.h"
 #include "nodes/mesh/mesh_distance.h"
 #include "nodes/path/step_size.h"
 #include "nodes/post/centre_index.h"
@@ -53,18 +54,6 @@ void trace_left(const std::vector<PartSample>& samples, const std::vector<PartTr
       if (std::isnan(old) || (!std::isnan(left) && left < old)) old = left;
     }
   });
-}
-
-// Each face's outward unit normal (Newell's, so a polygon's too; corners counter-clockwise seen
-// from outside).
-std::vector<Eigen::Vector3d> face_normals(const Mesh& m) {
-  std::vector<Eigen::Vector3d> out(m.num_faces(), Eigen::Vector3d::Zero());
-  for (std::size_t f = 0; f < m.num_faces(); ++f) {
-    for (std::size_t i = 0, k = m.face_size(f); i < k; ++i)
-      out[f] += m.vertices[m.face(f)[i]].cross(m.vertices[m.face(f)[(i + 1) % k]]);
-    out[f].normalize();
-  }
-  return out;
 }
 
 }  // namespace
@@ -224,11 +213,7 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
     if (score[best].first == 0) break;
     Setup s;
     s.axis = lattice[best];
-    s.rotation = rotation_to_z(s.axis);
-    // Placed as surface.setups places a setup: the part's box centred in x and y, its lowest point at z = 0.
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-    for (const auto& v : part.vertices) lo = lo.cwiseMin(s.rotation * v), hi = hi.cwiseMax(s.rotation * v);
-    s.translation = Eigen::Vector3d(-(lo.x() + hi.x()) / 2, -(lo.y() + hi.y()) / 2, -lo.z());
+    place_setup(s, part.vertices);  // as surface.setups places its setups
     char name[96];
     std::snprintf(name, sizeof name, "%zu: rest (%.3f, %.3f, %.3f)", setups.size() + 1, s.axis.x(), s.axis.y(), s.axis.z());
     s.name = name;
@@ -281,7 +266,7 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
       double top_z = -INFINITY, bottom_z = INFINITY;
       for (const auto& v : placed.vertices) top_z = std::max(top_z, v.z()), bottom_z = std::min(bottom_z, v.z());
       const MeshDistance placed_distance(placed);
-      const std::vector<Eigen::Vector3d> placed_normal = face_normals(placed);
+      const std::vector<Eigen::Vector3d> placed_normal = face_geometry(placed).normal;
       // Each cell's ball dropped from above the part; kept where it touches the part from the
       // outside of the face it touches (through a hole in the mesh, a ball would fall onto the
       // inside of the part's far side: a cloud's reconstruction has holes). On an edge the nearest

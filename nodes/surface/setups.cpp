@@ -59,6 +59,18 @@ Eigen::Matrix3d rotation_to_z(const Eigen::Vector3d& a) {
   return Eigen::Quaterniond::FromTwoVectors(a, z).toRotationMatrix();
 }
 
+void place_setup(Setup& setup, const std::vector<Eigen::Vector3d>& part) {
+  setup.rotation = rotation_to_z(setup.axis);
+  setup.translation.setZero();
+  if (part.empty()) return;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const auto& p : part) {
+    const Eigen::Vector3d q = setup.rotation * p;
+    lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+  }
+  setup.translation = Eigen::Vector3d(-(lo.x() + hi.x()) / 2, -(lo.y() + hi.y()) / 2, -lo.z());
+}
+
 std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const SetupOptions& o) {
   const std::vector<Eigen::Vector3d>& points = part.vertices;
   const std::size_t np = surfaces.patches.size();
@@ -206,16 +218,7 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
   for (std::size_t s = 0; s < chosen.size(); ++s) {
     Setup& st = setups[s];
     st.axis = candidates[chosen[s]];
-    st.rotation = rotation_to_z(st.axis);
-    st.translation.setZero();
-    if (!points.empty()) {
-      Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-      for (const auto& p : points) {
-        const Eigen::Vector3d q = st.rotation * p;
-        lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
-      }
-      st.translation = Eigen::Vector3d(-(lo.x() + hi.x()) / 2, -(lo.y() + hi.y()) / 2, -lo.z());
-    }
+    place_setup(st, points);
   }
   for (std::size_t p = 0; p < np; ++p) {
     std::size_t home = chosen.size();

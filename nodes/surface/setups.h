@@ -96,4 +96,8 @@ std::vector<Eigen::Vector3d> sphere_lattice(int n);
 // The smallest rotation taking unit vector a to +z (a half turn about x for a = -z).
 Eigen::Matrix3d rotation_to_z(const Eigen::Vector3d& a);
 
+// The setup's rotation (rotation_to_z of its axis) and translation: the part's points (its
+// vertices) centred on x = y = 0 in the machine frame, the lowest on z = 0 (t = 0 without points).
+void place_setup(Setup& setup, const std::vector<Eigen::Vector3d>& part);
+
 }  // namespace scallop
