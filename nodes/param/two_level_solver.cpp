@@ -164,20 +164,21 @@ Eigen::VectorXd TwoLevelPreconditioner::apply(const Eigen::VectorXd& r) const {
     for (int e = start[i]; e < start[i + 1]; ++e) s -= double(value[e]) * z[column[e]];
     return s;
   };
-  Eigen::VectorXd z = Eigen::VectorXd::Zero(n);
-  for (int s = 0; s < sweeps_; ++s)
-    for (Eigen::Index i = 0; i < n; ++i) z[i] += residual(z, i) * inv_diag_[i];
-  // Coarse correction on the residual's aggregate sums.
+  // Coarse correction first, on r's aggregate sums (z starts at zero, so the residual is r
+  // itself and needs no pass over the matrix), then the sweeps.
   const Eigen::Index nc = coarse_->Ac.rows();
   Eigen::VectorXd rc = Eigen::VectorXd::Zero(nc), zc(nc);
-  for (Eigen::Index i = 0; i < n; ++i) rc[aggregate_[i]] += residual(z, i);
+  for (Eigen::Index i = 0; i < n; ++i) rc[aggregate_[i]] += r[i];
   double info[UMFPACK_INFO];
   {
     std::lock_guard lock(umfpack_mutex());
     umfpack_di_solve(UMFPACK_A, coarse_->Ac.outerIndexPtr(), coarse_->Ac.innerIndexPtr(), coarse_->Ac.valuePtr(),
                      zc.data(), rc.data(), coarse_->numeric, coarse_->control, info);
   }
-  for (Eigen::Index i = 0; i < n; ++i) z[i] += zc[aggregate_[i]];
+  Eigen::VectorXd z(n);
+  for (Eigen::Index i = 0; i < n; ++i) z[i] = zc[aggregate_[i]];
+  for (int s = 0; s < sweeps_; ++s)
+    for (Eigen::Index i = 0; i < n; ++i) z[i] += residual(z, i) * inv_diag_[i];
   for (int s = 0; s < sweeps_; ++s)
     for (Eigen::Index i = n - 1; i >= 0; --i) z[i] += residual(z, i) * inv_diag_[i];
   return z;
