@@ -1,11 +1,14 @@
 #include "nodes/param/boundary_map.h"
 
 #include <Eigen/Geometry>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -126,11 +129,9 @@ std::vector<BandPoint> outer_band(const std::vector<Eigen::Vector3d>& P, const s
   }
   KnnIndex on_outer(Q);
   std::unique_ptr<KnnIndex> on_holes = holes.empty() ? nullptr : std::make_unique<KnnIndex>(holes);
-  std::vector<BandPoint> out;
-  std::vector<int> idx;
-  std::vector<double> sq;
-  for (std::size_t i = 0; i < P.size(); ++i) {
-    if (loop_of[i] == 2) continue;
+  // Each point's band entry, if any (the points in parallel, kept in index order).
+  auto band_point = [&](std::size_t i, std::vector<int>& idx, std::vector<double>& sq) -> std::optional<BandPoint> {
+    if (loop_of[i] == 2) return std::nullopt;
     // Nearest point on the smoothed loop: the segments next to the few nearest vertices.
     on_outer.query(P[i], std::min(4, n), idx, sq);
     double best = std::numeric_limits<double>::infinity(), best_t = 0;
@@ -143,16 +144,16 @@ std::vector<BandPoint> outer_band(const std::vector<Eigen::Vector3d>& P, const s
         double d = (P[i] - (Q[sg] + t * ab)).norm();
         if (d < best) best = d, best_t = t, seg = sg;
       }
-    if (seg < 0) continue;
+    if (seg < 0) return std::nullopt;
     // A loop point near a rectangle corner keeps its own place in the loop (its chord-length
     // parameter): projected on the rounded-off corner, points could swap sides across it.
     if (loop_of[i] == 1 && near_corner[position[i]]) seg = position[i], best_t = 0;
     const bool band = loop_of[i] == 1 || (is_boundary[i] && best <= kBandWidth * step[seg]);
     const bool probe = !band && best >= kBandWidth * step[seg] && best <= 3 * kBandWidth * step[seg];
-    if (!band && !probe) continue;
+    if (!band && !probe) return std::nullopt;
     if (loop_of[i] != 1 && on_holes) {
       on_holes->query(P[i], 1, idx, sq);
-      if (!idx.empty() && std::sqrt(sq[0]) < best) continue;  // a hole's band: stays free
+      if (!idx.empty() && std::sqrt(sq[0]) < best) return std::nullopt;  // a hole's band: stays free
     }
     // Signed depth inside the smoothed loop, in the point's tangent plane: the loop runs with the
     // patch on its left seen from the normal.
@@ -161,10 +162,20 @@ std::vector<BandPoint> outer_band(const std::vector<Eigen::Vector3d>& P, const s
     double depth = 0;
     if (T.allFinite() && inward.norm() > 1e-6)
       depth = (P[i] - ((1 - best_t) * Q[seg] + best_t * Q[(seg + 1) % n])).dot(inward.normalized());
-    if (probe && !(depth > 0)) continue;
-    out.push_back({static_cast<int>(i), seg, best_t, depth, std::min(rho[seg], rho[(seg + 1) % n]), band,
-                   loop_of[i] == 1});
-  }
+    if (probe && !(depth > 0)) return std::nullopt;
+    return BandPoint{static_cast<int>(i), seg, best_t, depth, std::min(rho[seg], rho[(seg + 1) % n]), band,
+                     loop_of[i] == 1};
+  };
+  constexpr std::size_t kChunk = 16384;
+  std::vector<std::vector<BandPoint>> chunks((P.size() + kChunk - 1) / kChunk);
+  tbb::parallel_for(std::size_t(0), chunks.size(), [&](std::size_t c) {
+    std::vector<int> idx;
+    std::vector<double> sq;
+    for (std::size_t i = c * kChunk; i < std::min(P.size(), (c + 1) * kChunk); ++i)
+      if (auto b = band_point(i, idx, sq)) chunks[c].push_back(*b);
+  });
+  std::vector<BandPoint> out;
+  for (const auto& chunk : chunks) out.insert(out.end(), chunk.begin(), chunk.end());
   // Depths are measured from the band's outer envelope, not from the smoothed loop (its mean
   // line): the band's outermost points within kScaleWindow segments get depth 0, the others keep
   // their distances to them. (Clamping the points outside the mean line to depth 0 would put

@@ -11,7 +11,7 @@ namespace scallop::param_nodes {
 NodeDecl make_harmonic_node() {
   NodeDecl d;
   d.type = "param.harmonic";
-  d.version = 5;  // 4: the band depth measured on a first map solved to 1e-9 (from 50 000 unknowns); 5: two-level preconditioner coarse first, the map to 1e-10
+  d.version = 5;  // 4: the band depth measured on a first map solved to 1e-9 (from 50 000 unknowns); 5: two-level preconditioner coarse first, the band depth to 1e-8, the map to 1e-10
   d.description = "harmonic (conformal) map: L u = L v = 0 inside, outer boundary band fixed, holes free";
   d.input("laplacian", "Laplacian", "the meshless Laplacian of the cloud")
       .input("map", "UVMap", "the boundary map (param.boundary_map)")
