@@ -11,6 +11,7 @@
 #include <string>
 
 #include "nodes/geom/angular_gap.h"
+#include "nodes/geom/grid_knn_2d.h"
 #include "nodes/geom/kd_tree.h"
 #include "nodes/geom/normal_equations.h"
 
@@ -39,8 +40,10 @@ struct HeightFieldModel::Impl {
   std::vector<Eigen::Vector2d> xy;
   std::vector<double> z;
   std::vector<Eigen::Vector3d> p;  // the points in 3-D, for the local-frame fit
-  std::unique_ptr<PointsAdaptor<Eigen::Vector2d>> adaptor;
-  std::unique_ptr<KdTree<Eigen::Vector2d, 2>> tree;
+  std::unique_ptr<GridKnn2d> grid;  // the k nearest in xy
+  std::size_t nearest_xy(double x, double y, int k, std::uint32_t* idx, double* d2) const {
+    return std::size_t(grid->query(Eigen::Vector2d(x, y), k, idx, d2));
+  }
   std::unique_ptr<PointsAdaptor<Eigen::Vector3d>> adaptor3;
   // The 3-D tree of the steep fits, built on their first use: a patch gentle everywhere never
   // needs it, and the planner, guard, certificate and preview each build their own model (half a
@@ -253,9 +256,7 @@ HeightFieldModel::HeightFieldModel(const std::vector<Eigen::Vector3d>& P, int k,
     hi_ = hi_.cwiseMax(impl_->xy.back());
     zmax_ = std::max(zmax_, p.z());
   }
-  impl_->adaptor = std::make_unique<PointsAdaptor<Eigen::Vector2d>>(PointsAdaptor<Eigen::Vector2d>{impl_->xy});
-  impl_->tree = std::make_unique<KdTree<Eigen::Vector2d, 2>>(2, *impl_->adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  impl_->tree->buildIndex();
+  impl_->grid = std::make_unique<GridKnn2d>(impl_->xy);
   impl_->adaptor3 = std::make_unique<PointsAdaptor<Eigen::Vector3d>>(PointsAdaptor<Eigen::Vector3d>{impl_->p});
   // Mean spacing from the 8th-neighbour distance: in a uniform sample of density ρ, π ρ r₈² ≈ 8.
   const std::size_t n = P.size(), stride = std::max<std::size_t>(1, n / 2000);
@@ -264,7 +265,7 @@ HeightFieldModel::HeightFieldModel(const std::vector<Eigen::Vector3d>& P, int k,
   std::vector<std::uint32_t> idx(kk);
   std::vector<double> d2(kk);
   for (std::size_t i = 0; i < n; i += stride) {
-    std::size_t got = impl_->tree->knnSearch(impl_->xy[i].data(), kk, idx.data(), d2.data());
+    std::size_t got = impl_->nearest_xy(impl_->xy[i].x(), impl_->xy[i].y(), kk, idx.data(), d2.data());
     r8.push_back(std::sqrt(d2[got - 1]));
   }
   std::nth_element(r8.begin(), r8.begin() + r8.size() / 2, r8.end());
@@ -303,8 +304,7 @@ double HeightFieldModel::Impl::beyond_edge(double x, double y, const std::uint32
   if (!angular_gap_exceeds(directions(x, y, idx, got).data(), got, kFrom)) return 0;
   std::uint32_t wide[64];
   double d2[64];
-  const double q[2] = {x, y};
-  const std::size_t got_wide = tree->knnSearch(q, 64, wide, d2);
+  const std::size_t got_wide = nearest_xy(x, y, 64, wide, d2);
   const double widest = largest_angular_gap(directions(x, y, wide, got_wide).data(), got_wide);
   return std::clamp((widest - kFrom) / (kTo - kFrom), 0.0, 1.0);
 }
@@ -312,8 +312,7 @@ double HeightFieldModel::Impl::beyond_edge(double x, double y, const std::uint32
 double HeightFieldModel::reach_beyond(double x, double y) const {
   std::uint32_t idx[64];
   double d2[64];
-  const double q[2] = {x, y};
-  const std::size_t got = impl_->tree->knnSearch(q, 64, idx, d2);
+  const std::size_t got = impl_->nearest_xy(x, y, 64, idx, d2);
   const Eigen::Vector2d centroid = impl_->centroid(idx, got);
   const Eigen::Vector2d out = Eigen::Vector2d(x, y) - centroid;
   if (!(out.norm() > 0)) return -INFINITY;
@@ -341,8 +340,7 @@ bool HeightFieldModel::eval(double x, double y, double& z, Eigen::Vector3d& norm
   const int k = k_;
   std::uint32_t idx[64];
   double d2[64];
-  const double q[2] = {x, y};
-  std::size_t got = impl_->tree->knnSearch(q, std::min(k, 64), idx, d2);
+  std::size_t got = impl_->nearest_xy(x, y, std::min(k, 64), idx, d2);
   if (got == 0) return false;
   // Beyond the edge, a gap in the data (the nearest point farther than the half spacing a
   // well-sampled edge has) is an extrapolation, known the less the farther it reaches:
