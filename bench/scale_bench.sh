@@ -31,7 +31,12 @@ for n in "${sizes[@]}"; do
       --cache "$work/cache-$n" -o "$work/out-$n" -q --events "$work/events-$n-$label.jsonl" "$@" \
       >/dev/null 2>"$work/stderr-$n-$label.txt" || status=$?
     read -r wall rss <"$work/time.txt"
-    printf '%-22s wall %8.2f s   peak %6d MiB   exit %d\n' "$label" "$wall" "$((rss / 1024))" "$status"
+    # The run's own peak (the largest of its nodes'): /usr/bin/time's is only since the last
+    # node that started with none running (the executor restarts the high-water mark there).
+    local peak
+    peak=$(sed -n 's/.*, peak \([0-9]*\) MiB$/\1/p' "$work/stderr-$n-$label.txt" | tail -1)
+    [ -n "$peak" ] || peak=$((rss / 1024))
+    printf '%-22s wall %8.2f s   peak %6d MiB   exit %d\n' "$label" "$wall" "$peak" "$status"
     echo "$wall" >"$work/wall-$n-$label.txt"
   }
   run cold

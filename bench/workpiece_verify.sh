@@ -33,7 +33,9 @@ else
   graph=(graphs/mesh-workpiece-contour.json --input mesh="$mesh" --set read.scale="$scale")
 fi
 # shellcheck disable=SC2086
-/usr/bin/time -f "scallop run: %e s, peak %M KB" ./build/scallop run "${graph[@]}" \
+# (the run's memory peak is the one on its "done in" line: /usr/bin/time's %M is only since the
+# last node that started with none running)
+/usr/bin/time -f "scallop run: %e s" ./build/scallop run "${graph[@]}" \
   --set tool_radius=$r --set scallop_height=$h --set chord_error=$e ${EXTRA:-} \
   -o "$out" --no-cache || test $? -eq 3  # 3: a certificate failed, measured below all the same
 base=$(/usr/bin/python3 -c 'import json,sys; print(",".join(map(str, json.load(open(sys.argv[1]))["base_direction"])))' "$out/base_report.json")

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "cli/slurm_batch.h"
+#include "engine/memory.h"
 #include "engine/runner.h"
 #include "nodes/all_nodes.h"
 #include "nodes/types/document.h"
@@ -197,11 +198,17 @@ int cmd_run(const std::string& graph_path, const std::vector<std::string>& input
   }
   int warnings = 0;
   for (const auto& n : r.run.nodes) warnings += static_cast<int>(n.warnings.size());
-  std::fprintf(stderr, "%s in %.3f s (%d nodes ran, %d from cache%s)\n", r.ok ? "done" : "FAILED", r.seconds,
-               r.run.executed(),
+  // The run's memory peak is the largest of the nodes' own: the executor restarts the kernel's
+  // high-water mark when a node starts with none running, which also restarts the ru_maxrss that
+  // /usr/bin/time reports (so that reports only the peak since the last such start).
+  double peak_mib = static_cast<double>(peak_resident_bytes()) / (1024.0 * 1024.0);
+  for (const auto& n : r.run.nodes) peak_mib = std::max(peak_mib, n.peak_mib);
+  std::fprintf(stderr, "%s in %.3f s (%d nodes ran, %d from cache%s), peak %.0f MiB\n", r.ok ? "done" : "FAILED",
+               r.seconds, r.run.executed(),
                static_cast<int>(std::count_if(r.run.nodes.begin(), r.run.nodes.end(),
                                               [](const NodeRun& n) { return n.status == "cached"; })),
-               warnings ? (", " + std::to_string(warnings) + " warning" + (warnings > 1 ? "s" : "")).c_str() : "");
+               warnings ? (", " + std::to_string(warnings) + " warning" + (warnings > 1 ? "s" : "")).c_str() : "",
+               peak_mib);
   for (const auto& w : r.written) std::cout << "wrote " << w << "\n";
   std::cout.flush();
   for (const auto& m : r.errors) std::cerr << "error: " << m << "\n";
