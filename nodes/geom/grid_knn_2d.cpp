@@ -59,16 +59,21 @@ int GridKnn2d::query(const Eigen::Vector2d& q, int k, std::uint32_t* idx, double
   if (k < 1) throw std::invalid_argument("k must be at least 1");
   const int want = static_cast<int>(std::min<std::size_t>(std::size_t(k), index_.size()));
   int count = 0;
+  double worst = std::numeric_limits<double>::infinity();  // the k-th distance once k are kept
   // Keeps the `want` nearest seen, sorted by distance, then index.
   auto offer = [&](double d, std::uint32_t i) {
-    if (count == want && !(d < sq[count - 1] || (d == sq[count - 1] && i < idx[count - 1]))) return;
+    if (d > worst || (d == worst && count == want && i > idx[count - 1])) return;
     int j = count < want ? count++ : count - 1;
     for (; j > 0 && (sq[j - 1] > d || (sq[j - 1] == d && idx[j - 1] > i)); --j) sq[j] = sq[j - 1], idx[j] = idx[j - 1];
     sq[j] = d, idx[j] = i;
+    if (count == want) worst = sq[count - 1];
   };
   auto visit = [&](int cx, int cy) {
     const std::size_t c = std::size_t(cy) * std::size_t(nx_) + std::size_t(cx);
-    for (std::uint32_t e = start_[c]; e < start_[c + 1]; ++e) offer((point_[e] - q).squaredNorm(), index_[e]);
+    for (std::uint32_t e = start_[c], end = start_[c + 1]; e < end; ++e) {
+      const double d = (point_[e] - q).squaredNorm();
+      if (d <= worst) offer(d, index_[e]);
+    }
   };
   const int cx = column_of(q.x(), x0_, nx_), cy = column_of(q.y(), y0_, ny_);
   constexpr double kInf = std::numeric_limits<double>::infinity();
