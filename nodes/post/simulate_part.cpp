@@ -426,6 +426,15 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     worst.push_back(w);
   }
   rep["worst"] = worst;
+  // Where the interior maximum stands (the place to look first, passing or not).
+  std::size_t highest = res.samples.size();
+  for (std::size_t i = 0; i < res.samples.size(); ++i) {
+    const SimSample& s = res.samples[i];
+    if (s.interior && !std::isnan(s.scallop) && (highest == res.samples.size() || s.scallop > res.samples[highest].scallop))
+      highest = i;
+  }
+  if (highest < res.samples.size())
+    rep["scallop_max_interior_at"] = xyz(Eigen::Vector3d(res.samples[highest].x, res.samples[highest].y, res.samples[highest].z));
 
   nlohmann::json reasons = nlohmann::json::array();
   char buf[160];

@@ -69,7 +69,8 @@ struct PartSimulateOptions {
 // ball centre there, part frame),
 // rapids_through_part, finished_fraction}], unreachable [{x, y, z, reach_radius}] (up to 10
 // places, 2 r apart, smallest reach first), worst [{x, y, z, kind, value, interior}] (up to 10,
-// one per sqrt(8 r h): interior first, then by excess).
+// one per sqrt(8 r h): interior first, then by excess), scallop_max_interior_at {x, y, z} (the
+// interior sample with the most material left; absent when none was cut).
 // Throws std::invalid_argument for r <= 0, h <= 0, h >= r, a mesh without faces, no setup, no
 // feed move at all, or a non-finite centre (naming the setup).
 // outer  where given, gouge and rapids are measured against it instead of `part`: the part's outer

@@ -47,6 +47,10 @@ TEST(SimulatePart, TwoSetupsShareTheTopTheScallopIsTheClosedFormTheSidesAreUncut
   const auto& rep = sim.report;
   const double closed_form = r - std::sqrt(r * r - 0.25 * w * w);  // 0.04196
   EXPECT_NEAR(rep["scallop_max_interior"].get<double>(), closed_form, 1e-5);
+  // ... standing on the top, midway between two passes
+  const auto& at = rep["scallop_max_interior_at"];
+  EXPECT_NEAR(at["z"].get<double>(), 10, 1e-9);
+  EXPECT_NEAR(std::fmod(at["y"].get<double>(), w), 0.5 * w, 0.02);
   EXPECT_NEAR(rep["base_fraction"].get<double>(), 0.25, 1e-12);
   EXPECT_NEAR(rep["measured_fraction"].get<double>(), 0.75, 1e-12);
   EXPECT_NEAR(rep["uncut_fraction"].get<double>(), 2.0 / 3, 1e-10);
