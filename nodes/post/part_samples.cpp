@@ -104,10 +104,15 @@ Eigen::Vector3d same_place(const PartTriangle& t, const Eigen::Vector3d& p, cons
   return (1 - u - v) * V[t.corner[0]] + u * V[t.corner[1]] + v * V[t.corner[2]];
 }
 
+double ball_clearance(const MeshDistance& part, const Eigen::Vector3d& p, const Eigen::Vector3d& n, double radius,
+                      double tolerance) {
+  // The sample itself is within `radius` of the centre: the search starts from it.
+  return part(p + radius * n, p) - (radius - tolerance);
+}
+
 bool ball_reaches(const MeshDistance& part, const Eigen::Vector3d& p, const Eigen::Vector3d& n, double radius,
                   double tolerance) {
-  // The sample itself is within `radius` of the centre: the search starts from it.
-  return part(p + radius * n, p) >= radius - tolerance;
+  return ball_clearance(part, p, n, radius, tolerance) >= 0;
 }
 
 }  // namespace scallop

@@ -55,8 +55,12 @@ bool in_part_triangle(const PartTriangle& t, const Eigen::Vector3d& p);
 // barycentric coordinates.
 Eigen::Vector3d same_place(const PartTriangle& t, const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& V);
 
-// Whether a ball of this radius tangent at p (centre p + radius n) stays `tolerance` clear of the
-// part elsewhere: verify_part.py's test of a place a ball can reach at all.
+// How far the centre p + radius n of a ball of this radius tangent at p is from coming nearer the
+// part than radius - tolerance (mm; negative: out of reach). It changes no faster than p moves.
+double ball_clearance(const MeshDistance& part, const Eigen::Vector3d& p, const Eigen::Vector3d& n, double radius,
+                      double tolerance);
+// Whether that ball stays `tolerance` clear of the part elsewhere (ball_clearance >= 0):
+// verify_part.py's test of a place a ball can reach at all.
 bool ball_reaches(const MeshDistance& part, const Eigen::Vector3d& p, const Eigen::Vector3d& n, double radius,
                   double tolerance);
 

@@ -124,7 +124,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   struct Traced {
     int kind = 0;
     double scallop = kNaN, gouge = 0, reach = 0;
-    double clearance = 0;  // measured: how far the tangent ball's centre is from being out of reach
+    double clearance = 0;  // ball_clearance of the tangent ball of radius r
     bool interior = false;
     std::uint32_t finisher = 0;
   };
@@ -136,8 +136,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
       out.kind = 1;
       return;
     }
-    // (ball_reaches, with the distance kept: it changes by no more than the sample moves)
-    out.clearance = distance(s.p + r * n, s.p) - (r - tol);
+    out.clearance = ball_clearance(distance, s.p, n, r, tol);
     if (!(out.clearance >= 0)) {
       out.kind = 2;
       double lo = 0, hi = r;  // the largest radius that reaches, by bisection
