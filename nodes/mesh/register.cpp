@@ -14,13 +14,15 @@ NodeDecl make_quad_remesh_node();
 NodeDecl make_setup_base_node();
 NodeDecl make_simplify_node();
 NodeDecl make_cloud_envelope_node();
+NodeDecl make_sharpen_node();
 }  // namespace mesh_nodes
 
 void register_mesh(Registry& registry) {
   using namespace mesh_nodes;
   registry.add_domain("mesh", {make_reconstruct_node(), make_repair_node(), make_denoise_node(),
                                make_sharp_edges_node(), make_quad_remesh_node(), make_setup_base_node(),
-                               make_segment_node(), make_simplify_node(), make_cloud_envelope_node()});
+                               make_segment_node(), make_simplify_node(), make_cloud_envelope_node(),
+                               make_sharpen_node()});
 }
 
 }  // namespace scallop

@@ -1,0 +1,406 @@
+#include "nodes/mesh/sharpen.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <memory>
+#include <cmath>
+#include <numbers>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "nodes/cloud/knn.h"
+#include "nodes/mesh/face_geometry.h"
+#include "nodes/mesh/mesh_topology.h"
+
+namespace scallop {
+
+namespace {
+
+constexpr int kUnassigned = -1;  // a band vertex with no region near it
+constexpr int kSeveral = -2;     // a vertex of smooth faces of two regions, or moved onto an edge
+constexpr int kCorner = -3;      // a vertex moved onto a corner
+constexpr int kNearAnchors = 48;  // vertices of known region around a point, for its local planes
+
+struct Plane {
+  Eigen::Vector3d normal, point;
+  double distance(const Eigen::Vector3d& p) const { return std::abs(normal.dot(p - point)); }
+};
+
+// Least-squares plane of the points, if they span one (not all on a line).
+std::optional<Plane> fit_plane(const std::vector<Eigen::Vector3d>& pts) {
+  if (pts.size() < 3) return std::nullopt;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& p : pts) c += p;
+  c /= double(pts.size());
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (const auto& p : pts) C += (p - c) * (p - c).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+  if (es.info() != Eigen::Success || !(es.eigenvalues()[1] > 1e-6 * es.eigenvalues()[2])) return std::nullopt;
+  return Plane{es.eigenvectors().col(0), c};
+}
+
+// The regions' vertices near a point, to fit each region's local plane there.
+class LocalPlanes {
+ public:
+  LocalPlanes(const std::vector<Eigen::Vector3d>& V, const std::vector<int>& label, double radius)
+      : label_(label), radius2_(radius * radius) {
+    for (std::size_t v = 0; v < V.size(); ++v)
+      if (label[v] >= 0) anchor_.push_back(static_cast<int>(v)), anchor_pos_.push_back(V[v]);
+    if (!anchor_pos_.empty()) index_ = std::make_unique<KnnIndex>(anchor_pos_);
+  }
+  // The regions with vertices within the radius of q, and the plane of each that has enough.
+  std::vector<std::pair<int, Plane>> near(const Eigen::Vector3d& q) const {
+    std::vector<std::pair<int, Plane>> out;
+    if (!index_) return out;
+    std::vector<int> idx;
+    std::vector<double> d2;
+    index_->query(q, kNearAnchors, idx, d2);
+    std::vector<int> regions;
+    for (std::size_t j = 0; j < idx.size(); ++j)
+      if (d2[j] <= radius2_) regions.push_back(label_[anchor_[idx[j]]]);
+    std::sort(regions.begin(), regions.end());
+    regions.erase(std::unique(regions.begin(), regions.end()), regions.end());
+    std::vector<Eigen::Vector3d> pts;
+    for (int r : regions) {
+      pts.clear();
+      for (std::size_t j = 0; j < idx.size(); ++j)
+        if (d2[j] <= radius2_ && label_[anchor_[idx[j]]] == r) pts.push_back(anchor_pos_[idx[j]]);
+      if (auto p = fit_plane(pts)) out.emplace_back(r, *p);
+    }
+    return out;
+  }
+  static const Plane* find(const std::vector<std::pair<int, Plane>>& planes, int region) {
+    for (const auto& [r, p] : planes)
+      if (r == region) return &p;
+    return nullptr;
+  }
+
+ private:
+  const std::vector<int>& label_;
+  double radius2_;
+  std::vector<int> anchor_;
+  std::vector<Eigen::Vector3d> anchor_pos_;
+  std::unique_ptr<KnnIndex> index_;
+};
+
+double angle_between_planes_deg(const Plane& a, const Plane& b) {
+  return angle_deg(a.normal, b.normal.dot(a.normal) < 0 ? Eigen::Vector3d(-b.normal) : b.normal);
+}
+
+// The line where two planes meet.
+struct Line {
+  Eigen::Vector3d origin, dir;  // dir a unit vector
+  Eigen::Vector3d project(const Eigen::Vector3d& p) const { return origin + dir.dot(p - origin) * dir; }
+  // The parameter t in [0, 1] of the point of the segment p + t (q - p) nearest the line.
+  double nearest_on_segment(const Eigen::Vector3d& p, const Eigen::Vector3d& q) const {
+    const Eigen::Vector3d e = q - p, w = p - origin;
+    const double ee = e.squaredNorm(), ed = e.dot(dir), denom = ee - ed * ed;
+    return std::clamp(denom > 1e-300 ? (ed * dir.dot(w) - e.dot(w)) / denom : 0.5, 0.0, 1.0);
+  }
+};
+
+// Where planes a and b meet, its origin the point of both nearest m.
+Line meet(const Plane& a, const Plane& b, const Eigen::Vector3d& m) {
+  Eigen::Matrix2d G;
+  G << 1, a.normal.dot(b.normal), a.normal.dot(b.normal), 1;
+  const Eigen::Vector2d rhs(a.normal.dot(a.point - m), b.normal.dot(b.point - m));
+  const Eigen::Vector2d st = G.inverse() * rhs;
+  return {m + st[0] * a.normal + st[1] * b.normal, a.normal.cross(b.normal).normalized()};
+}
+
+double distance_to_segment(const Eigen::Vector3d& x, const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+  const Eigen::Vector3d e = q - p;
+  const double t = std::clamp(e.squaredNorm() > 0 ? (x - p).dot(e) / e.squaredNorm() : 0.0, 0.0, 1.0);
+  return (p + t * e - x).norm();
+}
+
+}  // namespace
+
+SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
+  const std::size_t nv = mesh.num_vertices(), nf = mesh.num_faces();
+  for (std::size_t f = 0; f < nf; ++f) {
+    if (mesh.face_size(f) != 3)
+      throw std::invalid_argument("face " + std::to_string(f) + " has " + std::to_string(mesh.face_size(f)) +
+                                  " corners; sharpening works on the triangles of a reconstruction (run it "
+                                  "before mesh.quad_remesh)");
+    for (std::size_t c = 0; c < 3; ++c)
+      if (mesh.face(f)[c] >= nv)
+        throw std::invalid_argument("face " + std::to_string(f) + " has vertex " + std::to_string(mesh.face(f)[c]) +
+                                    " of " + std::to_string(nv));
+  }
+  for (std::size_t v = 0; v < nv; ++v)
+    if (!mesh.vertices[v].allFinite())
+      throw std::invalid_argument("vertex " + std::to_string(v) + " has a NaN or infinite coordinate");
+
+  SharpenResult res;
+  const FaceGeometry fg = face_geometry(mesh);
+  const MeshEdges edges = mesh_edges(mesh);
+  const VertexFaces vf = vertex_faces(mesh);
+  for (const auto& e : edges.edges) res.edge_length += (mesh.vertices[e[0]] - mesh.vertices[e[1]]).norm();
+  if (!edges.edges.empty()) res.edge_length /= double(edges.edges.size());
+
+  // 1. Smooth faces, and the regions they make.
+  std::vector<char> smooth(nf, 0);
+  for (std::size_t f = 0; f < nf; ++f) {
+    if (!(fg.area[f] > 0)) continue;
+    bool ok = true;
+    for (std::size_t c = 0; c < 3 && ok; ++c) {
+      const std::uint32_t v = mesh.face(f)[c];
+      for (std::size_t j = 0; j < vf.count(v) && ok; ++j) {
+        const std::uint32_t g = vf.faces(v)[j];
+        ok = !(fg.area[g] > 0) || angle_deg(fg.normal[f], fg.normal[g]) <= o.smooth_angle;
+      }
+    }
+    smooth[f] = ok;
+  }
+  std::vector<int> region(nf, -1);
+  {
+    std::vector<std::uint32_t> stack;
+    std::vector<std::size_t> size;
+    for (std::size_t seed = 0; seed < nf; ++seed) {
+      if (!smooth[seed] || region[seed] >= 0) continue;
+      const int id = static_cast<int>(size.size());
+      size.push_back(0);
+      region[seed] = id;
+      stack.assign(1, static_cast<std::uint32_t>(seed));
+      while (!stack.empty()) {
+        const std::uint32_t f = stack.back();
+        stack.pop_back();
+        ++size[id];
+        for (std::size_t c = 0; c < 3; ++c) {
+          const std::uint32_t e = edges.face_edge[mesh.face_start[f] + c];
+          if (edges.faces_on(e) != 2) continue;
+          for (std::size_t k = 0; k < 2; ++k) {
+            const std::uint32_t g = edges.faces(e)[k];
+            if (g == f || !smooth[g] || region[g] >= 0 || angle_deg(fg.normal[f], fg.normal[g]) > o.smooth_angle)
+              continue;
+            region[g] = id;
+            stack.push_back(g);
+          }
+        }
+      }
+    }
+    // Small regions are noise: their faces count as not smooth. The others are renumbered.
+    std::vector<int> renumber(size.size(), -1);
+    for (std::size_t r = 0; r < size.size(); ++r)
+      if (size[r] >= std::size_t(std::max(1, o.min_region_faces))) renumber[r] = static_cast<int>(res.regions++);
+    for (int& r : region)
+      if (r >= 0) r = renumber[r];
+  }
+
+  // 2. Each vertex's region.
+  std::vector<int> label(nv, kUnassigned);
+  for (std::size_t v = 0; v < nv; ++v)
+    for (std::size_t j = 0; j < vf.count(v); ++j) {
+      const int r = region[vf.faces(v)[j]];
+      if (r < 0) continue;
+      if (label[v] == kUnassigned) label[v] = r;
+      else if (label[v] != r) label[v] = kSeveral;
+    }
+  const LocalPlanes planes(mesh.vertices, label, o.radius * res.edge_length);
+  std::vector<int> final_label = label;
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (label[v] != kUnassigned || vf.count(v) == 0) continue;
+    ++res.band_vertices;
+    double best = INFINITY;
+    for (const auto& [r, p] : planes.near(mesh.vertices[v]))
+      if (p.distance(mesh.vertices[v]) < best) best = p.distance(mesh.vertices[v]), final_label[v] = r;
+  }
+
+  // 3. Corners: where vertices of three regions meet, the vertex nearest the point where their
+  // local planes meet is moved onto it (along its own face: the point lies in all three planes).
+  res.mesh.vertices = mesh.vertices;
+  const double sine = std::sin(o.min_angle * std::numbers::pi / 180);
+  {
+    std::vector<Eigen::Vector3d> corners;
+    std::vector<int> around;
+    for (std::size_t v = 0; v < nv; ++v) {
+      around.clear();
+      for (std::size_t j = 0; j < vf.count(v); ++j)
+        for (std::size_t c = 0; c < 3; ++c) {
+          const int r = final_label[mesh.face(vf.faces(v)[j])[c]];
+          if (r >= 0 && std::find(around.begin(), around.end(), r) == around.end()) around.push_back(r);
+        }
+      if (around.size() != 3) continue;
+      const auto near = planes.near(mesh.vertices[v]);
+      const Plane *p0 = LocalPlanes::find(near, around[0]), *p1 = LocalPlanes::find(near, around[1]),
+                  *p2 = LocalPlanes::find(near, around[2]);
+      if (!p0 || !p1 || !p2) continue;
+      Eigen::Matrix3d A;
+      A << p0->normal.transpose(), p1->normal.transpose(), p2->normal.transpose();
+      if (!(std::abs(A.determinant()) > sine * sine * sine)) continue;  // not three faces meeting at a point
+      const Eigen::Vector3d k =
+          A.inverse() * Eigen::Vector3d(p0->normal.dot(p0->point), p1->normal.dot(p1->point), p2->normal.dot(p2->point));
+      if (!k.allFinite() || (k - mesh.vertices[v]).norm() > 2 * res.edge_length) continue;
+      bool known = false;
+      for (const auto& c : corners) known = known || (c - k).norm() < res.edge_length;
+      if (!known) corners.push_back(k);
+    }
+    if (!corners.empty()) {
+      const KnnIndex vertices(mesh.vertices);
+      for (const auto& k : corners) {
+        const int v = vertices.nearest(k);
+        if (final_label[v] == kCorner) continue;
+        res.largest_offset = std::max(res.largest_offset, (k - mesh.vertices[v]).norm());
+        res.mesh.vertices[v] = k;
+        final_label[v] = kCorner;
+        ++res.corners;
+      }
+    }
+  }
+
+  // 4. New points on the edges between two regions, where the line their local planes meet
+  // crosses the chamfer. Where that line passes beside an end of the edge instead, that vertex is
+  // moved onto it (along its own face: the line lies in both planes) rather than cutting a sliver.
+  constexpr double kEnd = 0.1;  // of the edge's length: nearer an end than this, the end moves
+  struct Split {
+    std::size_t edge;
+    Eigen::Vector3d at;
+    double offset;
+  };
+  std::vector<Split> splits, near_ends, beside_corners;
+  std::vector<double> moved(nv, INFINITY);  // how far each vertex is to move (INFINITY: not)
+  std::vector<Eigen::Vector3d> moved_to(nv);
+  std::vector<std::array<int, 2>> moved_between(nv);  // the two regions of the line it moves to
+  // The line where the local planes of regions ra and rb meet near the segment pq, the parameter
+  // of the segment's point nearest it, that line's point nearest the segment and its distance.
+  struct Crossing {
+    Line line;
+    double t;
+    Eigen::Vector3d at;
+    double offset;
+  };
+  auto crossing = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q, int ra, int rb) -> std::optional<Crossing> {
+    const auto near = planes.near(0.5 * (p + q));
+    const Plane *pa = LocalPlanes::find(near, ra), *pb = LocalPlanes::find(near, rb);
+    if (!pa || !pb || angle_between_planes_deg(*pa, *pb) < o.min_angle) return std::nullopt;
+    const Line line = meet(*pa, *pb, 0.5 * (p + q));
+    const double t = line.nearest_on_segment(p, q);
+    const Eigen::Vector3d x = line.project(p + t * (q - p));
+    const double offset = distance_to_segment(x, p, q);
+    if (!x.allFinite() || offset > (q - p).norm()) return std::nullopt;  // not this edge's line
+    return Crossing{line, t, x, offset};
+  };
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    const auto [a, b] = edges.edges[e];
+    const int ra = final_label[a], rb = final_label[b];
+    if (ra < 0 || rb < 0 || ra == rb) continue;
+    const auto c = crossing(mesh.vertices[a], mesh.vertices[b], ra, rb);
+    if (!c) {
+      ++res.skipped_edges;
+      continue;
+    }
+    const double t = c->t;
+    if (t > kEnd && t < 1 - kEnd) {
+      splits.push_back({e, c->at, c->offset});
+      continue;
+    }
+    const Line& line = c->line;
+    // should the end stay (below), the edge is split a tenth of its length from it
+    const Eigen::Vector3d p = mesh.vertices[a], q = mesh.vertices[b];
+    const Eigen::Vector3d x = line.project(p + std::clamp(t, kEnd, 1 - kEnd) * (q - p));
+    near_ends.push_back({e, x, distance_to_segment(x, p, q)});
+    const std::uint32_t end = t <= kEnd ? a : b;
+    const Eigen::Vector3d to = line.project(mesh.vertices[end]);
+    const double d = (to - mesh.vertices[end]).norm();
+    if (d < moved[end]) moved[end] = d, moved_to[end] = to, moved_between[end] = {ra, rb};
+  }
+  for (std::size_t v = 0; v < nv; ++v)
+    if (std::isfinite(moved[v])) res.mesh.vertices[v] = moved_to[v];
+  // A chamfer triangle whose corners would all move onto the line would lose its area: the
+  // corner that moves farthest stays (its edges are split instead).
+  for (bool again = true; again;) {
+    again = false;
+    for (std::size_t f = 0; f < nf; ++f) {
+      const std::uint32_t* t = mesh.face(f);
+      const auto& V = res.mesh.vertices;
+      if ((V[t[1]] - V[t[0]]).cross(V[t[2]] - V[t[0]]).norm() > 1e-6 * res.edge_length * res.edge_length) continue;
+      std::int64_t farthest = -1;
+      for (int c = 0; c < 3; ++c)
+        if (std::isfinite(moved[t[c]]) && (farthest < 0 || moved[t[c]] > moved[farthest])) farthest = t[c];
+      if (farthest < 0) continue;
+      res.mesh.vertices[farthest] = mesh.vertices[farthest];
+      moved[farthest] = INFINITY;
+      again = true;
+    }
+  }
+  for (std::size_t v = 0; v < nv; ++v)
+    if (std::isfinite(moved[v])) {
+      final_label[v] = kSeveral;  // on an edge now
+      res.largest_offset = std::max(res.largest_offset, moved[v]);
+      ++res.moved_vertices;
+    }
+  // An edge from a vertex moved onto the line of regions A and B to one of a third region C (beside
+  // a corner) still cuts across: split where C meets A or B, whichever line crosses it.
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    auto [a, b] = edges.edges[e];
+    if (std::isfinite(moved[b]) && !std::isfinite(moved[a])) std::swap(a, b);
+    const int rc = final_label[b];
+    if (!std::isfinite(moved[a]) || final_label[a] == kCorner || rc < 0) continue;
+    const auto [ra, rb] = moved_between[a];
+    if (rc == ra || rc == rb) continue;  // along a face the line lies in
+    std::optional<Crossing> best;
+    for (int r : {ra, rb}) {
+      const auto c = crossing(res.mesh.vertices[a], res.mesh.vertices[b], r, rc);
+      if (c && c->t > kEnd && c->t < 1 - kEnd && (!best || c->offset < best->offset)) best = c;
+    }
+    if (best) beside_corners.push_back({e, best->at, best->offset});
+  }
+  std::vector<std::int64_t> split_at(edges.size(), -1);
+  auto insert = [&](const Split& s) {
+    split_at[s.edge] = static_cast<std::int64_t>(res.mesh.vertices.size());
+    res.mesh.vertices.push_back(s.at);
+    res.largest_offset = std::max(res.largest_offset, s.offset);
+    ++res.split_edges;
+  };
+  for (const auto* list : {&splits, &near_ends})
+    for (const Split& s : *list) {
+      const auto [a, b] = edges.edges[s.edge];
+      if (!std::isfinite(moved[a]) && !std::isfinite(moved[b])) insert(s);  // else an end is on the line now
+    }
+  for (const Split& s : beside_corners) insert(s);
+
+  // 5. Each triangle cut at its new points, its corners' order kept.
+  res.mesh.face_start.assign(1, 0);
+  const bool labels = mesh.has_labels();
+  for (std::size_t f = 0; f < nf; ++f) {
+    const std::uint32_t* t = mesh.face(f);
+    std::array<std::int64_t, 3> s{};  // the point on the edge from corner c to c + 1, or -1
+    int splits = 0;
+    for (int c = 0; c < 3; ++c) {
+      s[c] = split_at[edges.face_edge[mesh.face_start[f] + c]];
+      splits += s[c] >= 0;
+    }
+    auto add = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+      res.mesh.add_face({std::uint32_t(x), std::uint32_t(y), std::uint32_t(z)});
+      if (labels) res.mesh.face_label.push_back(mesh.face_label[f]);
+    };
+    if (splits == 0) {
+      add(t[0], t[1], t[2]);
+      continue;
+    }
+    // The ears at corners between two new points cut off, the rest fanned from a new point.
+    std::vector<std::int64_t> poly;
+    for (int c = 0; c < 3; ++c) {
+      poly.push_back(t[c]);
+      if (s[c] >= 0) poly.push_back(s[c]);
+    }
+    for (int c = 0; c < 3; ++c)
+      if (s[c] >= 0 && s[(c + 2) % 3] >= 0) {
+        add(s[(c + 2) % 3], t[c], s[c]);
+        poly.erase(std::find(poly.begin(), poly.end(), std::int64_t(t[c])));
+      }
+    if (poly.size() >= 3) {
+      const auto first = std::find_if(poly.begin(), poly.end(), [&](std::int64_t x) { return x >= std::int64_t(nv); });
+      std::rotate(poly.begin(), first, poly.end());
+      for (std::size_t j = 1; j + 1 < poly.size(); ++j) add(poly[0], poly[j], poly[j + 1]);
+    }
+  }
+  if (mesh.has_normals()) res.mesh.normals = vertex_normals(res.mesh);
+  return res;
+}
+
+}  // namespace scallop

@@ -1,0 +1,197 @@
+#include "nodes/mesh/sharpen.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <random>
+
+#include "engine/node.h"
+#include "nodes/mesh/mesh_topology.h"
+#include "nodes/mesh/reconstruct.h"
+#include "nodes/types/mesh.h"
+#include "tests/test_support.h"
+
+namespace scallop {
+namespace {
+
+// A box [lo, hi] as a signed distance (negative inside, exact everywhere).
+double box_sdf(const Eigen::Vector3d& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  const Eigen::Vector3d c = 0.5 * (lo + hi), h = 0.5 * (hi - lo);
+  const Eigen::Vector3d q = (p - c).cwiseAbs() - h;
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
+
+// n random points on the surface of the box, evenly by area, with outward normals.
+void box_cloud(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int n, std::vector<Eigen::Vector3d>& P,
+               std::vector<Eigen::Vector3d>& N, unsigned seed = 1) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  const Eigen::Vector3d d = hi - lo;
+  const double areas[3] = {d.y() * d.z(), d.x() * d.z(), d.x() * d.y()};
+  const double total = 2 * (areas[0] + areas[1] + areas[2]);
+  for (int i = 0; i < n; ++i) {
+    double pick = u(rng) * total;
+    int axis = 0, side = 0;
+    for (int k = 0; k < 6; ++k) {
+      if (pick < areas[k / 2]) {
+        axis = k / 2, side = k % 2;
+        break;
+      }
+      pick -= areas[k / 2];
+    }
+    Eigen::Vector3d p = lo + Eigen::Vector3d(u(rng) * d.x(), u(rng) * d.y(), u(rng) * d.z());
+    p[axis] = side ? hi[axis] : lo[axis];
+    Eigen::Vector3d nrm = Eigen::Vector3d::Zero();
+    nrm[axis] = side ? 1 : -1;
+    P.push_back(p);
+    N.push_back(nrm);
+  }
+}
+
+// The largest distance from the mesh to the true surface (|sdf|), each triangle sampled on a
+// barycentric grid of step 1/8.
+double largest_distance(const Mesh& m, const std::function<double(const Eigen::Vector3d&)>& sdf) {
+  double worst = 0;
+  for (std::size_t f = 0; f < m.num_faces(); ++f) {
+    const Eigen::Vector3d &a = m.vertices[m.face(f)[0]], &b = m.vertices[m.face(f)[1]], &c = m.vertices[m.face(f)[2]];
+    for (int i = 0; i <= 8; ++i)
+      for (int j = 0; i + j <= 8; ++j)
+        worst = std::max(worst, std::abs(sdf((a * (8 - i - j) + b * i + c * j) / 8.0)));
+  }
+  return worst;
+}
+
+double volume(const Mesh& m) {
+  double v = 0;
+  for (std::size_t f = 0; f < m.num_faces(); ++f) v += m.vertices[m.face(f)[0]].dot(face_area_vector(m, f)) / 6.0;
+  return v;
+}
+
+// Cut faces, the same surface: pieces, holes, genus and manifoldness as before.
+void expect_same_topology(const Mesh& before, const Mesh& after) {
+  const MeshTopology t0 = mesh_topology(before, mesh_edges(before)), t = mesh_topology(after, mesh_edges(after));
+  EXPECT_EQ(t.components, t0.components);
+  EXPECT_EQ(t.boundary_loops, t0.boundary_loops);
+  EXPECT_EQ(t.genus, t0.genus);
+  EXPECT_EQ(t.non_manifold_edges, 0u);
+  EXPECT_EQ(t.degenerate_faces, t0.degenerate_faces);
+}
+
+// A clean random sample of a 20 x 12 x 8 mm box, meshed by the advancing front: its triangles
+// chamfer every edge and corner. Sharpened, the mesh is back on the box to a small part of that.
+TEST(Sharpen, ABoxsChamferedEdgesAndCornersAreRestored) {
+  const Eigen::Vector3d lo(0, 0, 0), hi(20, 12, 8);
+  std::vector<Eigen::Vector3d> P, N;
+  box_cloud(lo, hi, 30000, P, N);
+  const Mesh mesh = reconstruct_surface(P, N, {}).mesh;
+  const auto sdf = [&](const Eigen::Vector3d& p) { return box_sdf(p, lo, hi); };
+  const double before = largest_distance(mesh, sdf);
+  const SharpenResult r = sharpen_edges(mesh);
+  const double after = largest_distance(r.mesh, sdf);
+  EXPECT_GT(before, 0.1);  // the chamfers: about a point spacing (0.2 mm edges) deep
+  EXPECT_LT(after, 0.25 * before) << "before " << before << " after " << after;
+  EXPECT_EQ(r.regions, 6u);
+  EXPECT_EQ(r.corners, 8u);
+  EXPECT_GT(r.split_edges, 0u);
+  EXPECT_GT(r.moved_vertices, 0u);
+  // Every vertex, moved or new, is on the box (moved along its own face onto an edge or a corner).
+  ASSERT_GT(r.mesh.num_vertices(), mesh.num_vertices());
+  for (const auto& v : r.mesh.vertices) EXPECT_LT(std::abs(sdf(v)), 1e-9);
+  expect_same_topology(mesh, r.mesh);
+  const double true_volume = 20 * 12 * 8;
+  EXPECT_LT(std::abs(volume(r.mesh) - true_volume), 0.35 * std::abs(volume(mesh) - true_volume))
+      << volume(mesh) << " -> " << volume(r.mesh);
+}
+
+// An L-shaped block (a 20 x 20 x 10 box less a 10 x 10 x 10 corner): convex edges and one concave
+// edge, each restored.
+TEST(Sharpen, AConcaveEdgeIsRestoredLikeTheConvexOnes) {
+  const Eigen::Vector3d lo_a(0, 0, 0), hi_a(20, 10, 10), lo_b(0, 10, 0), hi_b(10, 20, 10);
+  std::vector<Eigen::Vector3d> P, N, Pa, Na, Pb, Nb;
+  box_cloud(lo_a, hi_a, 40000, Pa, Na, 1);
+  box_cloud(lo_b, hi_b, 40000, Pb, Nb, 2);
+  // the points of each box not inside the other (nor on their shared face)
+  const auto sdf = [&](const Eigen::Vector3d& p) { return std::min(box_sdf(p, lo_a, hi_a), box_sdf(p, lo_b, hi_b)); };
+  for (std::size_t i = 0; i < Pa.size(); ++i)
+    if (box_sdf(Pa[i], lo_b, hi_b) > 1e-9) P.push_back(Pa[i]), N.push_back(Na[i]);
+  for (std::size_t i = 0; i < Pb.size(); ++i)
+    if (box_sdf(Pb[i], lo_a, hi_a) > 1e-9) P.push_back(Pb[i]), N.push_back(Nb[i]);
+  const Mesh mesh = reconstruct_surface(P, N, {}).mesh;
+  const double before = largest_distance(mesh, sdf);
+  const SharpenResult r = sharpen_edges(mesh);
+  const double after = largest_distance(r.mesh, sdf);
+  EXPECT_GT(before, 0.1);
+  EXPECT_LT(after, 0.25 * before) << "before " << before << " after " << after;
+  EXPECT_EQ(r.regions, 8u);
+  for (const auto& v : r.mesh.vertices) EXPECT_LT(std::abs(sdf(v)), 1e-9);
+  expect_same_topology(mesh, r.mesh);
+}
+
+// A sphere has no edge: every face is smooth and nothing is split.
+TEST(Sharpen, ASmoothSurfaceIsLeftAsItIs) {
+  std::vector<Eigen::Vector3d> P, N;
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < 4000; ++i) {
+    const double z = 1.0 - 2.0 * (i + 0.5) / 4000, s = std::sqrt(1.0 - z * z);
+    N.emplace_back(s * std::cos(golden * i), s * std::sin(golden * i), z);
+    P.push_back(10.0 * N.back());
+  }
+  const Mesh mesh = reconstruct_surface(P, N, {}).mesh;
+  const SharpenResult r = sharpen_edges(mesh);
+  EXPECT_EQ(r.regions, 1u);
+  EXPECT_EQ(r.split_edges, 0u);
+  EXPECT_EQ(r.corners, 0u);
+  EXPECT_EQ(r.mesh.vertices, mesh.vertices);
+  EXPECT_EQ(r.mesh.face_vertices, mesh.face_vertices);
+}
+
+TEST(Sharpen, BadInputIsAnError) {
+  Mesh quad;
+  for (int i = 0; i < 4; ++i) quad.vertices.push_back(Eigen::Vector3d(i & 1, i >> 1, 0));
+  quad.add_face({0, 1, 3, 2});
+  try {
+    sharpen_edges(quad);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(),
+                 "face 0 has 4 corners; sharpening works on the triangles of a reconstruction (run it before "
+                 "mesh.quad_remesh)");
+  }
+  Mesh bad;
+  bad.vertices = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, NAN, 0)};
+  bad.add_face({0, 1, 2});
+  EXPECT_THROW(sharpen_edges(bad), std::invalid_argument);
+  Mesh out_of_range;
+  out_of_range.vertices = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0)};
+  out_of_range.add_face({0, 1, 5});
+  EXPECT_THROW(sharpen_edges(out_of_range), std::invalid_argument);
+}
+
+}  // namespace
+
+namespace mesh_nodes {
+NodeDecl make_sharpen_node();
+}
+
+TEST(SharpenNode, ItsParametersAreSharpenOptionsAndItReportsWhatItDid) {
+  const NodeDecl d = mesh_nodes::make_sharpen_node();
+  EXPECT_EQ(d.type, "mesh.sharpen");
+  const SharpenOptions o;
+  EXPECT_EQ(d.find_param("smooth_angle")->default_value, o.smooth_angle);
+  EXPECT_EQ(d.find_param("min_angle")->default_value, o.min_angle);
+  EXPECT_EQ(d.find_param("radius")->default_value, o.radius);
+  EXPECT_EQ(d.find_param("min_region_faces")->default_value, o.min_region_faces);
+  Mesh quad;
+  for (int i = 0; i < 4; ++i) quad.vertices.push_back(Eigen::Vector3d(i & 1, i >> 1, 0));
+  quad.add_face({0, 1, 3, 2});
+  try {
+    test::run_node(d, {}, {{"mesh", std::make_shared<Mesh>(quad)}});
+    FAIL();
+  } catch (const NodeError& e) {
+    EXPECT_NE(std::string(e.what()).find("mesh.sharpen: face 0 has 4 corners"), std::string::npos);
+  }
+}
+
+}  // namespace scallop
