@@ -13,7 +13,8 @@
 
 namespace scallop {
 
-CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d>& points, int k, double max_gap) {
+CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d>& points, int k, double max_gap,
+                             double bend_spacings) {
   if (mesh.num_faces() == 0) throw std::invalid_argument("the mesh has no face");
   if (k < 1) throw std::invalid_argument("k must be >= 1");
   if (points.size() < std::size_t(k) || points.size() < 2)
@@ -22,6 +23,7 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
   for (const auto& p : points)
     if (!p.allFinite()) throw std::invalid_argument("the cloud has a point that is not finite");
   if (!(max_gap >= 0)) throw std::invalid_argument("max_gap must be >= 0");
+  if (!(bend_spacings >= 0)) throw std::invalid_argument("bend must be >= 0");
 
   CloudEnvelope e;
   const MeshDistance distance(mesh);
@@ -91,7 +93,7 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
         for (const auto& [f, d2] : hits)
           if (g.area[f] > 0) c = std::min(c, g.normal[f].dot(n[v]));
         c = std::clamp(c, 0.0, 1.0);  // beyond 90 degrees: s at most
-        bend[v] = e.spacing_median * std::sqrt(1 - c * c);
+        bend[v] = bend_spacings * e.spacing_median * std::sqrt(1 - c * c);
       }
     });
     for (std::size_t v = 0; v < nv; ++v) {

@@ -45,8 +45,11 @@ struct CloudEnvelope {
 //         trustworthy inside/outside at edges (MeshDistance::signed_distance).
 // points  #P >= k the cloud the mesh was made from (mm).
 // k       points per vertex; max_gap  0: 4 times the median point spacing.
+// bend    the bend allowance in spacings: s above is bend times the median spacing (1; less on a
+//         mesh whose edges were restored by mesh.sharpen, which no longer bevels them).
 // Throws std::invalid_argument for a mesh without faces, fewer than k points, k < 1, a non-finite
-// point, or max_gap < 0.
-CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d>& points, int k, double max_gap = 0);
+// point, max_gap < 0 or bend < 0.
+CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d>& points, int k, double max_gap = 0,
+                             double bend = 1);
 
 }  // namespace scallop

@@ -44,13 +44,16 @@ NodeDecl make_cloud_envelope_node() {
       .param_int("neighbours", 16, 1, 1000, "", "points per vertex (the largest of their deviations bounds the part there)")
       .param_float("max_gap", 0, 0, 1000, "mm",
                    "a vertex farther than this from every point is unsupported (reported); 0: 4 times the median "
-                   "point spacing");
+                   "point spacing")
+      .param_float("bend", 1, 0, 10, "spacings",
+                   "the bend allowance: where the mesh bends, the part may bend sharper between its points by up to "
+                   "this many median spacings times the sine of the bend (1 for a reconstruction that bevels edges)");
   d.run = [](NodeContext& ctx) {
     auto mesh = ctx.input<Mesh>("mesh");
     auto cloud = ctx.input<PointCloud>("cloud");
     CloudEnvelope e;
     try {
-      e = cloud_envelope(*mesh, cloud->points, int(ctx.integer("neighbours")), ctx.number("max_gap"));
+      e = cloud_envelope(*mesh, cloud->points, int(ctx.integer("neighbours")), ctx.number("max_gap"), ctx.number("bend"));
     } catch (const std::invalid_argument& ex) {
       throw NodeError(std::string("mesh.cloud_envelope: ") + ex.what());
     }

@@ -72,6 +72,21 @@ TEST(CloudEnvelope, PointsOnTheMeshGiveTheMeshItselfBesidesItsEdges) {
   EXPECT_EQ(e.unsupported, 0u);
 }
 
+// A mesh whose edges are the part's (mesh.sharpen's): the allowance scales with `bend`, 0 leaves
+// the points' own distances.
+TEST(CloudEnvelope, TheBendAllowanceScalesWithBend) {
+  const Mesh cube = test::cube_mesh(4, 10);
+  const std::vector<V> pts = box_side_points(0, 10, 0.5, 0);
+  const CloudEnvelope none = cloud_envelope(cube, pts, 16, 0, 0.0), twice = cloud_envelope(cube, pts, 16, 0, 2.0);
+  EXPECT_EQ(none.bend_allowance_max, 0.0);
+  EXPECT_NEAR(twice.bend_allowance_max, 2 * bend(0.5, 3), 1e-12);
+  for (std::size_t v = 0; v < cube.num_vertices(); ++v) {
+    EXPECT_EQ(none.out[v], 0.0);
+    EXPECT_LT((none.outer.vertices[v] - cube.vertices[v]).norm(), 1e-12);
+    EXPECT_NEAR(twice.out[v], 2 * bend(0.5, int(sides_sum(cube.vertices[v]).lpNorm<1>())), 1e-12);
+  }
+}
+
 TEST(CloudEnvelope, AMeshInsideThePartIsGrownByTheDistanceOnEverySideEdgeAndCorner) {
   // The part is the cube [-a, 10 + a]^3, the mesh the cube [0, 10]^3: every point lies a outside.
   // The outer mesh is the cube grown by a (and the bend allowance) on every side, to rounding:
@@ -158,6 +173,7 @@ TEST(CloudEnvelope, BadInputIsRefused) {
   EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cloud_envelope(cube, {V(0, 0, 0), V(NAN, 0, 0)}, 1); }),
             "the cloud has a point that is not finite");
   EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cloud_envelope(cube, pts, 4, -1); }), "max_gap must be >= 0");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cloud_envelope(cube, pts, 4, 0, -1); }), "bend must be >= 0");
 }
 
 TEST(CloudEnvelopeNode, ReportsTheBoundsAndWarnsOfUnsupportedVertices) {
