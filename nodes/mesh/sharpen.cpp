@@ -1,8 +1,10 @@
 #include "nodes/mesh/sharpen.h"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <array>
+#include <initializer_list>
 #include <memory>
 #include <cmath>
 #include <numbers>
@@ -22,14 +24,30 @@ namespace {
 constexpr int kUnassigned = -1;  // a band vertex with no region near it
 constexpr int kSeveral = -2;     // a vertex of smooth faces of two regions, or moved onto an edge
 constexpr int kCorner = -3;      // a vertex moved onto a corner
-constexpr int kNearAnchors = 48;  // vertices of known region around a point, for its local planes
+constexpr int kNearAnchors = 128;  // vertices of known region around a point, for its local surfaces
 
+// A region's surface near a point: a quadric height w(u, v) over the least-squares plane of its
+// vertices there (frame t1, t2, normal about point), or that plane where a quadric is not
+// determined (too few points, or all on a line).
 struct Plane {
-  Eigen::Vector3d normal, point;
-  double distance(const Eigen::Vector3d& p) const { return std::abs(normal.dot(p - point)); }
+  Eigen::Vector3d normal, point, t1, t2;
+  std::array<double, 6> c{};  // w = c0 + c1 u + c2 v + c3 u^2 + c4 uv + c5 v^2, (u, v) in mm
+  // Height of x above the surface (along normal), and its gradient.
+  double value(const Eigen::Vector3d& x) const {
+    const Eigen::Vector3d d = x - point;
+    const double u = d.dot(t1), v = d.dot(t2);
+    return d.dot(normal) - (c[0] + c[1] * u + c[2] * v + c[3] * u * u + c[4] * u * v + c[5] * v * v);
+  }
+  Eigen::Vector3d gradient(const Eigen::Vector3d& x) const {
+    const Eigen::Vector3d d = x - point;
+    const double u = d.dot(t1), v = d.dot(t2);
+    return normal - (c[1] + 2 * c[3] * u + c[4] * v) * t1 - (c[2] + c[4] * u + 2 * c[5] * v) * t2;
+  }
+  double distance(const Eigen::Vector3d& x) const { return std::abs(value(x)) / gradient(x).norm(); }
 };
 
-// Least-squares plane of the points, if they span one (not all on a line).
+// The local surface of the points: their plane, then a quadric over it where 10 or more points
+// determine one.
 std::optional<Plane> fit_plane(const std::vector<Eigen::Vector3d>& pts) {
   if (pts.size() < 3) return std::nullopt;
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -39,7 +57,48 @@ std::optional<Plane> fit_plane(const std::vector<Eigen::Vector3d>& pts) {
   for (const auto& p : pts) C += (p - c) * (p - c).transpose();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
   if (es.info() != Eigen::Success || !(es.eigenvalues()[1] > 1e-6 * es.eigenvalues()[2])) return std::nullopt;
-  return Plane{es.eigenvectors().col(0), c};
+  Plane plane{es.eigenvectors().col(0), c, es.eigenvectors().col(2), es.eigenvectors().col(1)};
+  if (pts.size() >= 10) {
+    Eigen::MatrixXd A(pts.size(), 6);
+    Eigen::VectorXd w(pts.size());
+    double scale = 0;
+    for (const auto& p : pts) scale = std::max(scale, (p - c).norm());
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const Eigen::Vector3d d = pts[i] - c;
+      const double u = d.dot(plane.t1) / scale, v = d.dot(plane.t2) / scale;
+      A.row(i) << 1, u, v, u * u, u * v, v * v;
+      w[i] = d.dot(plane.normal);
+    }
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    const auto& sv = svd.singularValues();
+    if (sv[5] > 1e-3 * sv[0]) {
+      const Eigen::VectorXd q = svd.solve(w);
+      const double k[6] = {1, 1 / scale, 1 / scale, 1 / (scale * scale), 1 / (scale * scale), 1 / (scale * scale)};
+      for (int j = 0; j < 6; ++j) plane.c[j] = q[j] * k[j];
+    }
+  }
+  return plane;
+}
+
+// x moved onto all of the surfaces (two: their curve of intersection; three: their common point)
+// by Gauss-Newton steps of least length, from a start on or near it (where their planes meet).
+// The start itself if that does not converge.
+Eigen::Vector3d onto(std::initializer_list<const Plane*> surfaces, const Eigen::Vector3d& start) {
+  const int m = static_cast<int>(surfaces.size());
+  Eigen::Vector3d x = start;
+  for (int it = 0; it < 8; ++it) {
+    Eigen::MatrixXd J(m, 3);
+    Eigen::VectorXd f(m);
+    int i = 0;
+    for (const Plane* s : surfaces) J.row(i) = s->gradient(x).transpose(), f[i++] = s->value(x);
+    if (f.cwiseAbs().maxCoeff() < 1e-12) return x;
+    const Eigen::Vector3d step = J.transpose() * (J * J.transpose()).ldlt().solve(f);
+    if (!step.allFinite()) return start;
+    x -= step;
+  }
+  double worst = 0;
+  for (const Plane* s : surfaces) worst = std::max(worst, s->distance(x));
+  return worst < 1e-9 && x.allFinite() ? x : start;
 }
 
 // The regions' vertices near a point, to fit each region's local plane there.
@@ -232,8 +291,9 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
       Eigen::Matrix3d A;
       A << p0->normal.transpose(), p1->normal.transpose(), p2->normal.transpose();
       if (!(std::abs(A.determinant()) > sine * sine * sine)) continue;  // not three faces meeting at a point
-      const Eigen::Vector3d k =
-          A.inverse() * Eigen::Vector3d(p0->normal.dot(p0->point), p1->normal.dot(p1->point), p2->normal.dot(p2->point));
+      const Eigen::Vector3d k = onto(
+          {p0, p1, p2},
+          A.inverse() * Eigen::Vector3d(p0->normal.dot(p0->point), p1->normal.dot(p1->point), p2->normal.dot(p2->point)));
       if (!k.allFinite() || (k - mesh.vertices[v]).norm() > 2 * res.edge_length) continue;
       bool known = false;
       for (const auto& c : corners) known = known || (c - k).norm() < res.edge_length;
@@ -268,9 +328,10 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
   // The line where the local planes of regions ra and rb meet near the segment pq, the parameter
   // of the segment's point nearest it, that line's point nearest the segment and its distance.
   struct Crossing {
-    Line line;
+    Plane a, b;  // the two regions' local surfaces
+    Line line;   // where their planes meet
     double t;
-    Eigen::Vector3d at;
+    Eigen::Vector3d at;  // on both surfaces, beside the segment's point t
     double offset;
   };
   auto crossing = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q, int ra, int rb) -> std::optional<Crossing> {
@@ -279,10 +340,10 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
     if (!pa || !pb || angle_between_planes_deg(*pa, *pb) < o.min_angle) return std::nullopt;
     const Line line = meet(*pa, *pb, 0.5 * (p + q));
     const double t = line.nearest_on_segment(p, q);
-    const Eigen::Vector3d x = line.project(p + t * (q - p));
+    const Eigen::Vector3d x = onto({pa, pb}, line.project(p + t * (q - p)));
     const double offset = distance_to_segment(x, p, q);
     if (!x.allFinite() || offset > (q - p).norm()) return std::nullopt;  // not this edge's line
-    return Crossing{line, t, x, offset};
+    return Crossing{*pa, *pb, line, t, x, offset};
   };
   for (std::size_t e = 0; e < edges.size(); ++e) {
     const auto [a, b] = edges.edges[e];
@@ -301,10 +362,10 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
     const Line& line = c->line;
     // should the end stay (below), the edge is split a tenth of its length from it
     const Eigen::Vector3d p = mesh.vertices[a], q = mesh.vertices[b];
-    const Eigen::Vector3d x = line.project(p + std::clamp(t, kEnd, 1 - kEnd) * (q - p));
+    const Eigen::Vector3d x = onto({&c->a, &c->b}, line.project(p + std::clamp(t, kEnd, 1 - kEnd) * (q - p)));
     near_ends.push_back({e, x, distance_to_segment(x, p, q)});
     const std::uint32_t end = t <= kEnd ? a : b;
-    const Eigen::Vector3d to = line.project(mesh.vertices[end]);
+    const Eigen::Vector3d to = onto({&c->a, &c->b}, line.project(mesh.vertices[end]));
     const double d = (to - mesh.vertices[end]).norm();
     if (d < moved[end]) moved[end] = d, moved_to[end] = to, moved_between[end] = {ra, rb};
   }

@@ -30,7 +30,7 @@ namespace scallop {
 struct SharpenOptions {
   double smooth_angle = 15;   // deg: a face is smooth when every face sharing a corner turns less
   double min_angle = 25;      // deg: planes meeting at less than this are not an edge to restore
-  double radius = 4;          // mean edge lengths: the neighbourhood of a local plane
+  double radius = 8;          // mean edge lengths: the neighbourhood of a local surface
   int min_region_faces = 10;  // smaller regions are noise, not faces of the part
 };
 

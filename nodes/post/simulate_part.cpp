@@ -96,7 +96,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   if (tris.empty()) throw std::invalid_argument("the part's mesh has no face with an area");
   const double tol = std::max(o.chord, 1e-3);
   const double nominal = std::sqrt(8 * r * H);
-  const double margin = o.margin > 0 ? o.margin : nominal;
+  const double margin = std::max(0.0, (o.margin > 0 ? o.margin : nominal) - o.edge_uncertainty);
   const double T = 20 * H;
 
   // Spacing: raised until the samples fit max_samples.

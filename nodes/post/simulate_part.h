@@ -51,6 +51,9 @@ struct PartSimulateOptions {
   double surface_uncertainty = 0;  // delta (mm): how far the real part may lie off the mesh
   double spacing = 0;       // mm; 0: sqrt(8 r h) / 8, raised to stay within max_samples
   double margin = 0;        // mm; 0: sqrt(8 r h)
+  // mm: how far the mesh's edges may lie off the part's (a mesh made from a cloud): the interior
+  // starts this much nearer them, so that it holds all of the part's own interior
+  double edge_uncertainty = 0;
   std::size_t max_samples = 1500000;
   Eigen::Vector3d base_normal = Eigen::Vector3d::Zero();  // outward normal of the base; 0: no base
   double base_angle = 10;     // degrees

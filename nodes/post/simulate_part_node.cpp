@@ -42,6 +42,9 @@ NodeDecl make_simulate_part_node() {
       .number("spacing", &PartSimulateOptions::spacing, 0, 100, "mm", "sample spacing; 0: sqrt(8 r h)/8")
       .number("margin", &PartSimulateOptions::margin, 0, 1000, "mm",
               "interior = farther than this from sharp edges and borders; 0: sqrt(8 r h)")
+      .number("edge_uncertainty", &PartSimulateOptions::edge_uncertainty, 0, 100, "mm",
+              "how far the mesh's edges may lie off the part's (a mesh made from a cloud): the interior starts this "
+              "much nearer them, so that it holds all of the part's own")
       .integer("max_samples", &PartSimulateOptions::max_samples, 1000, 100000000, "",
                "the spacing is raised to stay below this many samples");
   d.run = [](NodeContext& ctx) {

@@ -68,6 +68,29 @@ TEST(SimulatePart, TwoSetupsShareTheTopTheScallopIsTheClosedFormTheSidesAreUncut
     if (std::abs(sim.samples[i].z - 10) < 1e-9) EXPECT_FALSE(std::isnan(sim.samples[i].scallop)) << "a top sample is uncut";
 }
 
+// A mesh made from a cloud has its edges only near the part's: edge_uncertainty moves the
+// interior's border nearer them, so that the interior holds the part's own (stricter, never
+// laxer). The box's top cut from y = 2 on: the band below is left high, and more of it counts.
+TEST(SimulatePart, EdgeUncertaintyBringsTheInteriorNearerTheEdges) {
+  const double r = 3, h = 0.05, w = 1;
+  const Mesh box = test::quad_box({1, 1, 1}, V(20, 20, 10));
+  std::vector<PartSetupCut> cuts(1);
+  cuts[0].name = "top", cuts[0].feed = top_passes(2, 20, w, r, 10);
+  PartSimulateOptions o = options(r, h);
+  o.base_normal = V(0, 0, -1);
+  const nlohmann::json exact = simulate_part(box, cuts, o).report;
+  o.edge_uncertainty = 0.6;
+  const nlohmann::json widened = simulate_part(box, cuts, o).report;
+  const double nominal = std::sqrt(8 * r * h);
+  EXPECT_NEAR(exact["margin"].get<double>(), nominal, 1e-12);
+  EXPECT_NEAR(widened["margin"].get<double>(), nominal - 0.6, 1e-12);
+  EXPECT_GT(widened["samples_interior"].get<double>(), exact["samples_interior"].get<double>());
+  // the top at y = 0.5 (inside the widened interior only) is left higher than anywhere the exact
+  // interior reaches
+  EXPECT_GT(widened["scallop_max_interior"].get<double>(), exact["scallop_max_interior"].get<double>() + 0.1);
+  EXPECT_EQ(widened["scallop_max"], exact["scallop_max"]);
+}
+
 TEST(SimulatePart, GougesInsideAndNearAreMeasuredAndARapidThroughThePartIsCounted) {
   // A feed move through the middle of the box: its centre 5 below the top, r + 5 deep in the
   // material. Another setup dips 0.02 into the top and passes a corner outside (sqrt(12) > r
