@@ -6,7 +6,7 @@
 #   bench/workpiece_verify.sh [MESH] [SCALE] [OUT]   (default: the fandisk x 50 into /tmp/scallop-workpiece)
 # With CLOUD_POINTS=N (and NOISE=sigma in mm, default 0) the part is first sampled into a cloud of
 # N points (../shared/tools/sample_mesh.py, seed 1) and the cloud runs through
-# bench/workpiece-contour-cloud.json (reconstruction, mesh.cloud_envelope, then the same chain);
+# graphs/workpiece-contour.json (reconstruction, mesh.sharpen, mesh.cloud_envelope, then the same chain);
 # the judge still measures against the true mesh. With OUTER_SURFACE=1 the cloud is sampled from
 # the mesh as mesh.repair leaves it (bench/repaired-mesh.json): an assembly's overlapping solids
 # merged, so that no point lies inside the part (a scanner sees none there; the ABC plate's STL is
@@ -28,7 +28,7 @@ if [ -n "${CLOUD_POINTS:-}" ]; then
   fi
   /usr/bin/python3 ../shared/tools/sample_mesh.py --mesh "$sampled" --scale "$sampled_scale" --n "$CLOUD_POINTS" --seed 1 \
     --noise "${NOISE:-0}" -o "$out/cloud.ply"
-  graph=(bench/workpiece-contour-cloud.json --input cloud="$out/cloud.ply")
+  graph=(graphs/workpiece-contour.json --input cloud="$out/cloud.ply")
 else
   graph=(graphs/mesh-workpiece-contour.json --input mesh="$mesh" --set read.scale="$scale")
 fi
