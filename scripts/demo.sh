@@ -18,10 +18,3 @@ echo "certificate: ${verdict}"
   --no-cache
 echo "outputs in out/workpiece/: setup_1.ngc ... (one program per clamping), setups.json, setup_sheet.md" \
   "(with setup_1.png ...), report.json (certificate), scallop_map.png"
-# The third: the same part from a point cloud, as a scan would give it (100 000 points on its
-# surface, written by examples/make_part.py): the mesh rebuilt with its edges (mesh.sharpen), then
-# the same chain; a clean cloud, so no smoothing or denoising.
-python3 examples/make_part.py --cloud 100000 -o out/domed_block_cloud.ply
-./build/scallop run graphs/workpiece-contour.json --input cloud=out/domed_block_cloud.ply \
-  --set smooth=0 --set denoise=none -o out/workpiece-cloud --no-cache || test $? -eq 3
-echo "outputs in out/workpiece-cloud/: the same files, from the cloud; mesh.ply is the rebuilt part"

@@ -9,7 +9,6 @@ packages=(build-essential cmake ninja-build ccache pkg-config
   libboost-graph-dev  # mesh.segment: Kruskal's minimum spanning tree
   libocct-data-exchange-dev libocct-visualization-dev libocct-modeling-algorithms-dev  # B-spline fit, STEP
   blender  # mesh.quad_remesh runs QuadriFlow inside Blender, headless
-  python3  # scripts/demo.sh writes the cloud example with examples/make_part.py (standard library only)
   slurm-wlm munge  # batch --executor slurm; tests/cli/slurm_test.cpp starts a one-node cluster
   clang libclang-rt-14-dev)  # scripts/fuzz.sh: clang++ and libFuzzer's runtime (libclang_rt.fuzzer-x86_64.a)
 missing=()

@@ -7,7 +7,9 @@
 #include <CGAL/Polygon_mesh_processing/polygon_mesh_to_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/border.h>
 #include <CGAL/Polygon_mesh_processing/stitch_borders.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
@@ -143,6 +145,22 @@ Mesh repair_mesh(const Mesh& soup, const RepairOptions& options, RepairReport& r
   PMP::polygon_soup_to_polygon_mesh(points, polygons, sm);
   report.borders_stitched = PMP::stitch_borders(sm);
   report.non_manifold_vertices_split += PMP::duplicate_non_manifold_vertices(sm);
+  if (options.fill_holes > 0) {
+    std::vector<SurfaceMesh::Halfedge_index> cycles;
+    PMP::extract_boundary_cycles(sm, std::back_inserter(cycles));
+    for (auto h : cycles) {
+      std::size_t length = 0;
+      for (auto g : CGAL::halfedges_around_face(h, sm)) (void)g, ++length;
+      if (length > std::size_t(options.fill_holes)) {
+        ++report.holes_left;
+        continue;
+      }
+      std::vector<SurfaceMesh::Face_index> faces;
+      std::vector<SurfaceMesh::Vertex_index> vertices;
+      PMP::triangulate_and_refine_hole(sm, h, std::back_inserter(faces), std::back_inserter(vertices));
+      ++(faces.empty() ? report.holes_left : report.holes_filled);
+    }
+  }
   sm.collect_garbage();
   points.clear();
   polygons.clear();

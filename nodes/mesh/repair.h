@@ -15,6 +15,10 @@ struct RepairOptions {
   // Closed components whose surfaces cross (solids of an assembly that overlap) replaced by
   // their union (merge_solids.h); needs orient_outward.
   bool merge_overlapping = true;
+  // Holes of at most this many border edges are closed with triangles (CGAL's
+  // triangulate_and_refine_hole): the gaps an interpolating reconstruction leaves in a closed
+  // part's surface. 0: none (an open part's border stays; it is far longer).
+  int fill_holes = 0;
 };
 
 // What repair_mesh changed, step by step (each count 0 on a clean, consistently oriented mesh).
@@ -34,6 +38,8 @@ struct RepairReport {
   std::size_t non_manifold_vertices_split = 0;
   // On the mesh:
   std::size_t borders_stitched = 0;           // pairs of border edges joined (stitch_borders)
+  std::size_t holes_filled = 0;               // holes closed (fill_holes)
+  std::size_t holes_left = 0;                 // holes longer than fill_holes, or that CGAL could not close
   std::size_t faces_turned_outward = 0;       // faces of closed components reversed (orient_to_bound_a_volume)
   std::size_t solids_merged = 0;              // closed components merged into one they cross (their union)
   std::size_t solids_not_merged = 0;          // crossing ones left apart (one intersects itself)

@@ -23,18 +23,22 @@ NodeDecl make_repair_node() {
       .output("report", "Report",
               "{changes: {points_merged, faces_simplified, pinched_faces_split, degenerate_faces_removed, "
               "duplicate_faces_removed, isolated_vertices_removed, faces_reversed, non_manifold_edges_cut, "
-              "non_manifold_vertices_split, borders_stitched, faces_turned_outward, solids_merged, solids_not_merged}, "
+              "non_manifold_vertices_split, borders_stitched, holes_filled, holes_left, faces_turned_outward, solids_merged, solids_not_merged}, "
               "before, after: the topology as io.read_mesh reports it}")
       .param_bool("orient_outward", true,
                   "orient each closed component so that the mesh bounds a volume (normals out of the material)")
       .param_bool("merge_overlapping", true,
                   "replace closed components whose surfaces cross by their union (CGAL corefinement); needs "
-                  "orient_outward");
+                  "orient_outward")
+      .param_int("fill_holes", 0, 0, 1000000, "edges",
+                 "holes with at most this many border edges are closed with triangles (the gaps an interpolating "
+                 "reconstruction leaves in a closed part); 0: none");
   d.run = [](NodeContext& ctx) {
     auto in = ctx.input<Mesh>("mesh");
     RepairOptions options;
     options.orient_outward = ctx.flag("orient_outward");
     options.merge_overlapping = ctx.flag("merge_overlapping");
+    options.fill_holes = static_cast<int>(ctx.integer("fill_holes"));
     RepairReport r;
     Mesh out;
     try {
@@ -53,6 +57,8 @@ NodeDecl make_repair_node() {
                               {"non_manifold_edges_cut", r.non_manifold_edges_cut},
                               {"non_manifold_vertices_split", r.non_manifold_vertices_split},
                               {"borders_stitched", r.borders_stitched},
+                              {"holes_filled", r.holes_filled},
+                              {"holes_left", r.holes_left},
                               {"faces_turned_outward", r.faces_turned_outward},
                               {"solids_merged", r.solids_merged},
                               {"solids_not_merged", r.solids_not_merged}};

@@ -9,15 +9,15 @@
 //   1. faces whose neighbours (all faces sharing a corner) turn by at most `smooth_angle` are
 //      smooth; smooth faces joined across edges make regions (the part's faces);
 //   2. a vertex of smooth faces of one region belongs to it; a vertex of none (the chamfer
-//      band) to the region whose local plane (fitted to that region's vertices nearby) it lies
-//      nearest;
+//      band) to the region whose local surface it lies nearest (a quadric over the plane of that
+//      region's vertices nearby: a plane's bias on a curved or twisted face would move edges);
 //   3. where vertices of three regions meet, the vertex nearest the point where their three
-//      planes meet is moved onto it (a corner); an edge between vertices of two regions is split
-//      where those regions' local planes meet (the point of that line nearest the edge);
+//      surfaces meet is moved onto it (a corner); an edge between vertices of two regions is split
+//      where those regions' local surfaces meet (the point of that curve nearest the edge);
 //   4. each triangle is cut at its new points, so the chamfer becomes the two faces meeting at
 //      the edge.
-// Where that line passes beside a vertex rather than across an edge, the vertex is moved onto
-// it, along its own face (the line lies in both planes). No other vertex moves, and the
+// Where that curve passes beside a vertex rather than across an edge, the vertex is moved onto
+// it, along its own face (the curve lies on both surfaces). No other vertex moves, and the
 // connectivity stays what it was (closed stays closed).
 #pragma once
 
@@ -29,7 +29,7 @@ namespace scallop {
 
 struct SharpenOptions {
   double smooth_angle = 15;   // deg: a face is smooth when every face sharing a corner turns less
-  double min_angle = 25;      // deg: planes meeting at less than this are not an edge to restore
+  double min_angle = 25;      // deg: faces meeting at less than this are not an edge to restore
   double radius = 8;          // mean edge lengths: the neighbourhood of a local surface
   int min_region_faces = 10;  // smaller regions are noise, not faces of the part
 };
@@ -39,10 +39,10 @@ struct SharpenOptions {
 //                the input had them; feature edges dropped (mesh.sharp_edges finds them again)
 // regions        smooth regions found (of at least min_region_faces faces)
 // band_vertices  vertices on no smooth face, given a region by their distance to its plane
-// split_edges    edges split on the line where two regions' planes meet
-// moved_vertices vertices moved onto that line where it passes beside them (along their own
-//                face: the line lies in both planes), instead of a sliver split off an edge
-// corners        vertices moved onto the point where three regions' planes meet
+// split_edges    edges split on the curve where two regions' surfaces meet
+// moved_vertices vertices moved onto that curve where it passes beside them (along their own
+//                face), instead of a sliver split off an edge
+// corners        vertices moved onto the point where three regions' surfaces meet
 // skipped_edges  edges between two regions left whole: their planes nearly parallel or the line
 //                where they meet too far from the edge (more than its length)
 // largest_offset the farthest a new point lies from the edge it splits, or a vertex moved (mm):

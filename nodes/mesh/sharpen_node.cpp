@@ -13,9 +13,9 @@ NodeDecl make_sharpen_node() {
   d.version = 1;
   d.description =
       "sharp edges put back into a triangle mesh that interpolates a cloud (advancing front): the "
-      "chamfer its triangles cut across each edge is split where the two faces' local planes meet, "
+      "chamfer its triangles cut across each edge is split where the two faces' local surfaces (quadrics) meet, "
       "a vertex the line passes beside is moved onto it, and the vertex nearest a corner of three "
-      "faces onto the point where their planes meet (after Attene et al., Edge-Sharpener, 2003)";
+      "faces onto the point where their surfaces meet (after Attene et al., Edge-Sharpener, 2003)";
   d.input("mesh", "Mesh", "triangles, e.g. mesh.reconstruct's then mesh.repair's")
       .output("mesh", "Mesh", "the same surface with its edges and corners restored: the input's vertices, then the new ones")
       .output("report", "Report",
@@ -28,7 +28,7 @@ NodeDecl make_sharpen_node() {
       .number("min_angle", &SharpenOptions::min_angle, 1, 179, "deg",
               "faces meeting at less than this are not an edge to restore")
       .number("radius", &SharpenOptions::radius, 1, 100, "edge lengths",
-              "the neighbourhood each local plane is fitted over")
+              "the neighbourhood each local surface is fitted over")
       .integer("min_region_faces", &SharpenOptions::min_region_faces, 1, 1000000, "",
                "smooth regions with fewer faces are noise, not faces of the part");
   d.run = [](NodeContext& ctx) {

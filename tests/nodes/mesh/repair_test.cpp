@@ -95,6 +95,45 @@ std::vector<std::size_t> counts(const RepairReport& r) {
 }
 using Counts = std::vector<std::size_t>;
 
+// A triangulated cube (4 x 4 squares a side, edge 4) with the 2 triangles of one corner square of
+// its top taken out: a hole of 4 edges. fill_holes closes it, outward; a shorter limit leaves it.
+TEST(Repair, FillHolesClosesTheHolesUpToItsLength) {
+  const Mesh cube = test::cube_mesh(4, 4.0);
+  Mesh holed;
+  holed.vertices = cube.vertices;
+  std::size_t removed = 0;
+  for (std::size_t f = 0; f < cube.num_faces(); ++f) {
+    V c = V::Zero();
+    for (auto v : corners(cube, f)) c += cube.vertices[v];
+    c /= double(cube.face_size(f));
+    if (c.z() > 4 - 1e-9 && c.x() < 1 && c.y() < 1) {
+      ++removed;
+      continue;
+    }
+    holed.add_face_range(corners(cube, f));
+  }
+  ASSERT_GE(removed, 1u);
+  RepairOptions o;
+  o.fill_holes = 3;
+  RepairReport r;
+  const Mesh left = repair_mesh(holed, o, r);
+  EXPECT_EQ(r.holes_filled, 0u);
+  EXPECT_EQ(r.holes_left, 1u);
+  EXPECT_EQ(mesh_topology(left, mesh_edges(left)).boundary_loops, 1);
+  o.fill_holes = 4;
+  const Mesh closed = repair_mesh(holed, o, r);
+  EXPECT_EQ(r.holes_filled, 1u);
+  EXPECT_EQ(r.holes_left, 0u);
+  const MeshTopology t = mesh_topology(closed, mesh_edges(closed));
+  EXPECT_EQ(t.boundary_loops, 0);
+  EXPECT_EQ(t.non_manifold_edges, 0u);
+  expect_outward(closed, V(2, 2, 2));
+  double volume = 0;
+  for (std::size_t f = 0; f < closed.num_faces(); ++f)
+    volume += closed.vertices[closed.face(f)[0]].dot(face_area_vector(closed, f)) / 6.0;
+  EXPECT_NEAR(volume, 64.0, 1e-9);  // the patch lies in the top's plane
+}
+
 TEST(Repair, ACleanCubeIsLeftAsItIs) {
   RepairReport r;
   const Mesh m = repaired(unit_cube(), r);
@@ -245,6 +284,8 @@ TEST(Repair, NodeReportsTheChangesAndTheTopologyBeforeAndAfter) {
                                                {"non_manifold_edges_cut", 0},
                                                {"non_manifold_vertices_split", 0},
                                                {"borders_stitched", 0},
+                                               {"holes_filled", 0},
+                                               {"holes_left", 0},
                                                {"faces_turned_outward", 0},
                                                {"solids_merged", 0},
                                                {"solids_not_merged", 0}}));
