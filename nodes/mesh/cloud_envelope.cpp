@@ -1,5 +1,7 @@
 #include "nodes/mesh/cloud_envelope.h"
 
+#include "nodes/mesh/mesh_topology.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -14,7 +16,7 @@
 namespace scallop {
 
 CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d>& points, int k, double max_gap,
-                             double bend_spacings) {
+                             double bend_spacings, bool exact_feature_edges) {
   if (mesh.num_faces() == 0) throw std::invalid_argument("the mesh has no face");
   if (k < 1) throw std::invalid_argument("k must be >= 1");
   if (points.size() < std::size_t(k) || points.size() < 2)
@@ -85,13 +87,47 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
     faces.buildIndex();
     const double reach = 3 * e.spacing_median;
     std::vector<double> bend(nv, 0.0);
+    // With exact feature edges: the faces within reach on v's side of them (a walk across the
+    // other edges), none for a vertex on one.
+    const bool sides = exact_feature_edges && !mesh.feature_edges.empty();
+    const MeshEdges edges = sides ? mesh_edges(mesh) : MeshEdges();
+    const VertexFaces around = sides ? vertex_faces(mesh) : VertexFaces();
+    std::vector<char> feature(sides ? edges.size() : 0, 0), on_feature(sides ? nv : 0, 0);
+    for (const auto& fe : mesh.feature_edges)
+      if (sides)
+        if (const auto e = edges.find(fe[0], fe[1])) feature[*e] = 1, on_feature[fe[0]] = on_feature[fe[1]] = 1;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 256), [&](const tbb::blocked_range<std::size_t>& r) {
       std::vector<std::pair<std::uint32_t, double>> hits;
+      std::vector<std::uint32_t> stack, seen;
       for (std::size_t v = r.begin(); v < r.end(); ++v) {
         double c = least_cos[v];
-        faces.radiusSearch(mesh.vertices[v].data(), reach * reach, hits, nanoflann::SearchParams(32, 0, false));
-        for (const auto& [f, d2] : hits)
-          if (g.area[f] > 0) c = std::min(c, g.normal[f].dot(n[v]));
+        if (!sides) {
+          faces.radiusSearch(mesh.vertices[v].data(), reach * reach, hits, nanoflann::SearchParams(32, 0, false));
+          for (const auto& [f, d2] : hits)
+            if (g.area[f] > 0) c = std::min(c, g.normal[f].dot(n[v]));
+        } else if (on_feature[v]) {
+          c = 1;
+        } else {
+          stack.assign(around.faces(v), around.faces(v) + around.count(v));
+          seen = stack;
+          while (!stack.empty()) {
+            const std::uint32_t f = stack.back();
+            stack.pop_back();
+            if (g.area[f] > 0) c = std::min(c, g.normal[f].dot(n[v]));
+            for (std::size_t k = 0; k < mesh.face_size(f); ++k) {
+              const std::uint32_t e = edges.face_edge[mesh.face_start[f] + k];
+              if (feature[e]) continue;
+              for (std::size_t j = 0; j < edges.faces_on(e); ++j) {
+                const std::uint32_t h = edges.faces(e)[j];
+                if ((g.centroid[h] - mesh.vertices[v]).squaredNorm() > reach * reach ||
+                    std::find(seen.begin(), seen.end(), h) != seen.end())
+                  continue;
+                seen.push_back(h);
+                stack.push_back(h);
+              }
+            }
+          }
+        }
         c = std::clamp(c, 0.0, 1.0);  // beyond 90 degrees: s at most
         bend[v] = bend_spacings * e.spacing_median * std::sqrt(1 - c * c);
       }

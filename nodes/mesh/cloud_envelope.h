@@ -47,9 +47,12 @@ struct CloudEnvelope {
 // k       points per vertex; max_gap  0: 4 times the median point spacing.
 // bend    the bend allowance in spacings: s above is bend times the median spacing (1; less on a
 //         mesh whose edges were restored by mesh.sharpen, which no longer bevels them).
+// exact_feature_edges  the mesh's feature edges are the part's own (mesh.sharpen's restored
+//         edges): the allowance looks only at the faces on a vertex's side of them (reached
+//         without crossing one), and a vertex on one gets none; elsewhere (a chamfer left) as above.
 // Throws std::invalid_argument for a mesh without faces, fewer than k points, k < 1, a non-finite
 // point, max_gap < 0 or bend < 0.
 CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d>& points, int k, double max_gap = 0,
-                             double bend = 1);
+                             double bend = 1, bool exact_feature_edges = false);
 
 }  // namespace scallop

@@ -47,13 +47,17 @@ NodeDecl make_cloud_envelope_node() {
                    "point spacing")
       .param_float("bend", 1, 0, 10, "spacings",
                    "the bend allowance: where the mesh bends, the part may bend sharper between its points by up to "
-                   "this many median spacings times the sine of the bend (1 for a reconstruction that bevels edges)");
+                   "this many median spacings times the sine of the bend (1 for a reconstruction that bevels edges)")
+      .param_bool("exact_feature_edges", false,
+                  "the mesh's feature edges are the part's own (mesh.sharpen's restored edges): the allowance looks "
+                  "only at the faces on a vertex's side of them, and none on them; a chamfer left keeps it");
   d.run = [](NodeContext& ctx) {
     auto mesh = ctx.input<Mesh>("mesh");
     auto cloud = ctx.input<PointCloud>("cloud");
     CloudEnvelope e;
     try {
-      e = cloud_envelope(*mesh, cloud->points, int(ctx.integer("neighbours")), ctx.number("max_gap"), ctx.number("bend"));
+      e = cloud_envelope(*mesh, cloud->points, int(ctx.integer("neighbours")), ctx.number("max_gap"), ctx.number("bend"),
+                         ctx.flag("exact_feature_edges"));
     } catch (const std::invalid_argument& ex) {
       throw NodeError(std::string("mesh.cloud_envelope: ") + ex.what());
     }

@@ -461,6 +461,19 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
     }
   }
   if (mesh.has_normals()) res.mesh.normals = vertex_normals(res.mesh);
+
+  // The restored edges as the mesh's feature edges: both ends on an edge of the part (new points,
+  // vertices moved onto one or already on two regions, corners) and the faces turning there.
+  std::vector<char> on_edge(res.mesh.num_vertices(), 1);  // the new points are
+  for (std::size_t v = 0; v < nv; ++v) on_edge[v] = final_label[v] == kSeveral || final_label[v] == kCorner;
+  const MeshEdges out_edges = mesh_edges(res.mesh);
+  const FaceGeometry out_faces = face_geometry(res.mesh);
+  for (std::size_t e = 0; e < out_edges.size(); ++e) {
+    const auto [a, b] = out_edges.edges[e];
+    if (!on_edge[a] || !on_edge[b] || out_edges.faces_on(e) != 2) continue;
+    const std::uint32_t* f = out_edges.faces(e);
+    if (angle_deg(out_faces.normal[f[0]], out_faces.normal[f[1]]) > o.min_angle) res.mesh.feature_edges.push_back({a, b});
+  }
   return res;
 }
 

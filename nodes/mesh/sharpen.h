@@ -36,7 +36,9 @@ struct SharpenOptions {
 
 // mesh           the sharpened mesh: the input's vertices first, in order, then the new ones;
 //                face labels carried to the pieces of each face; vertex normals recomputed when
-//                the input had them; feature edges dropped (mesh.sharp_edges finds them again)
+//                the input had them; its feature edges the part's edges it now has (both ends on
+//                restored curves, corners or vertices already on two regions, the faces turning
+//                by more than min_angle), any the input had replaced
 // regions        smooth regions found (of at least min_region_faces faces)
 // band_vertices  vertices on no smooth face, given a region by their distance to its plane
 // split_edges    edges split on the curve where two regions' surfaces meet

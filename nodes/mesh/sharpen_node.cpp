@@ -17,7 +17,8 @@ NodeDecl make_sharpen_node() {
       "a vertex the line passes beside is moved onto it, and the vertex nearest a corner of three "
       "faces onto the point where their surfaces meet (after Attene et al., Edge-Sharpener, 2003)";
   d.input("mesh", "Mesh", "triangles, e.g. mesh.reconstruct's then mesh.repair's")
-      .output("mesh", "Mesh", "the same surface with its edges and corners restored: the input's vertices, then the new ones")
+      .output("mesh", "Mesh", "the same surface with its edges and corners restored: the input's vertices, then the new ones; its "
+              "feature edges the part's edges it now has")
       .output("report", "Report",
               "{regions (smooth faces joined), band_vertices (on no smooth face: given the region whose "
               "plane they lie on), split_edges, moved_vertices (onto an edge's line passing beside them), corners (vertices moved onto the point where three faces meet), skipped_edges (planes nearly parallel or meeting far "

@@ -1,4 +1,7 @@
 #include "nodes/mesh/cloud_envelope.h"
+#include <algorithm>
+#include "nodes/mesh/face_geometry.h"
+#include "nodes/mesh/mesh_topology.h"
 
 #include <gtest/gtest.h>
 
@@ -84,6 +87,38 @@ TEST(CloudEnvelope, TheBendAllowanceScalesWithBend) {
     EXPECT_EQ(none.out[v], 0.0);
     EXPECT_LT((none.outer.vertices[v] - cube.vertices[v]).norm(), 1e-12);
     EXPECT_NEAR(twice.out[v], 2 * bend(0.5, int(sides_sum(cube.vertices[v]).lpNorm<1>())), 1e-12);
+  }
+}
+
+// The cube's own edges as feature edges the part has exactly (mesh.sharpen's): no allowance on
+// them, and none beside them either (a vertex sees only the faces on its side); a bend the
+// feature edges do not explain keeps its allowance.
+TEST(CloudEnvelope, ExactFeatureEdgesNeedNoAllowance) {
+  Mesh cube = test::cube_mesh(4, 10);
+  const MeshEdges edges = mesh_edges(cube);
+  const FaceGeometry g = face_geometry(cube);
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    if (edges.faces_on(e) == 2 && angle_deg(g.normal[edges.faces(e)[0]], g.normal[edges.faces(e)[1]]) > 45)
+      cube.feature_edges.push_back(edges.edges[e]);
+  ASSERT_EQ(cube.feature_edges.size(), 12u * 4);
+  const std::vector<V> pts = box_side_points(0, 10, 0.5, 0);
+  const CloudEnvelope exact = cloud_envelope(cube, pts, 16, 0, 1.0, true);
+  EXPECT_EQ(exact.bend_allowance_max, 0.0);
+  for (std::size_t v = 0; v < cube.num_vertices(); ++v) EXPECT_EQ(exact.out[v], 0.0);
+  // the top's front edge (y = 0, z = 10) left out of them: the allowance comes back along it only
+  const auto front = [&](const std::array<std::uint32_t, 2>& fe) {
+    return cube.vertices[fe[0]].z() == 10 && cube.vertices[fe[1]].z() == 10 && cube.vertices[fe[0]].y() == 0 &&
+           cube.vertices[fe[1]].y() == 0;
+  };
+  cube.feature_edges.erase(std::remove_if(cube.feature_edges.begin(), cube.feature_edges.end(), front),
+                           cube.feature_edges.end());
+  ASSERT_EQ(cube.feature_edges.size(), 11u * 4);
+  const CloudEnvelope partial = cloud_envelope(cube, pts, 16, 0, 1.0, true);
+  EXPECT_NEAR(partial.bend_allowance_max, bend(0.5, 2), 1e-12);
+  for (std::size_t v = 0; v < cube.num_vertices(); ++v) {
+    const V& p = cube.vertices[v];
+    const bool on_front = p.y() == 0 && p.z() == 10 && p.x() > 0 && p.x() < 10;
+    EXPECT_EQ(partial.out[v] > 0, on_front) << p.transpose();
   }
 }
 

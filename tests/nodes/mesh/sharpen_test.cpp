@@ -96,6 +96,20 @@ TEST(Sharpen, ABoxsChamferedEdgesAndCornersAreRestored) {
   EXPECT_EQ(r.corners, 8u);
   EXPECT_GT(r.split_edges, 0u);
   EXPECT_GT(r.moved_vertices, 0u);
+  // Its feature edges are the box's edges, and run along all twelve (total length 4 (20+12+8)).
+  ASSERT_FALSE(r.mesh.feature_edges.empty());
+  double length = 0;
+  for (const auto& [a, b] : r.mesh.feature_edges) {
+    for (std::uint32_t v : {a, b}) {
+      const Eigen::Vector3d& p = r.mesh.vertices[v];
+      int bounds = 0;
+      for (int k = 0; k < 3; ++k) bounds += std::abs(p[k] - lo[k]) < 1e-9 || std::abs(p[k] - hi[k]) < 1e-9;
+      EXPECT_GE(bounds, 2) << p.transpose();
+    }
+    length += (r.mesh.vertices[a] - r.mesh.vertices[b]).norm();
+  }
+  EXPECT_GT(length, 0.9 * 4 * (20 + 12 + 8));
+  EXPECT_LT(length, 1.02 * 4 * (20 + 12 + 8));  // a few short ones across a corner
   // Every vertex, moved or new, is on the box (moved along its own face onto an edge or a corner).
   ASSERT_GT(r.mesh.num_vertices(), mesh.num_vertices());
   for (const auto& v : r.mesh.vertices) EXPECT_LT(std::abs(sdf(v)), 1e-9);
