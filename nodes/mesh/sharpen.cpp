@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "nodes/cloud/knn.h"
+#include "nodes/geom/segment.h"
 #include "nodes/mesh/face_geometry.h"
 #include "nodes/mesh/mesh_topology.h"
 
@@ -29,7 +30,7 @@ constexpr int kNearAnchors = 128;  // vertices of known region around a point, f
 // A region's surface near a point: a quadric height w(u, v) over the least-squares plane of its
 // vertices there (frame t1, t2, normal about point), or that plane where a quadric is not
 // determined (too few points, or all on a line).
-struct Plane {
+struct LocalSurface {
   Eigen::Vector3d normal, point, t1, t2;
   std::array<double, 6> c{};  // w = c0 + c1 u + c2 v + c3 u^2 + c4 uv + c5 v^2, (u, v) in mm
   // Height of x above the surface (along normal), and its gradient.
@@ -48,7 +49,7 @@ struct Plane {
 
 // The local surface of the points: their plane, then a quadric over it where 10 or more points
 // determine one.
-std::optional<Plane> fit_plane(const std::vector<Eigen::Vector3d>& pts) {
+std::optional<LocalSurface> fit_local_surface(const std::vector<Eigen::Vector3d>& pts) {
   if (pts.size() < 3) return std::nullopt;
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   for (const auto& p : pts) c += p;
@@ -57,7 +58,7 @@ std::optional<Plane> fit_plane(const std::vector<Eigen::Vector3d>& pts) {
   for (const auto& p : pts) C += (p - c) * (p - c).transpose();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
   if (es.info() != Eigen::Success || !(es.eigenvalues()[1] > 1e-6 * es.eigenvalues()[2])) return std::nullopt;
-  Plane plane{es.eigenvectors().col(0), c, es.eigenvectors().col(2), es.eigenvectors().col(1)};
+  LocalSurface plane{es.eigenvectors().col(0), c, es.eigenvectors().col(2), es.eigenvectors().col(1)};
   if (pts.size() >= 10) {
     Eigen::MatrixXd A(pts.size(), 6);
     Eigen::VectorXd w(pts.size());
@@ -83,36 +84,36 @@ std::optional<Plane> fit_plane(const std::vector<Eigen::Vector3d>& pts) {
 // x moved onto all of the surfaces (two: their curve of intersection; three: their common point)
 // by Gauss-Newton steps of least length, from a start on or near it (where their planes meet).
 // The start itself if that does not converge.
-Eigen::Vector3d onto(std::initializer_list<const Plane*> surfaces, const Eigen::Vector3d& start) {
+Eigen::Vector3d onto(std::initializer_list<const LocalSurface*> surfaces, const Eigen::Vector3d& start) {
   const int m = static_cast<int>(surfaces.size());
   Eigen::Vector3d x = start;
   for (int it = 0; it < 8; ++it) {
     Eigen::MatrixXd J(m, 3);
     Eigen::VectorXd f(m);
     int i = 0;
-    for (const Plane* s : surfaces) J.row(i) = s->gradient(x).transpose(), f[i++] = s->value(x);
+    for (const LocalSurface* s : surfaces) J.row(i) = s->gradient(x).transpose(), f[i++] = s->value(x);
     if (f.cwiseAbs().maxCoeff() < 1e-12) return x;
     const Eigen::Vector3d step = J.transpose() * (J * J.transpose()).ldlt().solve(f);
     if (!step.allFinite()) return start;
     x -= step;
   }
   double worst = 0;
-  for (const Plane* s : surfaces) worst = std::max(worst, s->distance(x));
+  for (const LocalSurface* s : surfaces) worst = std::max(worst, s->distance(x));
   return worst < 1e-9 && x.allFinite() ? x : start;
 }
 
 // The regions' vertices near a point, to fit each region's local plane there.
-class LocalPlanes {
+class LocalSurfaces {
  public:
-  LocalPlanes(const std::vector<Eigen::Vector3d>& V, const std::vector<int>& label, double radius)
+  LocalSurfaces(const std::vector<Eigen::Vector3d>& V, const std::vector<int>& label, double radius)
       : label_(label), radius2_(radius * radius) {
     for (std::size_t v = 0; v < V.size(); ++v)
       if (label[v] >= 0) anchor_.push_back(static_cast<int>(v)), anchor_pos_.push_back(V[v]);
     if (!anchor_pos_.empty()) index_ = std::make_unique<KnnIndex>(anchor_pos_);
   }
   // The regions with vertices within the radius of q, and the plane of each that has enough.
-  std::vector<std::pair<int, Plane>> near(const Eigen::Vector3d& q) const {
-    std::vector<std::pair<int, Plane>> out;
+  std::vector<std::pair<int, LocalSurface>> near(const Eigen::Vector3d& q) const {
+    std::vector<std::pair<int, LocalSurface>> out;
     if (!index_) return out;
     std::vector<int> idx;
     std::vector<double> d2;
@@ -127,11 +128,11 @@ class LocalPlanes {
       pts.clear();
       for (std::size_t j = 0; j < idx.size(); ++j)
         if (d2[j] <= radius2_ && label_[anchor_[idx[j]]] == r) pts.push_back(anchor_pos_[idx[j]]);
-      if (auto p = fit_plane(pts)) out.emplace_back(r, *p);
+      if (auto p = fit_local_surface(pts)) out.emplace_back(r, *p);
     }
     return out;
   }
-  static const Plane* find(const std::vector<std::pair<int, Plane>>& planes, int region) {
+  static const LocalSurface* find(const std::vector<std::pair<int, LocalSurface>>& planes, int region) {
     for (const auto& [r, p] : planes)
       if (r == region) return &p;
     return nullptr;
@@ -145,7 +146,7 @@ class LocalPlanes {
   std::unique_ptr<KnnIndex> index_;
 };
 
-double angle_between_planes_deg(const Plane& a, const Plane& b) {
+double angle_between_planes_deg(const LocalSurface& a, const LocalSurface& b) {
   return angle_deg(a.normal, b.normal.dot(a.normal) < 0 ? Eigen::Vector3d(-b.normal) : b.normal);
 }
 
@@ -162,7 +163,7 @@ struct Line {
 };
 
 // Where planes a and b meet, its origin the point of both nearest m.
-Line meet(const Plane& a, const Plane& b, const Eigen::Vector3d& m) {
+Line meet(const LocalSurface& a, const LocalSurface& b, const Eigen::Vector3d& m) {
   Eigen::Matrix2d G;
   G << 1, a.normal.dot(b.normal), a.normal.dot(b.normal), 1;
   const Eigen::Vector2d rhs(a.normal.dot(a.point - m), b.normal.dot(b.point - m));
@@ -170,11 +171,6 @@ Line meet(const Plane& a, const Plane& b, const Eigen::Vector3d& m) {
   return {m + st[0] * a.normal + st[1] * b.normal, a.normal.cross(b.normal).normalized()};
 }
 
-double distance_to_segment(const Eigen::Vector3d& x, const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
-  const Eigen::Vector3d e = q - p;
-  const double t = std::clamp(e.squaredNorm() > 0 ? (x - p).dot(e) / e.squaredNorm() : 0.0, 0.0, 1.0);
-  return (p + t * e - x).norm();
-}
 
 }  // namespace
 
@@ -259,7 +255,7 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
       if (label[v] == kUnassigned) label[v] = r;
       else if (label[v] != r) label[v] = kSeveral;
     }
-  const LocalPlanes planes(mesh.vertices, label, o.radius * res.edge_length);
+  const LocalSurfaces planes(mesh.vertices, label, o.radius * res.edge_length);
   std::vector<int> final_label = label;
   for (std::size_t v = 0; v < nv; ++v) {
     if (label[v] != kUnassigned || vf.count(v) == 0) continue;
@@ -285,8 +281,8 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
         }
       if (around.size() != 3) continue;
       const auto near = planes.near(mesh.vertices[v]);
-      const Plane *p0 = LocalPlanes::find(near, around[0]), *p1 = LocalPlanes::find(near, around[1]),
-                  *p2 = LocalPlanes::find(near, around[2]);
+      const LocalSurface *p0 = LocalSurfaces::find(near, around[0]), *p1 = LocalSurfaces::find(near, around[1]),
+                  *p2 = LocalSurfaces::find(near, around[2]);
       if (!p0 || !p1 || !p2) continue;
       Eigen::Matrix3d A;
       A << p0->normal.transpose(), p1->normal.transpose(), p2->normal.transpose();
@@ -328,7 +324,7 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
   // The line where the local planes of regions ra and rb meet near the segment pq, the parameter
   // of the segment's point nearest it, that line's point nearest the segment and its distance.
   struct Crossing {
-    Plane a, b;  // the two regions' local surfaces
+    LocalSurface a, b;  // the two regions' local surfaces
     Line line;   // where their planes meet
     double t;
     Eigen::Vector3d at;  // on both surfaces, beside the segment's point t
@@ -336,12 +332,12 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
   };
   auto crossing = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q, int ra, int rb) -> std::optional<Crossing> {
     const auto near = planes.near(0.5 * (p + q));
-    const Plane *pa = LocalPlanes::find(near, ra), *pb = LocalPlanes::find(near, rb);
+    const LocalSurface *pa = LocalSurfaces::find(near, ra), *pb = LocalSurfaces::find(near, rb);
     if (!pa || !pb || angle_between_planes_deg(*pa, *pb) < o.min_angle) return std::nullopt;
     const Line line = meet(*pa, *pb, 0.5 * (p + q));
     const double t = line.nearest_on_segment(p, q);
     const Eigen::Vector3d x = onto({pa, pb}, line.project(p + t * (q - p)));
-    const double offset = distance_to_segment(x, p, q);
+    const double offset = segment_distance(x, p, q);
     if (!x.allFinite() || offset > (q - p).norm()) return std::nullopt;  // not this edge's line
     return Crossing{*pa, *pb, line, t, x, offset};
   };
@@ -363,7 +359,7 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
     // should the end stay (below), the edge is split a tenth of its length from it
     const Eigen::Vector3d p = mesh.vertices[a], q = mesh.vertices[b];
     const Eigen::Vector3d x = onto({&c->a, &c->b}, line.project(p + std::clamp(t, kEnd, 1 - kEnd) * (q - p)));
-    near_ends.push_back({e, x, distance_to_segment(x, p, q)});
+    near_ends.push_back({e, x, segment_distance(x, p, q)});
     const std::uint32_t end = t <= kEnd ? a : b;
     const Eigen::Vector3d to = onto({&c->a, &c->b}, line.project(mesh.vertices[end]));
     const double d = (to - mesh.vertices[end]).norm();
