@@ -137,6 +137,12 @@ Mesh advancing_front(const std::vector<Eigen::Vector3d>& P, const std::vector<Ei
   std::vector<std::array<std::size_t, 3>> tris;
   CGAL::advancing_front_surface_reconstruction(points.begin(), points.end(), std::back_inserter(tris),
                                                o.radius_ratio_bound, o.beta);
+  // The front hands its triangles over in an order that changes from run to run (its ties are
+  // broken by where the triangulation's cells lie in memory): each triangle is started at its
+  // lowest vertex (keeping its orientation) and the list sorted, so the same cloud gives the same
+  // mesh, and everything after it the same programs.
+  for (auto& t : tris) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+  std::sort(tris.begin(), tris.end());
   std::vector<Eigen::Vector3d> V(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) V[i] = to_eigen(points[i]);
   Mesh m = compact_mesh(V, tris);

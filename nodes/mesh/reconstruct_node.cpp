@@ -11,7 +11,7 @@ namespace scallop::mesh_nodes {
 NodeDecl make_reconstruct_node() {
   NodeDecl d;
   d.type = "mesh.reconstruct";
-  d.version = 1;
+  d.version = 2;  // 2: the advancing front's triangles in a fixed order (they changed from run to run)
   d.description =
       "a cloud -> a triangle mesh: advancing front (interpolates the points, keeps sharp edges; "
       "optional sharpness-aware bilateral smoothing first for noisy clouds) or Poisson (watertight, "

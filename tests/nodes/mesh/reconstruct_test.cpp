@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <random>
+#include <thread>
 
 #include "nodes/mesh/mesh_topology.h"
 #include "nodes/types/cloud.h"
@@ -50,6 +51,43 @@ TEST(Reconstruct, AdvancingFrontInterpolatesASphereIntoOneClosedOutwardSurface) 
   EXPECT_GT(signed_volume(r.mesh), 0.99 * ball);
   EXPECT_LT(signed_volume(r.mesh), ball);
   EXPECT_EQ(r.distance_max, 0.0);
+}
+
+// The front breaks ties between equal candidates by where the triangulation's cells lie in memory,
+// which differs between threads (each has its own heap state): a grid on a box's faces is full of
+// such ties. Whatever thread runs it, the same cloud must give the same faces in the same order.
+TEST(Reconstruct, AdvancingFrontGivesTheSameFacesOnEveryThread) {
+  std::vector<Eigen::Vector3d> P, N;
+  for (int a = 0; a <= 20; ++a)
+    for (int b = 0; b <= 20; ++b)
+      for (int axis = 0; axis < 3; ++axis)
+        for (double side : {0.0, 10.0}) {
+          Eigen::Vector3d p, n = Eigen::Vector3d::Zero();
+          p[axis] = side;
+          p[(axis + 1) % 3] = 0.5 * a;
+          p[(axis + 2) % 3] = 0.5 * b;
+          n[axis] = side > 0 ? 1 : -1;
+          if (a == 0 || a == 20 || b == 0 || b == 20) continue;  // the edges and corners are on two faces
+          P.push_back(p);
+          N.push_back(n);
+        }
+  const Mesh first = reconstruct_surface(P, N, {}).mesh;
+  ASSERT_GT(first.num_faces(), 1000u);
+  std::vector<Mesh> on_threads(4);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      std::vector<std::vector<char>> churn;  // a heap in another state than the main thread's
+      for (int i = 0; i < 200 * (t + 1); ++i) churn.emplace_back(std::size_t(64 + 97 * i % 4000));
+      for (std::size_t i = 0; i < churn.size(); i += 2) churn[i].clear(), churn[i].shrink_to_fit();
+      on_threads[t] = reconstruct_surface(P, N, {}).mesh;
+    });
+  for (auto& t : threads) t.join();
+  for (const Mesh& m : on_threads) {
+    EXPECT_EQ(m.vertices, first.vertices);
+    EXPECT_EQ(m.face_start, first.face_start);
+    EXPECT_EQ(m.face_vertices, first.face_vertices);
+  }
 }
 
 TEST(Reconstruct, PoissonOfANoisySphereIsWithinSigmaAndOnePercentOfTheRadius) {
