@@ -31,7 +31,8 @@
 // seed tried; the fandisk at 1000 quads: two), the holes are closed and the mesh kept all quads
 // (fill_triangle_holes.h): a hole would pass for the part's border downstream. The result must
 // lie near the input (quads_off_the_input), be manifold and consistently oriented, and have no
-// more boundary loops than the input; otherwise an error says what is wrong. Its feature edges are the
+// more boundary loops than the input; otherwise the next seed is tried (options.tries), and then an error
+// says what was wrong with each. Its feature edges are the
 // sharp edges at options.angle_deg (sharp_edges.h).
 //
 // Snapping: QuadriFlow's vertices lie off the part near sharp features and corners (0.1 mm on
@@ -61,6 +62,7 @@ struct QuadRemeshOptions {
   int target_faces = 4000;          // quads asked of QuadriFlow (it gives about as many)
   double target_edge_length = 0;    // mm; > 0: target_faces = area / length^2 instead
   int seed = 0;                     // QuadriFlow's random seed: the same seed, the same quads
+  int tries = 3;                    // seeds tried (seed, seed + 1, ...) while the quads are not usable
   double angle_deg = 50;            // an edge is sharp when its faces' normals differ by more
   double feature_tolerance = 0.1;   // of the output's mean edge length (feature share above)
   std::string blender;              // Blender's executable; "": $SCALLOP_BLENDER, else blender on PATH
@@ -91,7 +93,8 @@ struct QuadRemeshReport {
   double quadriflow_seconds = 0;  // of which in the remesher
   std::string blender_version;
   std::filesystem::path blender;  // the executable run
-  int seed = 0;
+  int seed = 0;                   // the seed whose quads were used
+  int seeds_tried = 1;            // 1 + the seeds whose quads were not usable (torn, not a manifold)
   SnapReport snap;                // the vertices moved onto the input (when options.snap)
   std::string warning;            // what the user must see, or empty (feature curves QuadriFlow does not keep)
 };

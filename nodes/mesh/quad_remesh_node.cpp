@@ -12,7 +12,7 @@ namespace scallop::mesh_nodes {
 NodeDecl make_quad_remesh_node() {
   NodeDecl d;
   d.type = "mesh.quad_remesh";
-  d.version = 3;
+  d.version = 4;  // 4: the next seeds tried when the quads are not usable; seeds_tried
   d.description =
       "remeshes into quads aligned with the sharp features by QuadriFlow, run in Blender (Debian package blender) "
       "as a separate process";
@@ -33,7 +33,7 @@ NodeDecl make_quad_remesh_node() {
               "repeated_corners_removed, triangles_paired (two triangles a repeated corner left, sharing an edge, "
               "made one quad), triangles_opened (a lone one, closed as a hole), faces_dropped, components_reversed, "
               "seconds, quadriflow_seconds, "
-              "blender_version, blender, seed, snap: {corners, feature_vertices, surface_vertices (moved onto the input's "
+              "blender_version, blender, seed (the one used), seeds_tried, snap: {corners, feature_vertices, surface_vertices (moved onto the input's "
               "corners, feature curves, faces), kept, off_surface_max (mm, before), moved_max (mm)}, topology}");
   d.options<QuadRemeshOptions>()
       .integer("target_faces", &QuadRemeshOptions::target_faces, 1, 10000000, "",
@@ -41,6 +41,9 @@ NodeDecl make_quad_remesh_node() {
       .number("target_edge_length", &QuadRemeshOptions::target_edge_length, 0, 1e6, "mm",
               "> 0: sets target_faces to the mesh's area over its square")
       .integer("seed", &QuadRemeshOptions::seed, 0, 2147483647, "", "QuadriFlow's random seed (same seed, same quads)")
+      .integer("tries", &QuadRemeshOptions::tries, 1, 100, "",
+               "seeds tried in turn (seed, seed + 1, ...) while QuadriFlow's quads tear holes or are not a manifold; "
+               "the report says which was used")
       .number("angle", &QuadRemeshOptions::angle_deg, 0, 179.9, "deg",
               "sharp edges (faces' normals further apart; 50 as in the paper): the output's feature edges, and the "
               "input's feature curves when it has no feature_edges")
@@ -99,6 +102,7 @@ NodeDecl make_quad_remesh_node() {
                    {"blender_version", r.blender_version},
                    {"blender", r.blender.string()},
                    {"seed", r.seed},
+                   {"seeds_tried", r.seeds_tried},
                    {"topology", topology_report(out)}};
     if (!r.warning.empty()) ctx.warn(r.warning);
     ctx.set("report", std::move(report));

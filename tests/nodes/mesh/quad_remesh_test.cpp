@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdlib>
+#include <fstream>
 
 #include "engine/node.h"
 #include "nodes/mesh/fill_triangle_holes.h"
@@ -162,7 +163,7 @@ TEST(QuadRemesh, QuadriFlowsDoubletsAreZippedAwayAndOtherHolesRefused) {
   EXPECT_EQ(holes_torn(cube, zipped), "");
   EXPECT_EQ(holes_torn(cube, torn),
             "QuadriFlow's quads have 1 boundary loop (of 4 edges) where the input has 0: it tore holes, usually "
-            "where the part has details finer than the quads; raise target_faces or try another seed");
+            "where the part has details finer than the quads (raise target_faces)");
 }
 
 // A quad with a repeated corner comes out of clean_quadriflow_output as a triangle, which
@@ -289,6 +290,60 @@ TEST(QuadRemesh, WhenBlenderFailsTheErrorEndsWithItsLastLines) {
   EXPECT_EQ(refusal(test::tetrahedron(), {{"blender", fake.string()}}),
             "mesh.quad_remesh: Blender (" + fake.string() + ") failed with exit status 2; its last lines of output:" +
                 lines);
+}
+
+// The script's output file as Blender would write it: the mesh's vertices less `centre` (the
+// centre of the input's bounding box), as floats.
+void write_script_output(const std::filesystem::path& file, const Mesh& m, const V& centre) {
+  std::ofstream out(file, std::ios::binary);
+  out << "SCQO\nfake 1.0\n0.5\n";
+  auto put = [&](auto x) { out.write(reinterpret_cast<const char*>(&x), sizeof x); };
+  put(std::uint32_t(m.num_vertices()));
+  put(std::uint32_t(m.num_faces()));
+  put(std::uint32_t(m.face_vertices.size()));
+  for (const V& v : m.vertices)
+    for (int k = 0; k < 3; ++k) put(float(v[k] - centre[k]));
+  for (std::size_t f = 0; f < m.num_faces(); ++f) put(std::int32_t(m.face_size(f)));
+  for (auto c : m.face_vertices) put(std::int32_t(c));
+}
+
+// QuadriFlow now and then tears a hole that another seed does not (the domed block's 200 000-point
+// reconstruction, seed 0). A fake Blender that writes a cube with one side torn out for seeds 0
+// and 1 and the whole cube for seed 2: the node goes on to the next seed and says so.
+TEST(QuadRemesh, TornQuadsAreTriedAgainWithTheNextSeed) {
+  const Mesh cube = test::quad_box({2, 2, 2}, V(1, 1, 1));
+  Mesh torn = cube;  // its last face left out: a hole of 4 edges
+  torn.face_start.pop_back();
+  torn.face_vertices.resize(torn.face_start.back());
+  test::TempDir dir;
+  write_script_output(dir.path / "torn.bin", torn, V(0.5, 0.5, 0.5));
+  write_script_output(dir.path / "whole.bin", cube, V(0.5, 0.5, 0.5));
+  const auto fake = dir.path / "blender";
+  // ... -- in out target seed: the output file is the third argument from the end, the seed the last.
+  test::write_file(fake, "#!/bin/sh\neval out=\\${$(($# - 2))}\neval seed=\\${$#}\n"
+                         "if [ \"$seed\" -ge 2 ]; then cp " + (dir.path / "whole.bin").string() + " \"$out\"; else cp " +
+                         (dir.path / "torn.bin").string() + " \"$out\"; fi\n");
+  ::chmod(fake.c_str(), 0755);
+  const std::string tear =
+      "QuadriFlow's quads have 1 boundary loop (of 4 edges) where the input has 0: it tore holes, usually where the "
+      "part has details finer than the quads (raise target_faces)";
+  std::vector<std::string> warnings;
+  const auto out = test::run_node(make_quad_remesh_node(), {{"blender", fake.string()}, {"target_faces", 24}},
+                                  {{"mesh", std::make_shared<Mesh>(cube)}}, nullptr, &warnings);
+  const Mesh& q = *std::dynamic_pointer_cast<const Mesh>(out.at("mesh"));
+  EXPECT_EQ(q.num_faces(), 24u);
+  EXPECT_EQ(std::abs(six_volume(q)), 6.0);
+  const nlohmann::json& r = std::dynamic_pointer_cast<const Report>(out.at("report"))->data;
+  EXPECT_EQ(r["seed"], 2);
+  EXPECT_EQ(r["seeds_tried"], 3);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], "QuadriFlow's quads were not usable with seed 0: " + tear + "; seed 1: " + tear +
+                             "; seed 2 was used");
+  // With fewer tries than it takes, the error names every seed tried.
+  EXPECT_EQ(refusal(cube, {{"blender", fake.string()}, {"tries", 2}}),
+            "mesh.quad_remesh: with every seed tried, seed 0: " + tear + "; seed 1: " + tear);
+  EXPECT_EQ(refusal(cube, {{"blender", fake.string()}, {"tries", 1}}),
+            "mesh.quad_remesh: seed 0: " + tear + "; try another seed or target_faces");
 }
 
 // QuadriFlow that does not converge scatters its vertices far off the part; a 200 000-point
