@@ -2,7 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -45,11 +45,6 @@ std::optional<fs::path> find_executable(const std::string& name) {
 ProcessResult run_process(const std::vector<std::string>& argv, const fs::path& log, const fs::path& tmpdir,
                           double timeout_s, const std::function<void(double)>& waiting) {
   if (argv.empty()) throw std::runtime_error("no program to run");
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0600);
-  posix_spawn_file_actions_adddup2(&actions, 1, 2);
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
@@ -60,10 +55,42 @@ ProcessResult run_process(const std::vector<std::string>& argv, const fs::path& 
   std::vector<char*> env;
   for (std::string& e : env_text) env.push_back(e.data());
   env.push_back(nullptr);
-  pid_t pid = 0;
-  const int err = posix_spawn(&pid, argv[0].c_str(), &actions, nullptr, args.data(), env.data());
-  posix_spawn_file_actions_destroy(&actions);
-  if (err != 0) throw std::runtime_error("cannot run " + argv[0] + ": " + std::strerror(err));
+  // fork and exec rather than posix_spawn, for one thing posix_spawn cannot ask: the child is
+  // killed when this thread ends (the run stopped by Ctrl-C, a Slurm time limit or SIGKILL), so
+  // that a Blender run does not outlive the scallop that started it. Between fork and exec the
+  // child only makes system calls.
+  const pid_t parent = ::getpid();
+  int ready[2];  // closed on exec; the child writes its errno into it if exec fails
+  if (::pipe2(ready, O_CLOEXEC) != 0) throw std::runtime_error(std::string("cannot run ") + argv[0] + ": " + std::strerror(errno));
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    const int err = errno;
+    ::close(ready[0]), ::close(ready[1]);
+    throw std::runtime_error("cannot run " + argv[0] + ": " + std::strerror(err));
+  }
+  if (pid == 0) {
+    ::close(ready[0]);
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(127);  // the parent ended before prctl
+    const int in = ::open("/dev/null", O_RDONLY), out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0600);
+    if (in >= 0 && out >= 0 && ::dup2(in, 0) >= 0 && ::dup2(out, 1) >= 0 && ::dup2(out, 2) >= 0)
+      ::execve(argv[0].c_str(), args.data(), env.data());
+    const int err = errno;
+    (void)!::write(ready[1], &err, sizeof err);
+    ::_exit(127);
+  }
+  ::close(ready[1]);
+  int exec_error = 0;
+  ssize_t got;
+  while ((got = ::read(ready[0], &exec_error, sizeof exec_error)) < 0 && errno == EINTR) {
+  }
+  ::close(ready[0]);
+  if (got == sizeof exec_error) {
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    throw std::runtime_error("cannot run " + argv[0] + ": " + std::strerror(exec_error));
+  }
 
   ProcessResult r;
   const auto start = std::chrono::steady_clock::now();

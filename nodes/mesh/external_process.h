@@ -25,7 +25,8 @@ struct ProcessResult {
 // stderr both appended to log, in this process's environment with TMPDIR set to tmpdir when it is
 // not empty (so that what it leaves there when killed goes with that folder). waiting(seconds so
 // far) is called about every second while it runs. A run longer than timeout_s is killed
-// (SIGKILL, that child alone). Throws std::runtime_error when the process cannot be started.
+// (SIGKILL, that child alone); so is one whose caller's thread ends first (the run was stopped).
+// Throws std::runtime_error when the process cannot be started.
 ProcessResult run_process(const std::vector<std::string>& argv, const std::filesystem::path& log,
                           const std::filesystem::path& tmpdir, double timeout_s,
                           const std::function<void(double)>& waiting = {});
