@@ -8,8 +8,10 @@
 
 namespace scallop {
 
-SharpEdges sharp_edges(const Mesh& mesh, const MeshEdges& edges, double theta) {
+SharpEdges sharp_edges(const Mesh& mesh, const MeshEdges& edges, double theta, double fold) {
   if (!(theta >= 0 && theta < 180)) throw std::invalid_argument("the angle must lie in [0, 180) degrees");
+  if (!(fold > theta && fold <= 180))
+    throw std::invalid_argument("the fold angle must lie above the angle and at most 180 degrees");
   const FaceGeometry g = face_geometry(mesh);
   SharpEdges out;
   for (std::size_t e = 0; e < edges.size(); ++e) {
@@ -24,7 +26,10 @@ SharpEdges sharp_edges(const Mesh& mesh, const MeshEdges& edges, double theta) {
     const Eigen::Vector3d& a = g.normal[edges.faces(e)[0]];
     const Eigen::Vector3d& b = g.normal[edges.faces(e)[1]];
     if (a.squaredNorm() == 0 || b.squaredNorm() == 0) continue;
-    if (angle_deg(a, b) > theta) {
+    const double turn = angle_deg(a, b);
+    if (turn > fold) {
+      ++out.folds;
+    } else if (turn > theta) {
       out.edges.push_back(edges.edges[e]);
       out.length += (mesh.vertices[edges.edges[e][0]] - mesh.vertices[edges.edges[e][1]]).norm();
     }

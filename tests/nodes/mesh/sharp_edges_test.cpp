@@ -132,11 +132,33 @@ TEST(SharpEdges, EdgesWithThreeFacesAreCountedNotRated) {
   EXPECT_EQ(s.boundary_edges, 2u);  // the fin's two free edges
 }
 
+// A face turned over onto its neighbours (a vertex moved past its opposite edge): its three
+// edges turn by 180 degrees. With a fold angle below that they are folds, not edges of the part;
+// the cube's 90-degree edges stay sharp.
+TEST(SharpEdges, AFaceTurnedOverIsAFoldNotAnEdge) {
+  Mesh m = test::cube_mesh(4);
+  // On the face z = 1 the vertex (0.5, 0.5, 1) moved past the far edge of one of its triangles.
+  const auto centre = static_cast<std::uint32_t>(
+      std::find(m.vertices.begin(), m.vertices.end(), Eigen::Vector3d(0.5, 0.5, 1)) - m.vertices.begin());
+  ASSERT_LT(centre, m.vertices.size());
+  const std::size_t before = sharp(m).edges.size();
+  Mesh folded = m;
+  folded.vertices[centre] = Eigen::Vector3d(0.5, 0.5, 1) + Eigen::Vector3d(0.3, 0.3, 0);
+  const SharpEdges all = sharp(folded), parted = sharp_edges(folded, mesh_edges(folded), 50, 150);
+  EXPECT_GT(all.edges.size(), before);  // the turned-over faces' edges read as sharp
+  EXPECT_EQ(all.folds, 0u);
+  EXPECT_EQ(parted.edges, sharp(m).edges);
+  EXPECT_GT(parted.folds, 0u);
+  EXPECT_EQ(parted.folds, all.edges.size() - before);
+}
+
 TEST(SharpEdges, RefusesAnAngleOutsideTheRange) {
   const Mesh m = test::cube_mesh(1);
   EXPECT_THROW(sharp(m, 180), std::invalid_argument);
   EXPECT_THROW(sharp(m, -1), std::invalid_argument);
   EXPECT_THROW(sharp(m, std::nan("")), std::invalid_argument);
+  EXPECT_THROW(sharp_edges(m, mesh_edges(m), 50, 50), std::invalid_argument);
+  EXPECT_THROW(sharp_edges(m, mesh_edges(m), 50, 181), std::invalid_argument);
 }
 
 }  // namespace
