@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -578,7 +579,7 @@ Mesh quad_remesh(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshReport&
     } catch (const UnusableQuads& e) {
       report = before;
       failures += std::string(failures.empty() ? "" : "; ") + "seed " + std::to_string(run.seed) + ": " + e.what();
-      if (attempt + 1 >= o.tries)
+      if (attempt + 1 >= o.tries || run.seed == std::numeric_limits<int>::max())  // no seed past the largest
         throw std::runtime_error(std::string(o.tries > 1 ? "with every seed tried, " : "") + failures +
                                  (o.tries > 1 ? "" : "; try another seed or target_faces"));
     }
