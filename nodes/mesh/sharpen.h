@@ -18,7 +18,9 @@
 //      the edge.
 // Where that curve passes beside a vertex rather than across an edge, the vertex is moved onto
 // it, along its own face (the curve lies on both surfaces). No other vertex moves, and the
-// connectivity stays what it was (closed stays closed).
+// connectivity stays what it was (closed stays closed). A move that would turn a face over (a
+// face facing against the one it was cut from, or two faces folded onto each other) is made
+// only in part.
 #pragma once
 
 #include <cstddef>
@@ -47,13 +49,18 @@ struct SharpenOptions {
 // corners        vertices moved onto the point where three regions' surfaces meet
 // skipped_edges  edges between two regions left whole: their planes nearly parallel or the line
 //                where they meet too far from the edge (more than its length)
+// held_back      moved or new vertices held short of their edge's line (and off the feature
+//                edges), since all the way a face beside them would turn over: where the chamfer is
+//                narrower than the move, or new points crowd along the line
+// largest_held_back  the farthest one of them stays from the line (mm): the chamfer left there
 // largest_offset the farthest a new point lies from the edge it splits, or a vertex moved (mm):
 //                the deepest chamfer restored
 // edge_length    the mean edge length of the input (mm)
 struct SharpenResult {
   Mesh mesh;
   std::size_t regions = 0, band_vertices = 0, split_edges = 0, moved_vertices = 0, corners = 0, skipped_edges = 0;
-  double largest_offset = 0, edge_length = 0;
+  std::size_t held_back = 0;
+  double largest_offset = 0, largest_held_back = 0, edge_length = 0;
 };
 
 // Throws std::invalid_argument for a face that is not a triangle, an index out of range or a

@@ -10,7 +10,7 @@ namespace scallop::mesh_nodes {
 NodeDecl make_sharpen_node() {
   NodeDecl d;
   d.type = "mesh.sharpen";
-  d.version = 1;
+  d.version = 2;
   d.description =
       "sharp edges put back into a triangle mesh that interpolates a cloud (advancing front): the "
       "chamfer its triangles cut across each edge is split where the two faces' local surfaces (quadrics) meet, "
@@ -22,7 +22,8 @@ NodeDecl make_sharpen_node() {
       .output("report", "Report",
               "{regions (smooth faces joined), band_vertices (on no smooth face: given the region whose "
               "plane they lie on), split_edges, moved_vertices (onto an edge's line passing beside them), corners (vertices moved onto the point where three faces meet), skipped_edges (planes nearly parallel or meeting far "
-              "off), largest_offset (mm, the deepest chamfer restored), edge_length (mm, mean), vertices, faces}");
+              "off), held_back (vertices moved only part of the way, since all of it would turn a face over), "
+              "largest_held_back (mm, the chamfer left there), largest_offset (mm, the deepest chamfer restored), edge_length (mm, mean), vertices, faces}");
   d.options<SharpenOptions>()
       .number("smooth_angle", &SharpenOptions::smooth_angle, 0.1, 90, "deg",
               "a face is smooth when every face sharing a corner with it turns by less than this")
@@ -45,7 +46,8 @@ NodeDecl make_sharpen_node() {
     report.data = {{"regions", r.regions},          {"band_vertices", r.band_vertices},
                    {"split_edges", r.split_edges},  {"moved_vertices", r.moved_vertices},
                    {"corners", r.corners},
-                   {"skipped_edges", r.skipped_edges}, {"largest_offset", r.largest_offset},
+                   {"skipped_edges", r.skipped_edges}, {"held_back", r.held_back},
+                   {"largest_held_back", r.largest_held_back}, {"largest_offset", r.largest_offset},
                    {"edge_length", r.edge_length},  {"vertices", r.mesh.num_vertices()},
                    {"faces", r.mesh.num_faces()}};
     ctx.set("report", std::move(report));
