@@ -19,6 +19,7 @@
 #include <utility>
 
 #include "nodes/mesh/mesh_distance.h"
+#include "nodes/mesh/mesh_topology.h"
 #include "nodes/post/part_samples.h"
 
 namespace scallop {
@@ -96,7 +97,14 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   if (tris.empty()) throw std::invalid_argument("the part's mesh has no face with an area");
   const double tol = std::max(o.chord, 1e-3);
   const double nominal = std::sqrt(8 * r * H);
-  const double margin = std::max(0.0, (o.margin > 0 ? o.margin : nominal) - o.edge_uncertainty);
+  double edge_uncertainty = o.edge_uncertainty;
+  if (o.edge_uncertainty_edges > 0) {
+    const MeshEdges edges = mesh_edges(part);
+    double length = 0;
+    for (const auto& [a, b] : edges.edges) length += (part.vertices[a] - part.vertices[b]).norm();
+    if (!edges.edges.empty()) edge_uncertainty = std::max(edge_uncertainty, o.edge_uncertainty_edges * length / double(edges.edges.size()));
+  }
+  const double margin = std::max(0.0, (o.margin > 0 ? o.margin : nominal) - edge_uncertainty);
   const double T = 20 * H;
 
   // Spacing: raised until the samples fit max_samples.
@@ -362,6 +370,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   rep["samples_refined"] = samples.size() - n_grid;
   rep["spacing"] = spacing;
   rep["margin"] = margin;
+  rep["edge_uncertainty"] = edge_uncertainty;
   rep["surface_uncertainty"] = delta;
   rep["tool_radius"] = r;
   rep["scallop_limit"] = H;

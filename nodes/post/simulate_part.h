@@ -54,6 +54,10 @@ struct PartSimulateOptions {
   // mm: how far the mesh's edges may lie off the part's (a mesh made from a cloud): the interior
   // starts this much nearer them, so that it holds all of the part's own interior
   double edge_uncertainty = 0;
+  // the same in mean edge lengths of the part's mesh (a reconstruction's edges are about its
+  // cloud's spacing, and its edges of the part can lie a spacing or more off, where the chamfer
+  // was not restored in full); the larger of the two counts
+  double edge_uncertainty_edges = 0;
   std::size_t max_samples = 1500000;
   Eigen::Vector3d base_normal = Eigen::Vector3d::Zero();  // outward normal of the base; 0: no base
   double base_angle = 10;     // degrees

@@ -12,7 +12,7 @@ namespace scallop::post_nodes {
 NodeDecl make_simulate_part_node() {
   NodeDecl d;
   d.type = "post.simulate_part";
-  d.version = 8;  // 2: the worst places begin with the moves that reach into the part; 3: faces folded onto a neighbour leave the side to the rays; 4: samples in strips along each face's longest edge, by area, as verify_part.py; 5: refinement seeded from the highest 1 %; 6: and from the samples a ball of 0.9 r reaches; 7: twice as densely where the edge of the reach may cross a seed's square; 8: the report says where the interior maximum stands (scallop_max_interior_at)
+  d.version = 9;  // 2: the worst places begin with the moves that reach into the part; 3: faces folded onto a neighbour leave the side to the rays; 4: samples in strips along each face's longest edge, by area, as verify_part.py; 5: refinement seeded from the highest 1 %; 6: and from the samples a ball of 0.9 r reaches; 7: twice as densely where the edge of the reach may cross a seed's square; 8: the report says where the interior maximum stands (scallop_max_interior_at); 9: edge_uncertainty_edges
   d.description =
       "the certificate of a whole part cut in several clampings: every setup's program taken back to the part, "
       "scallop left over the whole mesh, gouge and rapids against it (verify_part.py's definitions)";
@@ -45,6 +45,8 @@ NodeDecl make_simulate_part_node() {
       .number("edge_uncertainty", &PartSimulateOptions::edge_uncertainty, 0, 100, "mm",
               "how far the mesh's edges may lie off the part's (a mesh made from a cloud): the interior starts this "
               "much nearer them, so that it holds all of the part's own")
+      .number("edge_uncertainty_edges", &PartSimulateOptions::edge_uncertainty_edges, 0, 100, "mean edge lengths",
+              "the same in mean edge lengths of `mesh` (a reconstruction's are its cloud's spacing); the larger counts")
       .integer("max_samples", &PartSimulateOptions::max_samples, 1000, 100000000, "",
                "the spacing is raised to stay below this many samples");
   d.run = [](NodeContext& ctx) {

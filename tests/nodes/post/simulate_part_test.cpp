@@ -89,6 +89,16 @@ TEST(SimulatePart, EdgeUncertaintyBringsTheInteriorNearerTheEdges) {
   // interior reaches
   EXPECT_GT(widened["scallop_max_interior"].get<double>(), exact["scallop_max_interior"].get<double>() + 0.1);
   EXPECT_EQ(widened["scallop_max"], exact["scallop_max"]);
+  EXPECT_DOUBLE_EQ(widened["edge_uncertainty"].get<double>(), 0.6);
+  // In mean edge lengths: the box's twelve edges, 4 x 20 + 4 x 20 + 4 x 10 mm, are 50/3 mm on average.
+  o.edge_uncertainty = 0;
+  o.edge_uncertainty_edges = 0.6 / (50.0 / 3);
+  const nlohmann::json in_edges = simulate_part(box, cuts, o).report;
+  EXPECT_NEAR(in_edges["edge_uncertainty"].get<double>(), 0.6, 1e-12);
+  EXPECT_NEAR(in_edges["margin"].get<double>(), nominal - 0.6, 1e-12);
+  EXPECT_EQ(in_edges["scallop_max_interior"], widened["scallop_max_interior"]);
+  o.edge_uncertainty = 0.7;  // the larger of the two counts
+  EXPECT_NEAR(simulate_part(box, cuts, o).report["margin"].get<double>(), nominal - 0.7, 1e-12);
 }
 
 TEST(SimulatePart, GougesInsideAndNearAreMeasuredAndARapidThroughThePartIsCounted) {
