@@ -71,7 +71,8 @@ double rapid_clearance(const MeshDistance& part, const Eigen::Vector3d& a, const
 }  // namespace
 
 Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setups, const PartSimulateOptions& o,
-                         const std::function<void(double)>& progress, const Mesh* outer, const Mesh* inner_mesh) {
+                         const std::function<void(double)>& progress, const Mesh* outer, const Mesh* inner_mesh,
+                         const std::vector<Eigen::Vector3d>* cloud) {
   const double r = o.tool_radius, H = o.scallop, delta = o.surface_uncertainty;
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
   if (!(H > 0)) throw std::invalid_argument("scallop limit must be > 0");
@@ -305,6 +306,27 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     if (progress) progress(0.7 + 0.28 * double(s + 1) / setups.size());
   }
 
+  // The cloud's own points inside a ball: cut away, whatever the meshes say.
+  using Deepest = std::pair<double, Eigen::Vector3d>;  // a depth and where
+  Deepest cloud_deepest{0.0, Eigen::Vector3d::Zero()};
+  std::size_t cloud_cut = 0;
+  if (cloud) {
+    tbb::combinable<Deepest> deepest([] { return Deepest{0.0, Eigen::Vector3d::Zero()}; });
+    tbb::combinable<std::size_t> cut([] { return std::size_t(0); });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cloud->size(), 4096), [&](const tbb::blocked_range<std::size_t>& b) {
+      std::vector<std::uint32_t> scratch;
+      for (std::size_t i = b.begin(); i < b.end(); ++i) {
+        const double d = centres.distance((*cloud)[i], r, scratch);
+        if (!std::isfinite(d)) continue;
+        if (r - d > tol) ++cut.local();
+        if (r - d > deepest.local().first) deepest.local() = {r - d, (*cloud)[i]};
+      }
+    });
+    cloud_deepest = deepest.combine([](const Deepest& a, const Deepest& b) { return a.first >= b.first ? a : b; });
+    cloud_cut = cut.combine(std::plus<>());
+    gouge_max = std::max(gouge_max, cloud_deepest.first);
+  }
+
   // Statistics: area-weighted over the grid; maxima include the refinement samples.
   Simulation res;
   res.spacing = spacing;
@@ -356,6 +378,11 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   rep["uncut_fraction"] = measured > 0 ? nlohmann::json(uncut / measured) : nlohmann::json();
   rep["uncut_fraction_interior"] = area_i > 0 ? nlohmann::json(uncut_i / area_i) : nlohmann::json();
   rep["gouge_max"] = gouge_max;
+  if (cloud) {
+    rep["gouge_max_cloud"] = cloud_deepest.first;
+    rep["gouge_cloud_at"] = cloud_deepest.first > 0 ? xyz(cloud_deepest.second) : nlohmann::json();
+    rep["cloud_points_cut"] = cloud_cut;
+  }
   rep["rapids_through_part"] = through_total;
   rep["rapid_min_clearance"] = finite_or_null(rapid_min);
   rep["cut_length"] = cut_total;
@@ -454,6 +481,12 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   }
   if (gouge_max > tol) {
     std::snprintf(buf, sizeof buf, "gouge max %.4g > %.4g", gouge_max, tol);
+    reasons.push_back(buf);
+  }
+  if (cloud_deepest.first > tol) {
+    std::snprintf(buf, sizeof buf, "%zu point(s) of the cloud inside a ball, up to %.4g deep at (%.3f, %.3f, %.3f)",
+                  cloud_cut, cloud_deepest.first, cloud_deepest.second.x(), cloud_deepest.second.y(),
+                  cloud_deepest.second.z());
     reasons.push_back(buf);
   }
   if (measured <= 0) {

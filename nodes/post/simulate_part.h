@@ -87,8 +87,14 @@ struct PartSimulateOptions {
 //        sample is still placed, classified (base, reach, interior) and reported on `part`, but
 //        its scallop is traced from the same place of the inner mesh (same face, same barycentric
 //        coordinates) along part's normal: the material left above the lowest the part may be.
+// cloud  where given, the points the part was measured at (the cloud the mesh was made from): a
+//        point inside a feed ball is material of the part cut away, whatever the meshes say (where
+//        the part sticks out of its outer bound, at an edge left bevelled). The deepest,
+//        r - (distance to the nearest feed centre), counts in gouge_max; the report adds
+//        gouge_max_cloud, gouge_cloud_at {x, y, z} (the point) and cloud_points_cut (deeper than
+//        the tolerance).
 Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setups, const PartSimulateOptions& options,
                          const std::function<void(double)>& progress = {}, const Mesh* outer = nullptr,
-                         const Mesh* inner = nullptr);
+                         const Mesh* inner = nullptr, const std::vector<Eigen::Vector3d>* cloud = nullptr);
 
 }  // namespace scallop

@@ -4,6 +4,7 @@
 #include "engine/node.h"
 #include "nodes/mesh/setup_base.h"
 #include "nodes/post/simulate_part.h"
+#include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
 #include "nodes/types/mesh.h"
 #include "nodes/types/toolpath.h"
@@ -12,7 +13,7 @@ namespace scallop::post_nodes {
 NodeDecl make_simulate_part_node() {
   NodeDecl d;
   d.type = "post.simulate_part";
-  d.version = 9;  // 2: the worst places begin with the moves that reach into the part; 3: faces folded onto a neighbour leave the side to the rays; 4: samples in strips along each face's longest edge, by area, as verify_part.py; 5: refinement seeded from the highest 1 %; 6: and from the samples a ball of 0.9 r reaches; 7: twice as densely where the edge of the reach may cross a seed's square; 8: the report says where the interior maximum stands (scallop_max_interior_at); 9: edge_uncertainty_edges
+  d.version = 9;  // 2: the worst places begin with the moves that reach into the part; 3: faces folded onto a neighbour leave the side to the rays; 4: samples in strips along each face's longest edge, by area, as verify_part.py; 5: refinement seeded from the highest 1 %; 6: and from the samples a ball of 0.9 r reaches; 7: twice as densely where the edge of the reach may cross a seed's square; 8: the report says where the interior maximum stands (scallop_max_interior_at); 9: edge_uncertainty_edges, the cloud's points checked for gouges
   d.description =
       "the certificate of a whole part cut in several clampings: every setup's program taken back to the part, "
       "scallop left over the whole mesh, gouge and rapids against it (verify_part.py's definitions)";
@@ -27,6 +28,9 @@ NodeDecl make_simulate_part_node() {
       .input("inner", "Mesh",
              "the part's inner bound, `mesh` with its vertices moved (mesh.cloud_envelope's inner): each sample's "
              "scallop is traced from its place there; samples are still placed and classified on `mesh`", false)
+      .input("cloud", "Cloud",
+             "the points the mesh was made from: a point inside a feed ball is the part cut away, whatever the meshes "
+             "say (gouge_max_cloud, gouge_cloud_at, cloud_points_cut; it counts in gouge_max)", false)
       .output("report", "Report",
               "pass (verify_part.py's rule: interior scallop <= 1.01 h, gouge <= max(e, 0.001), nothing uncut, no rapid "
               "through the part), fail_reasons, scallop/uncut figures for the whole part and its interior, gouge, "
@@ -88,8 +92,9 @@ NodeDecl make_simulate_part_node() {
     try {
       const auto outer = ctx.has_input("outer") ? ctx.input<Mesh>("outer") : nullptr;
       const auto inner = ctx.has_input("inner") ? ctx.input<Mesh>("inner") : nullptr;
+      const auto cloud = ctx.has_input("cloud") ? ctx.input<PointCloud>("cloud") : nullptr;
       Simulation sim = simulate_part(*mesh, cuts, o, [&](double f) { ctx.progress(f, "simulating the part"); }, outer.get(),
-                                     inner.get());
+                                     inner.get(), cloud ? &cloud->points : nullptr);
       Report rep;
       rep.data = sim.report;
       ctx.set("report", std::move(rep));

@@ -101,6 +101,41 @@ TEST(SimulatePart, EdgeUncertaintyBringsTheInteriorNearerTheEdges) {
   EXPECT_NEAR(simulate_part(box, cuts, o).report["margin"].get<double>(), nominal - 0.7, 1e-12);
 }
 
+// The part sticks out of its mesh where a cloud's point says so (an edge left bevelled): a ball
+// passing through that point has cut it away, though the mesh shows no gouge. The top is cut by
+// passes 1 apart (centres at z = 10 + r, over y = 10); a point 0.03 above the top under a pass is
+// 0.03 inside its ball; points on the top are touched, not cut; one far above every ball is not.
+TEST(SimulatePart, ACloudPointInsideABallIsAGougeTheMeshCannotShow) {
+  const double r = 3, h = 0.05;
+  const Mesh box = test::quad_box({1, 1, 1}, V(20, 20, 10));
+  std::vector<PartSetupCut> cuts(1);
+  cuts[0].name = "top", cuts[0].feed = top_passes(0, 20, 1, r, 10);
+  PartSimulateOptions o = options(r, h);
+  o.base_normal = V(0, 0, -1);
+  const std::vector<Eigen::Vector3d> cloud = {V(5, 5, 10), V(15, 12, 10), V(10, 10, 10.03), V(10, 10.5, 20)};
+  const nlohmann::json mesh_only = simulate_part(box, cuts, o).report;
+  const nlohmann::json rep = simulate_part(box, cuts, o, {}, nullptr, nullptr, &cloud).report;
+  EXPECT_LT(mesh_only["gouge_max"].get<double>(), 1e-9);
+  EXPECT_FALSE(mesh_only.contains("gouge_max_cloud"));
+  EXPECT_NEAR(rep["gouge_max_cloud"].get<double>(), 0.03, 1e-9);
+  EXPECT_NEAR(rep["gouge_max"].get<double>(), 0.03, 1e-9);
+  EXPECT_EQ(rep["cloud_points_cut"], 1);
+  EXPECT_NEAR(rep["gouge_cloud_at"]["z"].get<double>(), 10.03, 1e-12);
+  EXPECT_FALSE(rep["pass"].get<bool>());
+  const auto& reasons = rep["fail_reasons"];  // the sides are uncut too
+  EXPECT_NE(std::find(reasons.begin(), reasons.end(),
+                      "1 point(s) of the cloud inside a ball, up to 0.03 deep at (10.000, 10.000, 10.030)"),
+            reasons.end())
+      << reasons;
+  // The same points all on the top: nothing cut away.
+  const std::vector<Eigen::Vector3d> on_top = {V(5, 5, 10), V(10, 10, 10)};
+  const nlohmann::json clean = simulate_part(box, cuts, o, {}, nullptr, nullptr, &on_top).report;
+  EXPECT_LT(clean["gouge_max_cloud"].get<double>(), 1e-9);
+  EXPECT_EQ(clean["cloud_points_cut"], 0);
+  EXPECT_TRUE(clean["gouge_cloud_at"].is_null());
+  EXPECT_EQ(clean["pass"], mesh_only["pass"]);
+}
+
 TEST(SimulatePart, GougesInsideAndNearAreMeasuredAndARapidThroughThePartIsCounted) {
   // A feed move through the middle of the box: its centre 5 below the top, r + 5 deep in the
   // material. Another setup dips 0.02 into the top and passes a corner outside (sqrt(12) > r
