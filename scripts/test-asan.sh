@@ -22,6 +22,8 @@ export LSAN_OPTIONS=suppressions=$PWD/scripts/lsan-suppressions.txt
 # 155 s and 124 s): the 12 000-point crest of Denoise (its lack-of-fit test runs here in every
 # other multi-scale Denoise test) and the Slurm job array (the batch code it runs, in the Cli tests).
 # And the cloud workpiece run (45 s in Release): its nodes run here through their own tests
-# (mesh.sharpen on 30 000- and 80 000-point reconstructions) and the mesh workpiece run.
+# (mesh.sharpen on 30 000- and 80 000-point reconstructions) and the mesh workpiece run. And the
+# slowest left (2026-11-28: 259 s of the stage's 1202), the rest passes on a whole part, whose
+# code the RestPasses tests run here.
 cd build-asan && ctest --output-on-failure -j "$(nproc)" --timeout 900 \
-  -E '^(CertificateHonesty\.(Clean|Crease)|Denoise\.AWideFitThatDoesNotFollowTheSurfaceIsNotKept|Slurm\.BatchAsAJobArray|CloudWorkpiece\.)'
+  -E '^(CertificateHonesty\.(Clean|Crease)|Denoise\.AWideFitThatDoesNotFollowTheSurfaceIsNotKept|Slurm\.BatchAsAJobArray|CloudWorkpiece\.|SetupPrograms\.FacesThePassesMissAreCutByRestPasses$)'
