@@ -98,13 +98,9 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   if (tris.empty()) throw std::invalid_argument("the part's mesh has no face with an area");
   const double tol = std::max(o.chord, 1e-3);
   const double nominal = std::sqrt(8 * r * H);
-  double edge_uncertainty = o.edge_uncertainty;
-  if (o.edge_uncertainty_edges > 0) {
-    const MeshEdges edges = mesh_edges(part);
-    double length = 0;
-    for (const auto& [a, b] : edges.edges) length += (part.vertices[a] - part.vertices[b]).norm();
-    if (!edges.edges.empty()) edge_uncertainty = std::max(edge_uncertainty, o.edge_uncertainty_edges * length / double(edges.edges.size()));
-  }
+  const double edge_uncertainty = o.edge_uncertainty_edges > 0
+                                      ? std::max(o.edge_uncertainty, o.edge_uncertainty_edges * mean_edge_length(part))
+                                      : o.edge_uncertainty;
   const double margin = std::max(0.0, (o.margin > 0 ? o.margin : nominal) - edge_uncertainty);
   const double T = 20 * H;
 
