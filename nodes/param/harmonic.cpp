@@ -5,7 +5,10 @@
 #include <Eigen/UmfPackSupport>
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <memory>
+#include <optional>
+#include <utility>
 #include <stdexcept>
 #include <unsupported/Eigen/IterativeSolvers>
 #include <tbb/blocked_range.h>
@@ -76,6 +79,8 @@ namespace {
 // solve fixes the same points twice, with other values), with the first solve's answer as the
 // second's start.
 struct SystemFactor {
+  std::vector<char> given;            // #n: the points whose (u,v) is given
+  std::vector<int> point_of;          // the point of each unknown, breadth first from the outer loop
   std::vector<Eigen::Index> unknown;
   Eigen::SparseMatrix<double, Eigen::RowMajor> rows;  // the system, rows in the unknowns' order
   Eigen::SparseMatrix<double> A;  // column-major copy for UMFPACK and Eigen's solvers
@@ -134,19 +139,27 @@ UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>&
     uv[i] = q;
   }
   // Unknowns numbered breadth first from the outer loop, so that a row's neighbours are near it
-  // in memory whatever order the cloud came in.
+  // in memory whatever order the cloud came in (the same points fixed: the numbering before).
+  std::vector<char> given(n);  // the points whose (u,v) is fixed
+  for (Eigen::Index i = 0; i < n; ++i) given[i] = unknown[i] < 0;
+  const bool same_unknowns = factor && factor->given == given;
   std::vector<int> point_of;  // #unknowns: the point of each unknown
-  for (int i : breadth_first_order(L, outer))
-    if (unknown[i] >= 0) {
-      unknown[i] = static_cast<Eigen::Index>(point_of.size());
-      point_of.push_back(i);
-    }
+  if (same_unknowns) {
+    unknown = factor->unknown;
+    point_of = factor->point_of;
+  } else {
+    for (int i : breadth_first_order(L, outer))
+      if (unknown[i] >= 0) {
+        unknown[i] = static_cast<Eigen::Index>(point_of.size());
+        point_of.push_back(i);
+      }
+  }
   const Eigen::Index m = static_cast<Eigen::Index>(point_of.size());
 
   // Every unknown must reach the outer loop through its rows' neighbours; otherwise its cluster's
   // rows (summing to zero) make the system singular, which rounding can hide from the LU. (Checked
-  // once for the same unknowns: the band's second solve.)
-  if (!factor || factor->unknown != unknown) {
+  // once for the same unknowns: the band's second solve; beside the preconditioner's build, below.)
+  auto check_connected = [&] {
     // The rows that depend on each point j (L's nonzero pattern transposed, indices only).
     std::vector<int> start(n + 1, 0), dependent;
     for (Eigen::Index i = 0; i < n; ++i)
@@ -181,17 +194,26 @@ UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>&
       throw std::runtime_error(std::to_string(cut) + " points (first: point " + std::to_string(first) +
                                ") are not connected to the outer boundary through their neighbours, so "
                                "their (u,v) is undefined (separate clusters? run cloud.clean or raise k)");
-  }
+  };
+  std::optional<std::future<void>> connected;
+  if (!same_unknowns) connected = std::async(std::launch::async, check_connected);
+  // Its answer before any solve's: an unconnected system's solve fails with a less clear message.
+  auto wait_connected = [&] {
+    if (connected) std::exchange(connected, std::nullopt)->get();
+  };
 
   UVMap out = boundary;
   out.residual = 0;
+  if (m == 0) wait_connected();
   if (m > 0) {
     SystemFactor local;
     SystemFactor& f = factor ? *factor : local;
     // Same unknowns, same rows of L: the same matrix, so it and its factors can be used again.
-    if (f.unknown != unknown) {
+    if (f.given != given) {
       f = SystemFactor();
+      f.given = given;
       f.unknown = unknown;
+      f.point_of = point_of;
     }
     // A X = B: the interior rows of L, boundary columns moved to the right-hand side; written
     // straight into the compressed rows, the rows in parallel (each row's sums in L's order, as
@@ -245,6 +267,7 @@ UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>&
         f.two_level = std::make_unique<TwoLevelPreconditioner>();
         if (!f.two_level->build(A)) f.two_level_failed = true;
       }
+      wait_connected();
       if (!f.two_level_failed) {
         TwoLevelResult r = solve_two_level(A, *f.two_level, B, X0, tolerance);
         if (r.converged && r.X.allFinite())
@@ -254,6 +277,7 @@ UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>&
       }
       if (f.two_level_failed) f.two_level.reset();
     }
+    wait_connected();
     if (X.size() == 0 && (solver == HarmonicSolver::Direct || solver == HarmonicSolver::TwoLevel)) {
       X = solve_direct(A, B, f);
     } else if (X.size() == 0) {

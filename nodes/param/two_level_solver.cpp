@@ -2,9 +2,11 @@
 #include "nodes/param/umfpack_lock.h"
 
 #include <umfpack.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 
@@ -101,14 +103,20 @@ bool TwoLevelPreconditioner::build(const RowMatrix& A, int sweeps) {
   }
   row_start_ = C->outerIndexPtr();
   column_ = C->innerIndexPtr();
-  value_.assign(C->valuePtr(), C->valuePtr() + C->nonZeros());
+  value_.resize(C->nonZeros());
   inv_diag_.assign(n, 0.0);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    for (int e = row_start_[i]; e < row_start_[i + 1]; ++e)
-      if (column_[e] == i) inv_diag_[i] = value_[e];
-    if (!(inv_diag_[i] != 0) || !std::isfinite(inv_diag_[i])) return false;
-    inv_diag_[i] = 1 / inv_diag_[i];
-  }
+  std::atomic<bool> singular = false;
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, n, 4096), [&](const tbb::blocked_range<Eigen::Index>& rows) {
+    for (Eigen::Index i = rows.begin(); i < rows.end(); ++i) {
+      for (int e = row_start_[i]; e < row_start_[i + 1]; ++e) {
+        value_[e] = static_cast<float>(C->valuePtr()[e]);
+        if (column_[e] == i) inv_diag_[i] = value_[e];
+      }
+      if (!(inv_diag_[i] != 0) || !std::isfinite(inv_diag_[i])) singular = true;
+      inv_diag_[i] = 1 / inv_diag_[i];
+    }
+  });
+  if (singular) return false;
   aggregate_ = aggregate_points(A);
   const int nc = n == 0 ? 0 : *std::max_element(aggregate_.begin(), aggregate_.end()) + 1;
   // Ac = P^T A P: the sum of A's entries between the points of two aggregates.
