@@ -322,6 +322,27 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     cloud_cut = cut.combine(std::plus<>());
     gouge_max = std::max(gouge_max, cloud_deepest.first);
   }
+  // The gouge is measured against the outer mesh, a bound on the part only where it holds the
+  // cloud: a point x outside it shows the part standing out of it there, and between the points
+  // more may (an edge the mesh bevels). A ball passing within r + x of such a point may cut what
+  // the outer mesh does not show, so there the gouge is not bounded.
+  Deepest unbounded{0.0, Eigen::Vector3d::Zero()};
+  std::size_t unbounded_points = 0;
+  if (cloud && outer) {
+    tbb::combinable<Deepest> farthest([] { return Deepest{0.0, Eigen::Vector3d::Zero()}; });
+    tbb::combinable<std::size_t> count([] { return std::size_t(0); });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cloud->size(), 4096), [&](const tbb::blocked_range<std::size_t>& b) {
+      std::vector<std::uint32_t> scratch;
+      for (std::size_t i = b.begin(); i < b.end(); ++i) {
+        const double x = gouge_distance.signed_distance((*cloud)[i]);
+        if (!(x > tol) || !(centres.distance((*cloud)[i], r + x, scratch) < r + x)) continue;
+        ++count.local();
+        if (x > farthest.local().first) farthest.local() = {x, (*cloud)[i]};
+      }
+    });
+    unbounded = farthest.combine([](const Deepest& a, const Deepest& b) { return a.first >= b.first ? a : b; });
+    unbounded_points = count.combine(std::plus<>());
+  }
 
   // Statistics: area-weighted over the grid; maxima include the refinement samples.
   Simulation res;
@@ -378,6 +399,11 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     rep["gouge_max_cloud"] = cloud_deepest.first;
     rep["gouge_cloud_at"] = cloud_deepest.first > 0 ? xyz(cloud_deepest.second) : nlohmann::json();
     rep["cloud_points_cut"] = cloud_cut;
+  }
+  if (cloud && outer) {
+    rep["gouge_unbounded_points"] = unbounded_points;
+    rep["gouge_unbounded_max"] = unbounded.first;
+    rep["gouge_unbounded_at"] = unbounded_points > 0 ? xyz(unbounded.second) : nlohmann::json();
   }
   rep["rapids_through_part"] = through_total;
   rep["rapid_min_clearance"] = finite_or_null(rapid_min);
@@ -468,7 +494,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     rep["scallop_max_interior_at"] = xyz(Eigen::Vector3d(res.samples[highest].x, res.samples[highest].y, res.samples[highest].z));
 
   nlohmann::json reasons = nlohmann::json::array();
-  char buf[160];
+  char buf[256];
   if (!std::isfinite(max_inner)) {
     reasons.push_back("no interior sample was cut");
   } else if (max_inner > 1.01 * H) {
@@ -483,6 +509,13 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     std::snprintf(buf, sizeof buf, "%zu point(s) of the cloud inside a ball, up to %.4g deep at (%.3f, %.3f, %.3f)",
                   cloud_cut, cloud_deepest.first, cloud_deepest.second.x(), cloud_deepest.second.y(),
                   cloud_deepest.second.z());
+    reasons.push_back(buf);
+  }
+  if (unbounded_points > 0) {
+    std::snprintf(buf, sizeof buf,
+                  "%zu point(s) of the cloud outside the outer mesh, up to %.4g mm at (%.3f, %.3f, %.3f), with a ball "
+                  "passing within r + that: the gouge there is not bounded",
+                  unbounded_points, unbounded.first, unbounded.second.x(), unbounded.second.y(), unbounded.second.z());
     reasons.push_back(buf);
   }
   if (measured <= 0) {

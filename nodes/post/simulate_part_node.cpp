@@ -13,7 +13,7 @@ namespace scallop::post_nodes {
 NodeDecl make_simulate_part_node() {
   NodeDecl d;
   d.type = "post.simulate_part";
-  d.version = 9;  // 2: the worst places begin with the moves that reach into the part; 3: faces folded onto a neighbour leave the side to the rays; 4: samples in strips along each face's longest edge, by area, as verify_part.py; 5: refinement seeded from the highest 1 %; 6: and from the samples a ball of 0.9 r reaches; 7: twice as densely where the edge of the reach may cross a seed's square; 8: the report says where the interior maximum stands (scallop_max_interior_at); 9: edge_uncertainty_edges, the cloud's points checked for gouges
+  d.version = 10;  // 2: the worst places begin with the moves that reach into the part; 3: faces folded onto a neighbour leave the side to the rays; 4: samples in strips along each face's longest edge, by area, as verify_part.py; 5: refinement seeded from the highest 1 %; 6: and from the samples a ball of 0.9 r reaches; 7: twice as densely where the edge of the reach may cross a seed's square; 8: the report says where the interior maximum stands (scallop_max_interior_at); 9: edge_uncertainty_edges, the cloud's points checked for gouges; 10: and for where the outer mesh does not hold them (gouge_unbounded_*)
   d.description =
       "the certificate of a whole part cut in several clampings: every setup's program taken back to the part, "
       "scallop left over the whole mesh, gouge and rapids against it (verify_part.py's definitions)";
@@ -30,7 +30,9 @@ NodeDecl make_simulate_part_node() {
              "scallop is traced from its place there; samples are still placed and classified on `mesh`", false)
       .input("cloud", "Cloud",
              "the points the mesh was made from: a point inside a feed ball is the part cut away, whatever the meshes "
-             "say (gouge_max_cloud, gouge_cloud_at, cloud_points_cut; it counts in gouge_max)", false)
+             "say (gouge_max_cloud, gouge_cloud_at, cloud_points_cut; it counts in gouge_max); with `outer`, a point "
+             "outside it by x > the gouge tolerance that a ball passes within r + x of leaves the gouge there unbounded "
+             "and the certificate failed (gouge_unbounded_points, gouge_unbounded_max, gouge_unbounded_at)", false)
       .output("report", "Report",
               "pass (verify_part.py's rule: interior scallop <= 1.01 h, gouge <= max(e, 0.001), nothing uncut, no rapid "
               "through the part), fail_reasons, scallop/uncut figures for the whole part and its interior, gouge, "

@@ -32,6 +32,18 @@ PartSimulateOptions options(double r, double h) {
   return o;
 }
 
+PartSimulateOptions on_its_base(PartSimulateOptions o) {
+  o.base_normal = V(0, 0, -1);
+  return o;
+}
+
+// One setup cutting the box's whole top with passes 1 apart.
+std::vector<PartSetupCut> top_setup(double r) {
+  std::vector<PartSetupCut> cuts(1);
+  cuts[0].name = "top", cuts[0].feed = top_passes(0, 20, 1, r, 10);
+  return cuts;
+}
+
 TEST(SimulatePart, TwoSetupsShareTheTopTheScallopIsTheClosedFormTheSidesAreUncut) {
   // The box 20 x 20 x 10 on its base (-z). Two setups each cut half of the top with passes w = 1
   // apart: between two passes the ball leaves r - sqrt(r² - (w/2)²); the sides are never
@@ -106,12 +118,10 @@ TEST(SimulatePart, EdgeUncertaintyBringsTheInteriorNearerTheEdges) {
 // passes 1 apart (centres at z = 10 + r, over y = 10); a point 0.03 above the top under a pass is
 // 0.03 inside its ball; points on the top are touched, not cut; one far above every ball is not.
 TEST(SimulatePart, ACloudPointInsideABallIsAGougeTheMeshCannotShow) {
-  const double r = 3, h = 0.05;
+  const double r = 3;
   const Mesh box = test::quad_box({1, 1, 1}, V(20, 20, 10));
-  std::vector<PartSetupCut> cuts(1);
-  cuts[0].name = "top", cuts[0].feed = top_passes(0, 20, 1, r, 10);
-  PartSimulateOptions o = options(r, h);
-  o.base_normal = V(0, 0, -1);
+  const std::vector<PartSetupCut> cuts = top_setup(r);
+  const PartSimulateOptions o = on_its_base(options(r, 0.05));
   const std::vector<Eigen::Vector3d> cloud = {V(5, 5, 10), V(15, 12, 10), V(10, 10, 10.03), V(10, 10.5, 20)};
   const nlohmann::json mesh_only = simulate_part(box, cuts, o).report;
   const nlohmann::json rep = simulate_part(box, cuts, o, {}, nullptr, nullptr, &cloud).report;
@@ -134,6 +144,38 @@ TEST(SimulatePart, ACloudPointInsideABallIsAGougeTheMeshCannotShow) {
   EXPECT_EQ(clean["cloud_points_cut"], 0);
   EXPECT_TRUE(clean["gouge_cloud_at"].is_null());
   EXPECT_EQ(clean["pass"], mesh_only["pass"]);
+}
+
+TEST(SimulatePart, ACloudPointOutsideTheOuterMeshNearABallLeavesTheGougeUnbounded) {
+  // The outer mesh is the box itself. A point 1.2 outside its side x = 20, 4.005 from the end of
+  // a pass (more than r: not inside a ball, but within r + 1.2): the part stands out of the outer
+  // mesh there, and what the ball cuts between the points is unknown. A point 1 under the base,
+  // far from every pass, leaves the gouge bounded.
+  const double r = 3;
+  const Mesh box = test::quad_box({1, 1, 1}, V(20, 20, 10));
+  const std::vector<PartSetupCut> cuts = top_setup(r);
+  const PartSimulateOptions o = on_its_base(options(r, 0.05));
+  const std::vector<Eigen::Vector3d> cloud = {V(5, 5, 10), V(21.2, 10, 9), V(10, 10, -1)};
+  const nlohmann::json rep = simulate_part(box, cuts, o, {}, &box, nullptr, &cloud).report;
+  EXPECT_EQ(rep["cloud_points_cut"], 0);
+  EXPECT_EQ(rep["gouge_unbounded_points"], 1);
+  EXPECT_NEAR(rep["gouge_unbounded_max"].get<double>(), 1.2, 1e-9);
+  EXPECT_NEAR(rep["gouge_unbounded_at"]["x"].get<double>(), 21.2, 1e-12);
+  EXPECT_FALSE(rep["pass"].get<bool>());
+  const auto& reasons = rep["fail_reasons"];
+  EXPECT_NE(std::find(reasons.begin(), reasons.end(),
+                      "1 point(s) of the cloud outside the outer mesh, up to 1.2 mm at (21.200, 10.000, 9.000), with a "
+                      "ball passing within r + that: the gouge there is not bounded"),
+            reasons.end())
+      << reasons;
+  // Without the point beside the pass, or without an outer mesh, nothing of it.
+  const std::vector<Eigen::Vector3d> far = {V(5, 5, 10), V(10, 10, -1)};
+  const nlohmann::json bounded = simulate_part(box, cuts, o, {}, &box, nullptr, &far).report;
+  EXPECT_EQ(bounded["gouge_unbounded_points"], 0);
+  EXPECT_TRUE(bounded["gouge_unbounded_at"].is_null());
+  for (const auto& reason : bounded["fail_reasons"])
+    EXPECT_EQ(reason.get<std::string>().find("not bounded"), std::string::npos) << reason;
+  EXPECT_FALSE(simulate_part(box, cuts, o, {}, nullptr, nullptr, &cloud).report.contains("gouge_unbounded_points"));
 }
 
 TEST(SimulatePart, GougesInsideAndNearAreMeasuredAndARapidThroughThePartIsCounted) {
