@@ -302,47 +302,48 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     if (progress) progress(0.7 + 0.28 * double(s + 1) / setups.size());
   }
 
-  // The cloud's own points inside a ball: cut away, whatever the meshes say.
+  // The cloud's own points, in one pass:
+  //  - inside a ball: the part cut away, whatever the meshes say;
+  //  - outside the outer mesh by x: the gouge is measured against that mesh, a bound on the part
+  //    only where it holds the cloud; such a point shows the part standing out of it, and between
+  //    the points more may (an edge the mesh bevels). A ball passing within r + x of it may cut
+  //    what the outer mesh does not show, so there the gouge is not bounded.
   using Deepest = std::pair<double, Eigen::Vector3d>;  // a depth and where
-  Deepest cloud_deepest{0.0, Eigen::Vector3d::Zero()};
-  std::size_t cloud_cut = 0;
+  const auto deeper = [](const Deepest& a, const Deepest& b) { return a.first >= b.first ? a : b; };
+  struct CloudTally {
+    Deepest cut_deepest{0.0, Eigen::Vector3d::Zero()}, unbounded_farthest{0.0, Eigen::Vector3d::Zero()};
+    std::size_t cut = 0, unbounded = 0;
+  };
+  CloudTally cloud_tally;
   if (cloud) {
-    tbb::combinable<Deepest> deepest([] { return Deepest{0.0, Eigen::Vector3d::Zero()}; });
-    tbb::combinable<std::size_t> cut([] { return std::size_t(0); });
+    tbb::combinable<CloudTally> tally;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cloud->size(), 4096), [&](const tbb::blocked_range<std::size_t>& b) {
       std::vector<std::uint32_t> scratch;
+      CloudTally& t = tally.local();
       for (std::size_t i = b.begin(); i < b.end(); ++i) {
-        const double d = centres.distance((*cloud)[i], r, scratch);
-        if (!std::isfinite(d)) continue;
-        if (r - d > tol) ++cut.local();
-        if (r - d > deepest.local().first) deepest.local() = {r - d, (*cloud)[i]};
+        const Eigen::Vector3d& p = (*cloud)[i];
+        const double d = centres.distance(p, r, scratch);
+        if (std::isfinite(d)) {
+          if (r - d > tol) ++t.cut;
+          t.cut_deepest = deeper(t.cut_deepest, {r - d, p});
+        }
+        if (!outer) continue;
+        const double x = gouge_distance.signed_distance(p);
+        if (!(x > tol) || !(centres.distance(p, r + x, scratch) < r + x)) continue;
+        ++t.unbounded;
+        t.unbounded_farthest = deeper(t.unbounded_farthest, {x, p});
       }
     });
-    cloud_deepest = deepest.combine([](const Deepest& a, const Deepest& b) { return a.first >= b.first ? a : b; });
-    cloud_cut = cut.combine(std::plus<>());
-    gouge_max = std::max(gouge_max, cloud_deepest.first);
-  }
-  // The gouge is measured against the outer mesh, a bound on the part only where it holds the
-  // cloud: a point x outside it shows the part standing out of it there, and between the points
-  // more may (an edge the mesh bevels). A ball passing within r + x of such a point may cut what
-  // the outer mesh does not show, so there the gouge is not bounded.
-  Deepest unbounded{0.0, Eigen::Vector3d::Zero()};
-  std::size_t unbounded_points = 0;
-  if (cloud && outer) {
-    tbb::combinable<Deepest> farthest([] { return Deepest{0.0, Eigen::Vector3d::Zero()}; });
-    tbb::combinable<std::size_t> count([] { return std::size_t(0); });
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cloud->size(), 4096), [&](const tbb::blocked_range<std::size_t>& b) {
-      std::vector<std::uint32_t> scratch;
-      for (std::size_t i = b.begin(); i < b.end(); ++i) {
-        const double x = gouge_distance.signed_distance((*cloud)[i]);
-        if (!(x > tol) || !(centres.distance((*cloud)[i], r + x, scratch) < r + x)) continue;
-        ++count.local();
-        if (x > farthest.local().first) farthest.local() = {x, (*cloud)[i]};
-      }
+    tally.combine_each([&](const CloudTally& t) {
+      cloud_tally.cut += t.cut, cloud_tally.unbounded += t.unbounded;
+      cloud_tally.cut_deepest = deeper(cloud_tally.cut_deepest, t.cut_deepest);
+      cloud_tally.unbounded_farthest = deeper(cloud_tally.unbounded_farthest, t.unbounded_farthest);
     });
-    unbounded = farthest.combine([](const Deepest& a, const Deepest& b) { return a.first >= b.first ? a : b; });
-    unbounded_points = count.combine(std::plus<>());
+    gouge_max = std::max(gouge_max, cloud_tally.cut_deepest.first);
   }
+  const Deepest& cloud_deepest = cloud_tally.cut_deepest;
+  const Deepest& unbounded = cloud_tally.unbounded_farthest;
+  const std::size_t cloud_cut = cloud_tally.cut, unbounded_points = cloud_tally.unbounded;
 
   // Statistics: area-weighted over the grid; maxima include the refinement samples.
   Simulation res;
