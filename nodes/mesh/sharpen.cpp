@@ -47,19 +47,25 @@ struct LocalSurface {
   double distance(const Eigen::Vector3d& x) const { return std::abs(value(x)) / gradient(x).norm(); }
 };
 
-// The local surface of the points: their plane, then a quadric over it where 10 or more points
-// determine one.
+// The local surface of the points: their plane, then a quadric over it where they determine one.
+// Fewer than kMinSurfacePoints points are a sliver of a region, not its surface (on a sphere cut
+// into regions, a plane through 5 points of one stood 70 degrees off the sphere).
+constexpr std::size_t kMinSurfacePoints = 10;
 std::optional<LocalSurface> fit_local_surface(const std::vector<Eigen::Vector3d>& pts) {
-  if (pts.size() < 3) return std::nullopt;
+  if (pts.size() < kMinSurfacePoints) return std::nullopt;
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   for (const auto& p : pts) c += p;
   c /= double(pts.size());
   Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
   for (const auto& p : pts) C += (p - c) * (p - c).transpose();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
-  if (es.info() != Eigen::Success || !(es.eigenvalues()[1] > 1e-6 * es.eigenvalues()[2])) return std::nullopt;
+  // Not a plane where the points lie along a line, or where their spread across the plane is
+  // not well above their spread off it: a thin band of a curved face has its least-squares plane
+  // through its arc, its normal about the surface's tangent (seen on a sphere: 80 degrees off).
+  const Eigen::Vector3d& ev = es.eigenvalues();
+  if (es.info() != Eigen::Success || !(ev[1] > 1e-6 * ev[2]) || !(ev[0] <= 0.25 * ev[1])) return std::nullopt;
   LocalSurface plane{es.eigenvectors().col(0), c, es.eigenvectors().col(2), es.eigenvectors().col(1)};
-  if (pts.size() >= 10) {
+  {
     Eigen::MatrixXd A(pts.size(), 6);
     Eigen::VectorXd w(pts.size());
     double scale = 0;
@@ -145,6 +151,13 @@ class LocalSurfaces {
   std::vector<Eigen::Vector3d> anchor_pos_;
   std::unique_ptr<KnnIndex> index_;
 };
+
+// The angle between two local surfaces at x (their normals there), the side each faces aside:
+// pieces of one curved face cut into regions have planes apart but the same normal where they meet.
+double angle_between_surfaces_deg(const LocalSurface& a, const LocalSurface& b, const Eigen::Vector3d& x) {
+  const Eigen::Vector3d na = a.gradient(x), nb = b.gradient(x);
+  return angle_deg(na, nb.dot(na) < 0 ? Eigen::Vector3d(-nb) : nb);
+}
 
 double angle_between_planes_deg(const LocalSurface& a, const LocalSurface& b) {
   return angle_deg(a.normal, b.normal.dot(a.normal) < 0 ? Eigen::Vector3d(-b.normal) : b.normal);
@@ -260,25 +273,41 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
   if (!edges.edges.empty()) res.edge_length /= double(edges.edges.size());
 
   // 1. Smooth faces, and the regions they make.
+  // A face's spread: the most it turns against a face sharing a corner with it.
   std::vector<char> smooth(nf, 0);
+  std::vector<double> spread(nf, INFINITY);
   for (std::size_t f = 0; f < nf; ++f) {
     if (!(fg.area[f] > 0)) continue;
-    bool ok = true;
-    for (std::size_t c = 0; c < 3 && ok; ++c) {
+    double most = 0;
+    for (std::size_t c = 0; c < 3; ++c) {
       const std::uint32_t v = mesh.face(f)[c];
-      for (std::size_t j = 0; j < vf.count(v) && ok; ++j) {
+      for (std::size_t j = 0; j < vf.count(v); ++j) {
         const std::uint32_t g = vf.faces(v)[j];
-        ok = !(fg.area[g] > 0) || angle_deg(fg.normal[f], fg.normal[g]) <= o.smooth_angle;
+        if (fg.area[g] > 0) most = std::max(most, angle_deg(fg.normal[f], fg.normal[g]));
       }
     }
-    smooth[f] = ok;
+    spread[f] = most;
+    smooth[f] = most <= o.smooth_angle;
   }
+  // Regions grow from the flattest faces first and keep within half of min_angle of their first
+  // face's normal, so that no two faces of a region turn by more than min_angle: an edge of the
+  // part always lies between two regions, even where its two faces also blend into each other
+  // somewhere else (the fandisk's top and a 1.4 mm strip beside it: joined through a blend, the
+  // edge between them lay inside one region and was never restored). A curved face is cut into
+  // several regions; where they meet their local surfaces agree, so neither an edge (min_angle)
+  // nor a corner is made there. Flattest first: a seed on a blend would take both faces of an
+  // edge that fades into it (each within the cone of the blend's normal).
+  const double cone = 0.5 * o.min_angle;
+  std::vector<std::uint32_t> seeds;
+  for (std::size_t f = 0; f < nf; ++f)
+    if (smooth[f]) seeds.push_back(static_cast<std::uint32_t>(f));
+  std::stable_sort(seeds.begin(), seeds.end(), [&](std::uint32_t a, std::uint32_t b) { return spread[a] < spread[b]; });
   std::vector<int> region(nf, -1);
   {
     std::vector<std::uint32_t> stack;
     std::vector<std::size_t> size;
-    for (std::size_t seed = 0; seed < nf; ++seed) {
-      if (!smooth[seed] || region[seed] >= 0) continue;
+    for (const std::uint32_t seed : seeds) {
+      if (region[seed] >= 0) continue;
       const int id = static_cast<int>(size.size());
       size.push_back(0);
       region[seed] = id;
@@ -292,7 +321,8 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
           if (edges.faces_on(e) != 2) continue;
           for (std::size_t k = 0; k < 2; ++k) {
             const std::uint32_t g = edges.faces(e)[k];
-            if (g == f || !smooth[g] || region[g] >= 0 || angle_deg(fg.normal[f], fg.normal[g]) > o.smooth_angle)
+            if (g == f || !smooth[g] || region[g] >= 0 || angle_deg(fg.normal[f], fg.normal[g]) > o.smooth_angle ||
+                angle_deg(fg.normal[seed], fg.normal[g]) > cone)
               continue;
             region[g] = id;
             stack.push_back(g);
@@ -349,6 +379,11 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
       Eigen::Matrix3d A;
       A << p0->normal.transpose(), p1->normal.transpose(), p2->normal.transpose();
       if (!(std::abs(A.determinant()) > sine * sine * sine)) continue;  // not three faces meeting at a point
+      // three faces of the part, each meeting the others at an edge (not pieces of a curved face)
+      const Eigen::Vector3d& x = mesh.vertices[v];
+      if (angle_between_surfaces_deg(*p0, *p1, x) < o.min_angle || angle_between_surfaces_deg(*p1, *p2, x) < o.min_angle ||
+          angle_between_surfaces_deg(*p0, *p2, x) < o.min_angle)
+        continue;
       const Eigen::Vector3d k = onto(
           {p0, p1, p2},
           A.inverse() * Eigen::Vector3d(p0->normal.dot(p0->point), p1->normal.dot(p1->point), p2->normal.dot(p2->point)));
@@ -397,7 +432,7 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
   auto crossing = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q, int ra, int rb) -> std::optional<Crossing> {
     const auto near = planes.near(0.5 * (p + q));
     const LocalSurface *pa = LocalSurfaces::find(near, ra), *pb = LocalSurfaces::find(near, rb);
-    if (!pa || !pb || angle_between_planes_deg(*pa, *pb) < o.min_angle) return std::nullopt;
+    if (!pa || !pb || angle_between_surfaces_deg(*pa, *pb, 0.5 * (p + q)) < o.min_angle) return std::nullopt;
     const Line line = meet(*pa, *pb, 0.5 * (p + q));
     // Where the segment passes from nearer a's surface to nearer b's. Neighbouring edges of the
     // chamfer cross there in the order they have along the line, which the cut faces keep; the

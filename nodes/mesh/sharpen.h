@@ -7,13 +7,18 @@
 // and Spagnuolo, "Edge-Sharpener: recovering sharp features in triangulations of non-adaptively
 // re-meshed surfaces" (SGP 2003):
 //   1. faces whose neighbours (all faces sharing a corner) turn by at most `smooth_angle` are
-//      smooth; smooth faces joined across edges make regions (the part's faces);
+//      smooth; smooth faces joined across edges make regions (the part's faces), grown from the
+//      flattest faces first, each keeping within min_angle / 2 of its first face's normal: no
+//      two faces of a region turn by min_angle, so an edge always lies between two regions, even
+//      where its two faces blend into each other elsewhere (a curved face is cut into several
+//      regions, whose surfaces agree where they meet: no edge is made there);
 //   2. a vertex of smooth faces of one region belongs to it; a vertex of none (the chamfer
 //      band) to the region whose local surface it lies nearest (a quadric over the plane of that
 //      region's vertices nearby: a plane's bias on a curved or twisted face would move edges);
-//   3. where vertices of three regions meet, the vertex nearest the point where their three
-//      surfaces meet is moved onto it (a corner); an edge between vertices of two regions is split
-//      where those regions' local surfaces meet (the point of that curve nearest the edge);
+//   3. where vertices of three regions meet, their surfaces each turning by min_angle or more
+//      against the others there, the vertex nearest the point where the three meet is moved onto
+//      it (a corner); an edge between vertices of two regions whose surfaces turn by min_angle or
+//      more there is split where those surfaces meet (the point of that curve nearest the edge);
 //   4. each triangle is cut at its new points, so the chamfer becomes the two faces meeting at
 //      the edge.
 // Where that curve passes beside a vertex rather than across an edge, the vertex is moved onto
@@ -31,7 +36,7 @@ namespace scallop {
 
 struct SharpenOptions {
   double smooth_angle = 15;   // deg: a face is smooth when every face sharing a corner turns less
-  double min_angle = 25;      // deg: faces meeting at less than this are not an edge to restore
+  double min_angle = 15;      // deg: faces meeting at less than this are not an edge to restore
   double radius = 8;          // mean edge lengths: the neighbourhood of a local surface
   int min_region_faces = 10;  // smaller regions are noise, not faces of the part
 };
@@ -41,14 +46,15 @@ struct SharpenOptions {
 //                the input had them; its feature edges the part's edges it now has (both ends on
 //                restored curves, corners or vertices already on two regions, the faces turning
 //                by more than min_angle), any the input had replaced
-// regions        smooth regions found (of at least min_region_faces faces)
+// regions        smooth regions found (of at least min_region_faces faces; a curved face makes several)
 // band_vertices  vertices on no smooth face, given a region by their distance to its plane
 // split_edges    edges split on the curve where two regions' surfaces meet
 // moved_vertices vertices moved onto that curve where it passes beside them (along their own
 //                face), instead of a sliver split off an edge
 // corners        vertices moved onto the point where three regions' surfaces meet
-// skipped_edges  edges between two regions left whole: their planes nearly parallel or the line
-//                where they meet too far from the edge (more than its length)
+// skipped_edges  edges between two regions left whole: their surfaces turning by less than
+//                min_angle there (pieces of one curved face) or meeting too far from the edge (more
+//                than its length)
 // held_back      moved or new vertices held short of their edge's line (and off the feature
 //                edges), since all the way a face beside them would turn over: where the chamfer is
 //                narrower than the move, or new points crowd along the line

@@ -10,7 +10,7 @@ namespace scallop::mesh_nodes {
 NodeDecl make_sharpen_node() {
   NodeDecl d;
   d.type = "mesh.sharpen";
-  d.version = 2;
+  d.version = 4;
   d.description =
       "sharp edges put back into a triangle mesh that interpolates a cloud (advancing front): the "
       "chamfer its triangles cut across each edge is split where the two faces' local surfaces (quadrics) meet, "
@@ -20,8 +20,8 @@ NodeDecl make_sharpen_node() {
       .output("mesh", "Mesh", "the same surface with its edges and corners restored: the input's vertices, then the new ones; its "
               "feature edges the part's edges it now has")
       .output("report", "Report",
-              "{regions (smooth faces joined), band_vertices (on no smooth face: given the region whose "
-              "plane they lie on), split_edges, moved_vertices (onto an edge's line passing beside them), corners (vertices moved onto the point where three faces meet), skipped_edges (planes nearly parallel or meeting far "
+              "{regions (smooth faces joined, each within min_angle / 2 of its flattest face: a curved face makes several), band_vertices (on no smooth face: given the region whose "
+              "plane they lie on), split_edges, moved_vertices (onto an edge's line passing beside them), corners (vertices moved onto the point where three faces meet), skipped_edges (surfaces turning by less than min_angle there, or meeting far "
               "off), held_back (vertices moved only part of the way, since all of it would turn a face over), "
               "largest_held_back (mm, the chamfer left there), largest_offset (mm, the deepest chamfer restored), edge_length (mm, mean), vertices, faces}");
   d.options<SharpenOptions>()

@@ -170,7 +170,44 @@ TEST(Sharpen, AConcaveEdgeIsRestoredLikeTheConvexOnes) {
   EXPECT_LE(folds(r.mesh), folds(mesh));  // the advancing front's own, if any (one here)
 }
 
-// A sphere has no edge: every face is smooth and nothing is split.
+// A crease z = -s(x) |y| whose sides turn by 50 degrees for x <= 12 and flatten smoothly (s is
+// C1) into the plane z = 0 between x = 12 and 22: its two sides are one smooth surface through
+// the fade. The crease is still an edge where it is sharp, and is restored there.
+TEST(Sharpen, ACreaseThatFadesIntoAPlaneIsRestoredWhereItIsSharp) {
+  const double slope = std::tan(25 * M_PI / 180);
+  const auto s = [&](double x) {
+    const double t = std::clamp((x - 12) / 10, 0.0, 1.0);
+    return slope * (1 - t * t * (3 - 2 * t));
+  };
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> ux(0, 34), uy(-8, 8);
+  std::vector<Eigen::Vector3d> P, N;
+  for (int i = 0; i < 20000; ++i) {
+    const double x = ux(rng), y = uy(rng);
+    P.emplace_back(x, y, -s(x) * std::abs(y));
+    N.push_back(Eigen::Vector3d(0, std::copysign(s(x), y), 1).normalized());  // near enough for the front
+  }
+  const Mesh mesh = reconstruct_surface(P, N, {}).mesh;
+  const SharpenResult r = sharpen_edges(mesh);
+  EXPECT_GT(r.regions, 2u);
+  // The new points where the crease is sharp lie on it.
+  std::size_t on_crease = 0;
+  for (std::size_t v = mesh.num_vertices(); v < r.mesh.num_vertices(); ++v) {
+    const Eigen::Vector3d& p = r.mesh.vertices[v];
+    if (p.x() < 2 || p.x() > 7) continue;
+    EXPECT_LT(std::abs(p.y()), 1e-6) << p.transpose();
+    EXPECT_LT(std::abs(p.z()), 1e-6) << p.transpose();
+    ++on_crease;
+  }
+  EXPECT_GT(on_crease, 10u);
+  // Nothing is split where the surface is smooth (the plane beyond the fade).
+  for (std::size_t v = mesh.num_vertices(); v < r.mesh.num_vertices(); ++v) EXPECT_LT(r.mesh.vertices[v].x(), 22);
+  expect_same_topology(mesh, r.mesh);
+}
+
+// A sphere has no edge: every face is smooth and nothing is split. (It is cut into several
+// regions, each within half of min_angle of its first face; where they meet their local surfaces
+// agree.)
 TEST(Sharpen, ASmoothSurfaceIsLeftAsItIs) {
   std::vector<Eigen::Vector3d> P, N;
   const double golden = M_PI * (3.0 - std::sqrt(5.0));
@@ -181,7 +218,7 @@ TEST(Sharpen, ASmoothSurfaceIsLeftAsItIs) {
   }
   const Mesh mesh = reconstruct_surface(P, N, {}).mesh;
   const SharpenResult r = sharpen_edges(mesh);
-  EXPECT_EQ(r.regions, 1u);
+  EXPECT_GT(r.regions, 1u);
   EXPECT_EQ(r.split_edges, 0u);
   EXPECT_EQ(r.corners, 0u);
   EXPECT_EQ(r.mesh.vertices, mesh.vertices);
