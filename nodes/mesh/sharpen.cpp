@@ -65,24 +65,22 @@ std::optional<LocalSurface> fit_local_surface(const std::vector<Eigen::Vector3d>
   const Eigen::Vector3d& ev = es.eigenvalues();
   if (es.info() != Eigen::Success || !(ev[1] > 1e-6 * ev[2]) || !(ev[0] <= 0.25 * ev[1])) return std::nullopt;
   LocalSurface plane{es.eigenvectors().col(0), c, es.eigenvectors().col(2), es.eigenvectors().col(1)};
-  {
-    Eigen::MatrixXd A(pts.size(), 6);
-    Eigen::VectorXd w(pts.size());
-    double scale = 0;
-    for (const auto& p : pts) scale = std::max(scale, (p - c).norm());
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-      const Eigen::Vector3d d = pts[i] - c;
-      const double u = d.dot(plane.t1) / scale, v = d.dot(plane.t2) / scale;
-      A.row(i) << 1, u, v, u * u, u * v, v * v;
-      w[i] = d.dot(plane.normal);
-    }
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
-    const auto& sv = svd.singularValues();
-    if (sv[5] > 1e-3 * sv[0]) {
-      const Eigen::VectorXd q = svd.solve(w);
-      const double k[6] = {1, 1 / scale, 1 / scale, 1 / (scale * scale), 1 / (scale * scale), 1 / (scale * scale)};
-      for (int j = 0; j < 6; ++j) plane.c[j] = q[j] * k[j];
-    }
+  Eigen::MatrixXd A(pts.size(), 6);
+  Eigen::VectorXd w(pts.size());
+  double scale = 0;
+  for (const auto& p : pts) scale = std::max(scale, (p - c).norm());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const Eigen::Vector3d d = pts[i] - c;
+    const double u = d.dot(plane.t1) / scale, v = d.dot(plane.t2) / scale;
+    A.row(i) << 1, u, v, u * u, u * v, v * v;
+    w[i] = d.dot(plane.normal);
+  }
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const auto& sv = svd.singularValues();
+  if (sv[5] > 1e-3 * sv[0]) {
+    const Eigen::VectorXd q = svd.solve(w);
+    const double k[6] = {1, 1 / scale, 1 / scale, 1 / (scale * scale), 1 / (scale * scale), 1 / (scale * scale)};
+    for (int j = 0; j < 6; ++j) plane.c[j] = q[j] * k[j];
   }
   return plane;
 }
@@ -159,9 +157,6 @@ double angle_between_surfaces_deg(const LocalSurface& a, const LocalSurface& b, 
   return angle_deg(na, nb.dot(na) < 0 ? Eigen::Vector3d(-nb) : nb);
 }
 
-double angle_between_planes_deg(const LocalSurface& a, const LocalSurface& b) {
-  return angle_deg(a.normal, b.normal.dot(a.normal) < 0 ? Eigen::Vector3d(-b.normal) : b.normal);
-}
 
 // The line where two planes meet.
 struct Line {
@@ -430,10 +425,11 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
     double offset;
   };
   auto crossing = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q, int ra, int rb) -> std::optional<Crossing> {
-    const auto near = planes.near(0.5 * (p + q));
+    const Eigen::Vector3d m = 0.5 * (p + q);
+    const auto near = planes.near(m);
     const LocalSurface *pa = LocalSurfaces::find(near, ra), *pb = LocalSurfaces::find(near, rb);
-    if (!pa || !pb || angle_between_surfaces_deg(*pa, *pb, 0.5 * (p + q)) < o.min_angle) return std::nullopt;
-    const Line line = meet(*pa, *pb, 0.5 * (p + q));
+    if (!pa || !pb || angle_between_surfaces_deg(*pa, *pb, m) < o.min_angle) return std::nullopt;
+    const Line line = meet(*pa, *pb, m);
     // Where the segment passes from nearer a's surface to nearer b's. Neighbouring edges of the
     // chamfer cross there in the order they have along the line, which the cut faces keep; the
     // segment's nearest approach to the line is ill-posed for an edge nearly parallel to it and
