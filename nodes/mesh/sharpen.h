@@ -22,10 +22,12 @@
 //   4. each triangle is cut at its new points, so the chamfer becomes the two faces meeting at
 //      the edge.
 // Where that curve passes beside a vertex rather than across an edge, the vertex is moved onto
-// it, along its own face (the curve lies on both surfaces). No other vertex moves, and the
-// connectivity stays what it was (closed stays closed). A move that would turn a face over (a
-// face facing against the one it was cut from, or two faces folded onto each other) is made
-// only in part.
+// it, along its own face (the curve lies on both surfaces). No other vertex moves, and the surface
+// keeps its pieces, holes and genus (closed stays closed). Where the moves turn a face over (a
+// face facing against the one it was cut from, two faces folded onto each other, or one flattened
+// onto a line), points that came out of order along an edge or past a corner are merged into
+// one (the edge's point into the corner, a band vertex into the edge's point): the edge stays
+// sharp. A move that would still turn a face over is made only in part.
 #pragma once
 
 #include <cstddef>
@@ -41,7 +43,8 @@ struct SharpenOptions {
   int min_region_faces = 10;  // smaller regions are noise, not faces of the part
 };
 
-// mesh           the sharpened mesh: the input's vertices first, in order, then the new ones;
+// mesh           the sharpened mesh: the input's vertices first, in order (less those merged,
+//                below: then also less any no face used), then the new ones;
 //                face labels carried to the pieces of each face; vertex normals recomputed when
 //                the input had them; its feature edges the part's edges it now has (both ends on
 //                restored curves, corners or vertices already on two regions, the faces turning
@@ -55,6 +58,8 @@ struct SharpenOptions {
 // skipped_edges  edges between two regions left whole: their surfaces turning by less than
 //                min_angle there (pieces of one curved face) or meeting too far from the edge (more
 //                than its length)
+// merged_vertices  vertices merged into a neighbour on the same edge of the part, or its corner,
+//                since moving both turned a face over (and the merge turns or folds no other)
 // held_back      moved or new vertices held short of their edge's line (and off the feature
 //                edges), since all the way a face beside them would turn over: where the chamfer is
 //                narrower than the move, or new points crowd along the line
@@ -65,7 +70,7 @@ struct SharpenOptions {
 struct SharpenResult {
   Mesh mesh;
   std::size_t regions = 0, band_vertices = 0, split_edges = 0, moved_vertices = 0, corners = 0, skipped_edges = 0;
-  std::size_t held_back = 0;
+  std::size_t merged_vertices = 0, held_back = 0;
   double largest_offset = 0, largest_held_back = 0, edge_length = 0;
 };
 

@@ -10,19 +10,19 @@ namespace scallop::mesh_nodes {
 NodeDecl make_sharpen_node() {
   NodeDecl d;
   d.type = "mesh.sharpen";
-  d.version = 4;
+  d.version = 5;
   d.description =
       "sharp edges put back into a triangle mesh that interpolates a cloud (advancing front): the "
       "chamfer its triangles cut across each edge is split where the two faces' local surfaces (quadrics) meet, "
       "a vertex the line passes beside is moved onto it, and the vertex nearest a corner of three "
       "faces onto the point where their surfaces meet (after Attene et al., Edge-Sharpener, 2003)";
   d.input("mesh", "Mesh", "triangles, e.g. mesh.reconstruct's then mesh.repair's")
-      .output("mesh", "Mesh", "the same surface with its edges and corners restored: the input's vertices, then the new ones; its "
+      .output("mesh", "Mesh", "the same surface with its edges and corners restored: the input's vertices (less any merged, below), then the new ones; its "
               "feature edges the part's edges it now has")
       .output("report", "Report",
               "{regions (smooth faces joined, each within min_angle / 2 of its flattest face: a curved face makes several), band_vertices (on no smooth face: given the region whose "
               "plane they lie on), split_edges, moved_vertices (onto an edge's line passing beside them), corners (vertices moved onto the point where three faces meet), skipped_edges (surfaces turning by less than min_angle there, or meeting far "
-              "off), held_back (vertices moved only part of the way, since all of it would turn a face over), "
+              "off), merged_vertices (merged into a neighbour on an edge where moving both turned a face over), held_back (vertices moved only part of the way, since all of it would turn a face over), "
               "largest_held_back (mm, the chamfer left there), largest_offset (mm, the deepest chamfer restored), edge_length (mm, mean), vertices, faces}");
   d.options<SharpenOptions>()
       .number("smooth_angle", &SharpenOptions::smooth_angle, 0.1, 90, "deg",
@@ -46,7 +46,8 @@ NodeDecl make_sharpen_node() {
     report.data = {{"regions", r.regions},          {"band_vertices", r.band_vertices},
                    {"split_edges", r.split_edges},  {"moved_vertices", r.moved_vertices},
                    {"corners", r.corners},
-                   {"skipped_edges", r.skipped_edges}, {"held_back", r.held_back},
+                   {"skipped_edges", r.skipped_edges}, {"merged_vertices", r.merged_vertices},
+                   {"held_back", r.held_back},
                    {"largest_held_back", r.largest_held_back}, {"largest_offset", r.largest_offset},
                    {"edge_length", r.edge_length},  {"vertices", r.mesh.num_vertices()},
                    {"faces", r.mesh.num_faces()}};

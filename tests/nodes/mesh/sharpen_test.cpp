@@ -74,7 +74,8 @@ double volume(const Mesh& m) {
 std::size_t folds(const Mesh& m) { return sharp_edges(m, mesh_edges(m), 50, 150).folds; }
 
 // Every vertex on the surface (|sdf| < 1e-9) but at most held_back of them, and those (and only
-// moved or new vertices) within largest_held_back of it; held back are a few of the moves.
+// moved or new vertices: an input vertex keeps its index where none was merged away) within
+// largest_held_back of it; held back are a few of the moves.
 void expect_on_surface_but_held_back(const Mesh& before, const SharpenResult& r,
                                      const std::function<double(const Eigen::Vector3d&)>& sdf) {
   std::size_t off = 0;
@@ -83,7 +84,9 @@ void expect_on_surface_but_held_back(const Mesh& before, const SharpenResult& r,
     if (d < 1e-9) continue;
     ++off;
     EXPECT_LE(d, r.largest_held_back + 1e-9) << r.mesh.vertices[v].transpose();
-    if (v < before.num_vertices()) EXPECT_NE(r.mesh.vertices[v], before.vertices[v]) << "an input vertex off the surface";
+    if (r.merged_vertices == 0 && v < before.num_vertices()) {
+      EXPECT_NE(r.mesh.vertices[v], before.vertices[v]) << "an input vertex off the surface";
+    }
   }
   EXPECT_LE(off, r.held_back);
   EXPECT_LT(r.held_back, (r.moved_vertices + r.split_edges) / 10);
@@ -112,8 +115,12 @@ TEST(Sharpen, ABoxsChamferedEdgesAndCornersAreRestored) {
   const double after = largest_distance(r.mesh, sdf);
   EXPECT_GT(before, 0.1);  // the chamfers: about a point spacing (0.2 mm edges) deep
   // The deepest chamfer left is where a move was held short (it would have turned a face over).
-  EXPECT_LT(after, 0.5 * before) << "before " << before << " after " << after;
+  // Points that came out of order along an edge or past a corner are merged instead: without
+  // that, 72 moves were held short and 0.078 mm of chamfer left (0.0027 with it).
+  EXPECT_LT(after, 0.05 * before) << "before " << before << " after " << after;
   EXPECT_LE(after, r.largest_held_back + 1e-9);
+  EXPECT_GT(r.merged_vertices, 0u);
+  EXPECT_LT(r.held_back, 10u);
   EXPECT_EQ(r.regions, 6u);
   EXPECT_EQ(r.corners, 8u);
   EXPECT_GT(r.split_edges, 0u);
@@ -163,7 +170,8 @@ TEST(Sharpen, AConcaveEdgeIsRestoredLikeTheConvexOnes) {
   const SharpenResult r = sharpen_edges(mesh);
   const double after = largest_distance(r.mesh, sdf);
   EXPECT_GT(before, 0.1);
-  EXPECT_LT(after, 0.5 * before) << "before " << before << " after " << after;
+  // 0.037 mm (96 moves held short) before out-of-order points were merged, 0.017 with it
+  EXPECT_LT(after, 0.2 * before) << "before " << before << " after " << after;
   EXPECT_EQ(r.regions, 8u);
   expect_on_surface_but_held_back(mesh, r, sdf);
   expect_same_topology(mesh, r.mesh);
