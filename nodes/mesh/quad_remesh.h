@@ -66,7 +66,7 @@ struct QuadRemeshOptions {
   double angle_deg = 50;            // an edge is sharp when its faces' normals differ by more
   double feature_tolerance = 0.1;   // of the output's mean edge length (feature share above)
   std::string blender;              // Blender's executable; "": $SCALLOP_BLENDER, else blender on PATH
-  double timeout_s = 3600;          // Blender is killed after this long
+  double timeout_s = 300;           // Blender is killed after this long, and the next try made
   bool snap = true;                 // move the quads' vertices onto the input (snap_to_reference.h)
 };
 

@@ -54,7 +54,8 @@ NodeDecl make_quad_remesh_node() {
             "feature curves, each by at most the mean edge length (QuadriFlow leaves them off near features)")
       .text("blender", &QuadRemeshOptions::blender,
             "Blender's executable; empty: the environment variable SCALLOP_BLENDER, else blender on PATH")
-      .number("timeout", &QuadRemeshOptions::timeout_s, 1, 86400, "s", "Blender is stopped after this long");
+      .number("timeout", &QuadRemeshOptions::timeout_s, 1, 86400, "s", "Blender is stopped after this long, and the next seed tried on the input simplified to 3/4 of its triangles "
+              "(QuadriFlow's sharp-feature flow now and then never ends where a slightly different input takes seconds)");
   d.run = [](NodeContext& ctx) {
     auto mesh = ctx.input<Mesh>("mesh");
     const QuadRemeshOptions o = ctx.options<QuadRemeshOptions>();

@@ -346,6 +346,33 @@ TEST(QuadRemesh, TornQuadsAreTriedAgainWithTheNextSeed) {
             "mesh.quad_remesh: seed 0: " + tear + "; try another seed or target_faces");
 }
 
+// QuadriFlow's sharp-feature flow now and then never ends on one input where a slightly different
+// one takes seconds. A fake Blender that hangs for seed 0 and writes the cube for seed 1: the run
+// is stopped at the time-out and the next seed tried on the input simplified to 3/4 of its
+// triangles; with one try the time-out is the error.
+TEST(QuadRemesh, ARunPastTheTimeOutIsStoppedAndTriedAgainOnASimplerInput) {
+  const Mesh cube = test::quad_box({2, 2, 2}, V(1, 1, 1));
+  const Mesh triangles = test::cube_mesh(4);  // 192 triangles on the unit cube: at most 144 after (142)
+  test::TempDir dir;
+  write_script_output(dir.path / "whole.bin", cube, V(0.5, 0.5, 0.5));
+  const auto fake = dir.path / "blender";
+  test::write_file(fake, "#!/bin/sh\neval out=\\${$(($# - 2))}\neval seed=\\${$#}\n"
+                         "if [ \"$seed\" -ge 1 ]; then cp " + (dir.path / "whole.bin").string() + " \"$out\"; else exec sleep 60; fi\n");
+  ::chmod(fake.c_str(), 0755);
+  std::vector<std::string> warnings;
+  const auto out = test::run_node(make_quad_remesh_node(),
+                                  {{"blender", fake.string()}, {"target_faces", 24}, {"timeout", 1}, {"snap", false}},
+                                  {{"mesh", std::make_shared<Mesh>(triangles)}}, nullptr, &warnings);
+  EXPECT_EQ(std::dynamic_pointer_cast<const Mesh>(out.at("mesh"))->num_faces(), 24u);
+  const nlohmann::json& r = std::dynamic_pointer_cast<const Report>(out.at("report"))->data;
+  EXPECT_EQ(r["seed"], 1);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], "QuadriFlow's quads were not usable with seed 0: QuadriFlow ran longer than 1 s and was "
+                         "stopped (tried again on the input simplified to 142 triangles); seed 1 was used");
+  EXPECT_EQ(refusal(triangles, {{"blender", fake.string()}, {"timeout", 1}, {"tries", 1}}),
+            "mesh.quad_remesh: seed 0: QuadriFlow ran longer than 1 s and was stopped; try another seed or target_faces");
+}
+
 // QuadriFlow that does not converge scatters its vertices far off the part; a 200 000-point
 // cloud of the ABC plate, sampled inside its overlapping solids too, got quads 900 mm off a part
 // 120 mm long, whose only symptom had been a non-manifold edge.
