@@ -183,15 +183,15 @@ Line meet(const LocalSurface& a, const LocalSurface& b, const Eigen::Vector3d& m
 
 constexpr double kFoldCosine = -0.866;  // faces turning by more than 150 degrees: one turned over
 
-// The faces of out turned over: facing against the input face each was cut from (parent), folded
-// onto a neighbour across an edge (turning by more than 150 degrees), or flattened onto a line.
-std::vector<char> turned_faces(const Mesh& out, const FaceGeometry& input_faces, const std::vector<std::uint32_t>& parent) {
-  std::vector<char> turned(out.num_faces(), 0);
-  const FaceGeometry g = face_geometry(out);
-  for (std::size_t f = 0; f < out.num_faces(); ++f)
+// The faces of a mesh turned over (g its faces' geometry, out_edges its edges): facing against
+// the input face each was cut from (parent), folded onto a neighbour across an edge (turning by
+// more than 150 degrees), or flattened onto a line.
+std::vector<char> turned_faces(const FaceGeometry& g, const MeshEdges& out_edges, const FaceGeometry& input_faces,
+                               const std::vector<std::uint32_t>& parent) {
+  std::vector<char> turned(g.area.size(), 0);
+  for (std::size_t f = 0; f < turned.size(); ++f)
     turned[f] = input_faces.area[parent[f]] > 0 &&
                 (g.normal[f].dot(input_faces.normal[parent[f]]) < 0 || g.area[f] < 1e-9 * input_faces.area[parent[f]]);
-  const MeshEdges out_edges = mesh_edges(out);
   for (std::size_t e = 0; e < out_edges.size(); ++e) {
     if (out_edges.faces_on(e) != 2) continue;
     const std::uint32_t* f = out_edges.faces(e);
@@ -218,7 +218,8 @@ std::size_t merge_across_turned_faces(Mesh& out, const FaceGeometry& input_faces
                                       double max_length) {
   std::size_t merged = 0;
   for (int round = 0; round < 20; ++round) {
-    const std::vector<char> turned = turned_faces(out, input_faces, parent);
+    const FaceGeometry geometry = face_geometry(out);
+    const std::vector<char> turned = turned_faces(geometry, mesh_edges(out), input_faces, parent);
     const std::size_t nf = out.num_faces();
     std::vector<std::array<std::uint32_t, 3>> tri(nf);
     std::vector<std::vector<std::uint32_t>> faces_of(out.num_vertices());
@@ -238,7 +239,6 @@ std::size_t merge_across_turned_faces(Mesh& out, const FaceGeometry& input_faces
     // a closed fan around v: as many neighbours as faces
     auto interior = [&](std::uint32_t v) { return !faces_of[v].empty() && neighbours(v).size() == faces_of[v].size(); };
     std::vector<char> alive(nf, 1), touched(out.num_vertices(), 0);
-    const FaceGeometry geometry = face_geometry(out);
     // Whether merging gone into keep (the faces on_edge going) turns no face of gone against its
     // input face, nor folds one onto a neighbour, that was not so before.
     auto keeps_faces_facing = [&](std::uint32_t keep, std::uint32_t gone, const std::vector<std::uint32_t>& on_edge) {
@@ -363,8 +363,9 @@ std::vector<char> keep_faces_facing_their_parents(const Mesh& input, const FaceG
       out.vertices[nv + j] = trace + share[nv + j] * (target[nv + j] - trace);
     }
   };
+  const MeshEdges out_edges = mesh_edges(out);  // the moves change no connectivity
   auto find_turned = [&] {
-    turned = turned_faces(out, input_faces, parent);
+    turned = turned_faces(face_geometry(out), out_edges, input_faces, parent);
     return std::find(turned.begin(), turned.end(), 1) != turned.end();
   };
   std::vector<char> moves(n);
