@@ -22,7 +22,9 @@
 //   4. each triangle is cut at its new points, so the chamfer becomes the two faces meeting at
 //      the edge.
 // Where that curve passes beside a vertex rather than across an edge, the vertex is moved onto
-// it, along its own face (the curve lies on both surfaces). No other vertex moves, and the surface
+// it, along its own face (the curve lies on both surfaces). A band vertex off every region's
+// surface (by more than a tenth of a mean edge: not a point of the part but a hole's filling)
+// moves onto its region's. No other vertex moves, and the surface
 // keeps its pieces, holes and genus (closed stays closed). Where the moves turn a face over (a
 // face facing against the one it was cut from, two faces folded onto each other, or one flattened
 // onto a line), points that came out of order along an edge or past a corner are merged into
@@ -58,6 +60,8 @@ struct SharpenOptions {
 // skipped_edges  edges between two regions left whole: their surfaces turning by less than
 //                min_angle there (pieces of one curved face) or meeting too far from the edge (more
 //                than its length)
+// projected_vertices  band vertices off every region's surface by 0.1 to 1 mean edge lengths (not
+//                points of the part: a hole's filling), moved onto the nearest one's
 // merged_vertices  vertices merged into a neighbour on the same edge of the part, or its corner,
 //                since moving both turned a face over (and the merge turns or folds no other)
 // held_back      moved or new vertices held short of their edge's line (and off the feature
@@ -70,7 +74,7 @@ struct SharpenOptions {
 struct SharpenResult {
   Mesh mesh;
   std::size_t regions = 0, band_vertices = 0, split_edges = 0, moved_vertices = 0, corners = 0, skipped_edges = 0;
-  std::size_t merged_vertices = 0, held_back = 0;
+  std::size_t merged_vertices = 0, held_back = 0, projected_vertices = 0;
   double largest_offset = 0, largest_held_back = 0, edge_length = 0;
 };
 

@@ -123,6 +123,7 @@ TEST(Sharpen, ABoxsChamferedEdgesAndCornersAreRestored) {
   EXPECT_LT(r.held_back, 10u);
   EXPECT_EQ(r.regions, 6u);
   EXPECT_EQ(r.corners, 8u);
+  EXPECT_EQ(r.projected_vertices, 0u);  // a clean cloud's vertices are the box's points
   EXPECT_GT(r.split_edges, 0u);
   EXPECT_GT(r.moved_vertices, 0u);
   // Its feature edges are the box's edges, and run along all twelve (total length 4 (20+12+8)).
@@ -149,6 +150,41 @@ TEST(Sharpen, ABoxsChamferedEdgesAndCornersAreRestored) {
       << volume(mesh) << " -> " << volume(r.mesh);
   // No face turned over beside an edge (its edges would read as sharp, a fold in the part).
   EXPECT_EQ(folds(mesh), 0u);
+  EXPECT_EQ(folds(r.mesh), 0u);
+}
+
+// A vertex that is not a point of the part (mesh.repair's filling of a hole left one 0.107 mm
+// inside a side of the domed block's cloud mesh, 0.3 mm from an edge) is put back onto its face:
+// here two pushed 0.3 mean edges into the box's top, one amid it and one beside an edge.
+TEST(Sharpen, AVertexPushedOffAFaceIsPutBackOnIt) {
+  const Eigen::Vector3d lo(0, 0, 0), hi(20, 12, 8);
+  std::vector<Eigen::Vector3d> P, N;
+  box_cloud(lo, hi, 30000, P, N);
+  Mesh mesh = reconstruct_surface(P, N, {}).mesh;
+  const MeshEdges edges = mesh_edges(mesh);
+  double edge = 0;
+  for (const auto& [a, b] : edges.edges) edge += (mesh.vertices[a] - mesh.vertices[b]).norm();
+  edge /= double(edges.size());
+  const auto nearest = [&](const Eigen::Vector3d& q) {
+    std::size_t best = 0;
+    for (std::size_t v = 0; v < mesh.num_vertices(); ++v)
+      if ((mesh.vertices[v] - q).norm() < (mesh.vertices[best] - q).norm()) best = v;
+    return best;
+  };
+  const std::size_t amid = nearest({10, 6, 8}), beside = nearest({10, 12 - 2 * edge, 8});
+  ASSERT_NEAR(mesh.vertices[beside].y(), 12 - 2 * edge, 0.5 * edge);
+  for (std::size_t v : {amid, beside}) mesh.vertices[v].z() -= 0.3 * edge;
+  const SharpenResult r = sharpen_edges(mesh);
+  EXPECT_EQ(r.projected_vertices, 2u);
+  const auto sdf = [&](const Eigen::Vector3d& p) { return box_sdf(p, lo, hi); };
+  for (std::size_t v : {amid, beside}) {
+    double closest = INFINITY;  // the output vertex straight above the pushed one
+    for (const Eigen::Vector3d& x : r.mesh.vertices)
+      if ((x.head<2>() - mesh.vertices[v].head<2>()).norm() < 1e-9) closest = std::min(closest, std::abs(sdf(x)));
+    EXPECT_LT(closest, 1e-9) << "vertex " << v << " not put back";
+  }
+  EXPECT_LT(largest_distance(r.mesh, sdf), 0.02);
+  expect_same_topology(mesh, r.mesh);
   EXPECT_EQ(folds(r.mesh), 0u);
 }
 
