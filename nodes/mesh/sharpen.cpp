@@ -503,7 +503,7 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
     double best = INFINITY;
     const auto near = planes.near(mesh.vertices[v]);
     for (const auto& [r, p] : near)
-      if (p.distance(mesh.vertices[v]) < best) best = p.distance(mesh.vertices[v]), final_label[v] = r;
+      if (const double d = p.distance(mesh.vertices[v]); d < best) best = d, final_label[v] = r;
     if (best > kOffSurface * res.edge_length && best <= res.edge_length) {
       const Eigen::Vector3d x = onto({LocalSurfaces::find(near, final_label[v])}, mesh.vertices[v]);
       if (x != mesh.vertices[v]) rest[v] = x, ++res.projected_vertices;
