@@ -5,6 +5,7 @@
 #include <boost/graph/kruskal_min_spanning_tree.hpp>
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <stdexcept>
 
@@ -16,6 +17,9 @@ namespace scallop {
 namespace {
 
 constexpr std::uint32_t kNone = UINT32_MAX;
+// Two patches are not joined where the union's border would turn by more than this at an end of
+// the side they share (a border turns about 11 degrees per quad on a 32-quad cylinder).
+constexpr double kMaxJoinedBorderTurnDeg = 30;
 
 // Connectivity of a manifold quad mesh, for walking straight along its edge lines.
 struct QuadConnectivity {
@@ -402,8 +406,9 @@ SegmentPatch turned(const SegmentPatch& p) {
   return t;
 }
 
-// a and b side by side, when a whole side of a is a whole side of b and side_ok(its vertices)
-// holds; with the shared side's vertices.
+// a and b side by side, when a whole side of a is a whole side of b and side_ok(a, b, its
+// vertices) holds (a and b turned so that the side is a's last column and b's first); with the
+// shared side's vertices.
 template <class SideOk>
 std::optional<std::pair<SegmentPatch, std::vector<std::uint32_t>>> joined(const SegmentPatch& a0,
                                                                            const SegmentPatch& b0, SideOk side_ok) {
@@ -414,7 +419,7 @@ std::optional<std::pair<SegmentPatch, std::vector<std::uint32_t>>> joined(const 
       if (a.rows != b.rows) continue;
       std::vector<std::uint32_t> side;
       for (std::uint32_t i = 0; i < a.rows && a.at(i, a.cols - 1) == b.at(i, 0); ++i) side.push_back(a.at(i, a.cols - 1));
-      if (side.size() != a.rows || !side_ok(side)) continue;
+      if (side.size() != a.rows || !side_ok(a, b, side)) continue;
       SegmentPatch j;
       j.rows = a.rows;
       j.cols = a.cols + b.cols - 1;
@@ -442,10 +447,21 @@ std::size_t join_patches(std::vector<SegmentPatch>& patches, const std::vector<E
   std::vector<int> patch_of(q.mesh.num_faces(), -1);
   for (std::size_t i = 0; i < patches.size(); ++i)
     for (auto f : patches[i].faces) patch_of[f] = static_cast<int>(i);
-  auto smooth_side = [&](const std::vector<std::uint32_t>& side) {
+  // The union's border runs on through the shared side's two ends: where it turns there (an
+  // extraordinary point the two patches had as a corner), its B-spline border curve swings past
+  // the turn and the surface folds over near it (a 63 degree turn on the domed block's top
+  // turned normals upside down, and balls planned there were lifted 3 mm).
+  const std::vector<Eigen::Vector3d>& x = q.mesh.vertices;
+  auto straight_through = [&](std::uint32_t before, std::uint32_t at, std::uint32_t after) {
+    const Eigen::Vector3d in = (x[at] - x[before]).normalized(), out = (x[after] - x[at]).normalized();
+    return in.dot(out) >= std::cos(kMaxJoinedBorderTurnDeg * std::numbers::pi / 180);
+  };
+  auto side_ok = [&](const SegmentPatch& a, const SegmentPatch& b, const std::vector<std::uint32_t>& side) {
     for (std::size_t k = 1; k < side.size(); ++k)
       if (sharp[*q.edges.find(side[k - 1], side[k])]) return false;
-    return true;
+    const std::uint32_t last = a.rows - 1;
+    return straight_through(a.at(0, a.cols - 2), side.front(), b.at(0, 1)) &&
+           straight_through(a.at(last, a.cols - 2), side.back(), b.at(last, 1));
   };
   // Candidate joins, dropped when either patch changes.
   using Join = std::optional<std::pair<SegmentPatch, std::vector<std::uint32_t>>>;
@@ -453,7 +469,7 @@ std::size_t join_patches(std::vector<SegmentPatch>& patches, const std::vector<E
   auto evaluate = [&](int a, int b) -> const Join& {
     auto [it, added] = tried.try_emplace({a, b});
     if (!added) return it->second;
-    if (auto j = joined(patches[a], patches[b], smooth_side)) {
+    if (auto j = joined(patches[a], patches[b], side_ok)) {
       std::vector<Eigen::Vector3d> normals;
       for (auto f : j->first.faces) normals.push_back(face_normal[f]);
       const auto [d, worst] = best_height_field_direction(normals);

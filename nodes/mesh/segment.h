@@ -25,8 +25,10 @@
 //      faces not above min_normal_dot for the best d) is halved across its longer side until
 //      every part is (a single quad is one, along its own normal, so the halving ends).
 // Then, unless join is off, neighbouring rectangles that share a whole side with no sharp edge on
-// it are joined while their union is a height field with every n . d above join_min_normal_dot,
-// the best union first (the paper lets the number of patches be controlled; the lines of
+// it are joined while their union is a height field with every n . d above join_min_normal_dot
+// and the union's border runs on through the shared side's ends turning by at most 30 degrees
+// (two patches whose corner is an extraordinary point would otherwise make a border that bends
+// there, and the B-spline fitted to it folds over), the best union first (the paper lets the number of patches be controlled; the lines of
 // priorities 4-6 cut more than the sharp edges and EPs need). Joined patches keep the SHF's
 // conditions: the shared side's inner vertices had two faces on either side, so they are regular.
 // Each patch's direction d maximises the smallest n . d over its faces' unit normals (the axis

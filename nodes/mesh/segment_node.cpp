@@ -11,7 +11,7 @@ namespace scallop::mesh_nodes {
 NodeDecl make_segment_node() {
   NodeDecl d;
   d.type = "mesh.segment";
-  d.version = 1;
+  d.version = 2;  // 2: no join where the union's border would turn more than 30 degrees
   d.description =
       "cuts a quad mesh into sharp height fields (the paper's MST of extraordinary points and clipping edges by "
       "priority): rectangles of the quad grid with the sharp edges on their borders, each a height field along a "

@@ -162,6 +162,22 @@ TEST(Segment, NeighboursJoinWhileTheUnionStaysAHeightFieldAboveTheLimit) {
   EXPECT_EQ(segment_shf(m, o).patches.size(), 6u);
 }
 
+TEST(Segment, NoJoinWhereTheUnionsBorderWouldTurnAtACorner) {
+  // A box whose edges are not sharp (theta 100 degrees): two neighbouring sides form a height
+  // field (every n . d = cos 45 degrees, above join_min_normal_dot 0.5), but their union's border
+  // would turn 90 degrees at the box's corners, where the B-spline fitted to it folds over.
+  const Mesh box = test::quad_box({4, 4, 4}, {20, 20, 20});
+  SegmentOptions o;
+  o.sharp_angle_deg = 100;
+  SegmentStats stats;
+  const Segments s = segment_shf(box, o, &stats);
+  expect_valid(s);
+  EXPECT_EQ(stats.sharp_edges, 0u);
+  EXPECT_EQ(stats.joins, 0u);
+  ASSERT_EQ(s.patches.size(), 6u);
+  for (const auto& p : s.patches) EXPECT_GE(side_of(box, p), 0);
+}
+
 TEST(Segment, ASphereWithoutSharpEdgesIsCutByItsExtraordinaryPoints) {
   Mesh m = test::quad_box({6, 6, 6}, {2, 2, 2});
   for (auto& v : m.vertices) v = (v - Eigen::Vector3d(1, 1, 1)).normalized() * 20;
