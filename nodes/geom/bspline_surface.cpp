@@ -114,8 +114,8 @@ std::string bspline_problem(const BSplineSurface& s) {
   return "";
 }
 
-BSplinePatch::BSplinePatch(BSplineSurface surface, const Eigen::Vector3d& up, double uncertainty)
-    : surface_(std::move(surface)), up_(up.normalized()), uncertainty_(uncertainty) {
+BSplinePatch::BSplinePatch(BSplineSurface surface, const Eigen::Vector3d& up, double uncertainty, double min_up_dot)
+    : surface_(std::move(surface)), up_(up.normalized()), uncertainty_(uncertainty), min_up_dot_(min_up_dot) {
   if (const std::string problem = bspline_problem(surface_); !problem.empty())
     throw std::invalid_argument("BSplinePatch: " + problem);
   if (!up_.allFinite()) throw std::invalid_argument("BSplinePatch: the up direction is zero or not finite");
@@ -128,15 +128,34 @@ BSplinePatch::BSplinePatch(BSplineSurface surface, const Eigen::Vector3d& up, do
   spacing_ = span / 4;
 }
 
+namespace {
+// ru x rv turned to up's side; up where it vanishes.
+Eigen::Vector3d jet_normal(const SurfaceJet& j, const Eigen::Vector3d& up) {
+  const Eigen::Vector3d n = j.du.cross(j.dv);
+  const double scale = j.du.norm() * j.dv.norm();
+  const Eigen::Vector3d unit = n.norm() > 1e-12 * scale && scale > 0 ? Eigen::Vector3d(n.normalized()) : up;
+  return unit.dot(up) < 0 ? Eigen::Vector3d(-unit) : unit;
+}
+}  // namespace
+
 SurfaceDerivatives BSplinePatch::derivatives(const Eigen::Vector2d& uv) const {
   const Eigen::Vector2d c = domain_.clamp(uv);
   const SurfaceJet j = evaluate(surface_, c.x(), c.y());
   SurfaceDerivatives d;
   d.sample.position = j.point;
-  const Eigen::Vector3d n = j.du.cross(j.dv);
-  const double scale = j.du.norm() * j.dv.norm();
-  d.sample.normal = n.norm() > 1e-12 * scale && scale > 0 ? Eigen::Vector3d(n.normalized()) : up_;
-  if (d.sample.normal.dot(up_) < 0) d.sample.normal = -d.sample.normal;
+  d.sample.normal = jet_normal(j, up_);
+  if (d.sample.normal.dot(up_) < min_up_dot_) {
+    constexpr int kSteps = 64;  // on the way to the centre
+    const Eigen::Vector2d centre(0.5, 0.5);
+    d.sample.normal = up_;
+    for (int k = 1; k <= kSteps; ++k) {
+      const Eigen::Vector2d x = c + (centre - c) * (double(k) / kSteps);
+      if (const Eigen::Vector3d n = jet_normal(evaluate(surface_, x.x(), x.y()), up_); n.dot(up_) >= min_up_dot_) {
+        d.sample.normal = n;
+        break;
+      }
+    }
+  }
   d.sample.uncertainty = uncertainty_;
   d.ru = j.du, d.rv = j.dv, d.ruu = j.duu, d.ruv = j.duv, d.rvv = j.dvv;
   return d;

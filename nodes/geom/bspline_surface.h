@@ -61,9 +61,17 @@ Eigen::Vector3d surface_point(const BSplineSurface& s, double u, double v);
 // away from the material), and a constant uncertainty (mm; how far the part may lie from the
 // surface, 0 when it is taken as exact). Where ru x rv vanishes (a border collapsed to a point)
 // the normal is up. Holds its own copy of the surface.
+//
+// min_up_dot: the patch's normals are known to lie within this of up (n . up >= min_up_dot: the
+// segmentation's cap, less the fit's slack). Where ru x rv falls outside it, the patch's (u, v)
+// map is degenerate there (a corner of nearly 180 degrees, where ru and rv are nearly parallel,
+// or the crease where a fitted surface folds over) and ru x rv points nowhere in particular (a
+// ball placed along it on the domed block stood beside the part and was lifted 3 mm): the normal
+// is taken from the nearest point on the way to the square's centre whose normal lies within it
+// (up if none). The default, -1, takes ru x rv everywhere.
 class BSplinePatch final : public ParametricSurface {
  public:
-  BSplinePatch(BSplineSurface surface, const Eigen::Vector3d& up, double uncertainty = 0);
+  BSplinePatch(BSplineSurface surface, const Eigen::Vector3d& up, double uncertainty = 0, double min_up_dot = -1);
   SurfaceSample operator()(const Eigen::Vector2d& uv) const override;
   SurfaceDerivatives derivatives(const Eigen::Vector2d& uv) const override;
   const UVDomain& domain() const override { return domain_; }
@@ -74,7 +82,7 @@ class BSplinePatch final : public ParametricSurface {
  private:
   BSplineSurface surface_;
   Eigen::Vector3d up_;
-  double uncertainty_;
+  double uncertainty_, min_up_dot_;
   UVDomain domain_;
   double spacing_;
 };

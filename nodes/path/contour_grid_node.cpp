@@ -19,7 +19,7 @@ namespace scallop::path_nodes {
 NodeDecl make_contour_grid_node() {
   NodeDecl d;
   d.type = "path.contour_grid";
-  d.version = 3;
+  d.version = 4;  // 4: normals held within the patch's cap (machining_surface)
   d.description =
       "contour-parallel passes on every B-spline patch (the second paper's Algorithm 1): nested rectangles of the "
       "patch's (u, v) square, each side stepped in from the scallop limit and the scallop between every two "
@@ -64,7 +64,7 @@ NodeDecl make_contour_grid_node() {
     tbb::parallel_for(std::size_t(0), np, [&](std::size_t p) {
       try {
         const SurfacePatch& sp = surfaces->patches[p];
-        const BSplinePatch patch(sp.surface, sp.direction);
+        const BSplinePatch patch = machining_surface(sp);
         ContourGridOptions patch_options = o;
         patch_options.scallop_height = target[p];
         results[p] = plan_contour_grid(patch, patch_options);

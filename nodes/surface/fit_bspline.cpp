@@ -288,6 +288,11 @@ std::vector<double> surface_distance_max(const Surfaces& surfaces, const Mesh& m
   return out;
 }
 
+BSplinePatch machining_surface(const SurfacePatch& patch) {
+  constexpr double kFitNormalSlack = 0.1;
+  return BSplinePatch(patch.surface, patch.direction, 0, patch.min_normal_dot - kFitNormalSlack);
+}
+
 namespace {
 
 Surfaces fit_patches(const Segments& seg, const FitBSplineOptions& o, FitStats* stats,

@@ -74,6 +74,11 @@ GridFit fit_grid_bspline(const std::vector<Eigen::Vector3d>& points, std::uint32
 // off the part (path.contour_grid).
 std::vector<double> surface_distance_max(const Surfaces& surfaces, const Mesh& mesh);
 
+// A fitted patch as the planners see it: up its machining direction, and its normals held within
+// its segment's cap (n . direction >= min_normal_dot) less 0.1, the fit's own lean (BSplinePatch:
+// where the fitted map degenerates, the normal is taken from inside).
+BSplinePatch machining_surface(const SurfacePatch& patch);
+
 // How the patches meet, and how close they came to the part.
 struct FitStats {
   int subdivisions = 0;                 // times the grids were made twice as fine

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "nodes/mesh/mesh_distance.h"
+#include "nodes/surface/fit_bspline.h"
 
 namespace scallop {
 namespace {
@@ -85,7 +86,7 @@ std::vector<Setup> plan_setups(const Surfaces& surfaces, const Mesh& part, const
     const SurfacePatch& sp = surfaces.patches[p];
     if (!(sp.direction.allFinite() && std::abs(sp.direction.norm() - 1) < 1e-6))
       throw std::invalid_argument("patch " + std::to_string(p) + ": its direction is not a unit vector");
-    const BSplinePatch patch(sp.surface, sp.direction);  // throws on a malformed surface
+    const BSplinePatch patch = machining_surface(sp);  // throws on a malformed surface
     for (int i = 0; i < kSamples; ++i)
       for (int j = 0; j < kSamples; ++j) {
         const SurfaceSample x = patch({double(j) / (kSamples - 1), double(i) / (kSamples - 1)});

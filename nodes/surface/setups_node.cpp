@@ -14,7 +14,7 @@ namespace scallop::surface_nodes {
 NodeDecl make_setups_node() {
   NodeDecl d;
   d.type = "surface.setups";
-  d.version = 5;  // 2: the part hides patches from axes; 3: square axes win ties within 0.005; 4: hidden patches reached around the part; 5: hidden_patches
+  d.version = 6;  // 2: the part hides patches from axes; 3: square axes win ties within 0.005; 4: hidden patches reached around the part; 5: hidden_patches; 6: normals held within the patch's cap
   d.description =
       "groups the patches into clampings by machining direction, as few as the directions allow (greedy set cover), "
       "each with the rigid transform from the part's frame to the machine's (tool axis +z); a patch the part hides from "

@@ -16,7 +16,8 @@ namespace scallop {
 //   surface         S(u, v) on the domain [0, 1]^2; S_u x S_v points toward the spindle
 //                   (along direction), as the patch's faces do
 //   direction       unit machining direction (tool axis, surface to spindle), min_normal_dot the
-//                   smallest n . direction over the patch's mesh faces (mesh.segment's figures)
+//                   smallest n . direction over the patch's mesh faces (mesh.segment's figures;
+//                   -1 where not known)
 //   segment         the patch's index in the Segments it was fitted from
 //   rows, cols      the grid fitted (vertex (i, j) at (u, v) = (j / (cols-1), i / (rows-1)))
 //   fit_max_error, fit_mean_error   |S(u, v) - vertex| over that grid (mm)
@@ -27,7 +28,7 @@ namespace scallop {
 struct SurfacePatch {
   BSplineSurface surface;
   Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
-  double min_normal_dot = 1.0;
+  double min_normal_dot = -1;
   std::uint32_t segment = 0;
   std::uint32_t rows = 0, cols = 0;
   double fit_max_error = 0, fit_mean_error = 0, smoothing = 0;

@@ -144,6 +144,28 @@ TEST(BSplinePatch, TheDefaultFiniteDifferencesAgreeWithTheExactDerivatives) {
   EXPECT_DOUBLE_EQ(patch.uv_spacing(), 0.25);
 }
 
+TEST(BSplinePatch, WhereTheMapIsDegenerateTheNormalComesFromInsideTheCap) {
+  // A bilinear patch whose corner (1, 0) is nearly 180 degrees: ru = (10, 0, 0) and rv = (10, 0.1,
+  // 0.2) there, so ru x rv = (0, -2, 1) stands 63 degrees off a surface that is nearly z = 0.
+  BSplineSurface s;
+  s.degree_u = s.degree_v = 1;
+  s.knots_u = s.knots_v = {0, 0, 1, 1};
+  s.poles_u = s.poles_v = 2;
+  s.poles = {{0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {20, 0.1, 0.2}};
+  const Eigen::Vector3d z(0, 0, 1);
+  const BSplinePatch plain(s, z), capped(s, z, 0, 0.95);
+  EXPECT_NEAR(plain({1, 0}).normal.dot(z), 1 / std::sqrt(5.0), 1e-12);
+  const SurfaceDerivatives a = plain.derivatives({1, 0}), b = capped.derivatives({1, 0});
+  EXPECT_GE(b.sample.normal.dot(z), 0.95);
+  EXPECT_NEAR(b.sample.normal.norm(), 1, 1e-12);
+  EXPECT_EQ(a.sample.position, b.sample.position);  // only the normal is taken from inside
+  EXPECT_EQ(a.ru, b.ru);
+  EXPECT_EQ(a.rv, b.rv);
+  // Inside, where ru x rv lies within the cap, both agree.
+  EXPECT_EQ(plain({0.5, 0.5}).normal, capped({0.5, 0.5}).normal);
+  EXPECT_GT(capped({0.5, 0.5}).normal.dot(z), 0.999);
+}
+
 TEST(BSplinePatch, RefusesABadSurface) {
   BSplineSurface s = parabolic_cylinder();
   s.poles.pop_back();
