@@ -159,10 +159,13 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
       if (!(need > 0)) continue;
       // The lower end goes up to the upper end's height; ends already level (raised so before)
       // both go up by what the move lacks: raising one end to the other's height no longer
-      // moves it (a move beside a slope kept 0.01 mm of a fandisk's side that way).
+      // moves it (a move beside a slope kept 0.01 mm of a fandisk's side that way). So do the ends
+      // of a move that lacks less than their height difference: raising the lower end to the
+      // upper one's would lift it far more than needed (a move on the domed block's top lacking
+      // 0.00007 mm had a ball lifted 0.129 mm, and left a 0.058 mm scallop).
       std::vector<std::size_t> ends;
       double rise;
-      if (std::abs(cb.z() - ca.z()) > 1e-3) {
+      if (const double dz = std::abs(cb.z() - ca.z()); dz > 1e-3 && dz <= need) {
         ends = {ca.z() < cb.z() ? k - 1 : k};
         rise = std::abs(cb.z() - ca.z()) + 1e-6;
       } else {
