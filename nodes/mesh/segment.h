@@ -28,8 +28,9 @@
 // it are joined while their union is a height field with every n . d above join_min_normal_dot
 // and the union's border runs on through the shared side's ends turning by at most 30 degrees
 // (two patches whose corner is an extraordinary point would otherwise make a border that bends
-// there, and the B-spline fitted to it folds over), the best union first (the paper lets the number of patches be controlled; the lines of
-// priorities 4-6 cut more than the sharp edges and EPs need). Joined patches keep the SHF's
+// there, and the B-spline fitted to it folds over), the best union first (the paper lets the
+// number of patches be controlled; the lines of priorities 4-6 cut more than the sharp edges and
+// EPs need). Joined patches keep the SHF's
 // conditions: the shared side's inner vertices had two faces on either side, so they are regular.
 // Each patch's direction d maximises the smallest n . d over its faces' unit normals (the axis
 // of the smallest cap holding them, by 400 Badoiu-Clarkson steps on the normals: within about

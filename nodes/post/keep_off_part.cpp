@@ -167,7 +167,7 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
       double rise;
       if (const double dz = std::abs(cb.z() - ca.z()); dz > 1e-3 && dz <= need) {
         ends = {ca.z() < cb.z() ? k - 1 : k};
-        rise = std::abs(cb.z() - ca.z()) + 1e-6;
+        rise = dz + 1e-6;
       } else {
         ends = {k - 1, k};
         rise = std::max(need, 1e-4) + 1e-6;

@@ -7,7 +7,8 @@
 // part is found exactly (MeshDistance::least_along), and where it is too near (or, checked at
 // eighths, a point of it lies under the part) a lifted point is inserted and both halves are
 // checked again (6 times at most); a move that still reaches in (a narrow neck above a free
-// pocket) has its lower end raised to its upper end's height, and a move that is still too near
+// pocket) has its lower end raised to its upper end's height when it lacks at least their height
+// difference, else both ends raised by what it lacks, and a move that is still too near
 // after that is not cut: the pass is split there and the pieces' ends trimmed back to balls that
 // go straight up clear (splits, dropped). A pass's first and last ball, where the tool comes down
 // and goes up along +z, is raised until that vertical keeps the ball as far off the part (an

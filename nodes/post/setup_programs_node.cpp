@@ -28,7 +28,7 @@ struct SetupProgramsOptions {
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 11;  // 11: the rest search also refines the thin band beside concave edges a ball of 0.9 r reaches; 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
+  d.version = 12;  // 12: a move lacking less than its ends' height difference goes up by what it lacks; 11: the rest search also refines the thin band beside concave edges a ball of 0.9 r reaches; 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
                   // 3: moves and links kept off the part's faces exactly (MeshDistance::least_along)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), kept off "
