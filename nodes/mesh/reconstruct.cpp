@@ -1,6 +1,5 @@
 #include "nodes/mesh/reconstruct.h"
 
-#include <CGAL/Advancing_front_surface_reconstruction.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/bilateral_smooth_point_set.h>
@@ -10,10 +9,15 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <stdexcept>
 
 #include "nodes/cloud/knn.h"
 #include "nodes/cloud/principal_extents.h"
+#include "nodes/mesh/external_process.h"
 #include "nodes/mesh/mesh_distance.h"
 #include "nodes/mesh/mesh_topology.h"
 
@@ -23,6 +27,9 @@ namespace {
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point3 = Kernel::Point_3;
 using Vector3 = Kernel::Vector_3;
+
+constexpr const char* kAdvancingFront = "scallop-advancing-front";  // helpers/advancing_front_main.cpp
+constexpr double kAdvancingFrontTimeout = 24 * 3600;               // s: only a hung front comes near it
 
 Point3 to_cgal(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
 Eigen::Vector3d to_eigen(const Point3& p) { return {p.x(), p.y(), p.z()}; }
@@ -117,6 +124,56 @@ void point_distances(const std::vector<Eigen::Vector3d>& P, const Mesh& m, Recon
   r.distance_max = *std::max_element(d.begin(), d.end());
 }
 
+// CGAL's advancing front over V, run by scallop-advancing-front beside this program: the front
+// breaks ties between its candidates by where their records lie in memory, so in this process
+// the same points gave other triangles after other work (21 of 200 000 differed between a run
+// with the disk cache and one without); a fresh process gives the same ones every time.
+std::vector<std::array<std::size_t, 3>> advancing_front_triangles(const std::vector<Eigen::Vector3d>& V,
+                                                                  double radius_ratio_bound, double beta,
+                                                                  const std::function<void(double, const std::string&)>& progress) {
+  const std::filesystem::path helper = std::filesystem::read_symlink("/proc/self/exe").parent_path() / kAdvancingFront;
+  if (!find_executable(helper.string()))
+    throw std::runtime_error(helper.string() + " is missing: it is built with scallop (scripts/build.sh) and must lie "
+                             "beside it");
+  const PrivateTempDir dir("scallop-advancing-front-");
+  const std::filesystem::path in = dir.path() / "points.bin", out = dir.path() / "triangles.bin", log = dir.path() / "log";
+  {
+    std::ofstream f(in, std::ios::binary);
+    const std::uint64_t n = V.size();
+    f.write(reinterpret_cast<const char*>(&n), sizeof n);
+    for (const auto& p : V) f.write(reinterpret_cast<const char*>(p.data()), 3 * sizeof(double));
+    if (!f) throw std::runtime_error("cannot write the points for the advancing front to " + in.string());
+  }
+  char ratio[32], wedge[32];
+  std::snprintf(ratio, sizeof ratio, "%.17g", radius_ratio_bound);
+  std::snprintf(wedge, sizeof wedge, "%.17g", beta);
+  const ProcessResult run = run_process({helper.string(), in.string(), out.string(), ratio, wedge}, log, dir.path(),
+                                        kAdvancingFrontTimeout, [&](double seconds) {
+                                          if (progress)
+                                            progress(0.5, "advancing-front reconstruction (" +
+                                                              std::to_string(static_cast<int>(seconds)) + " s)");
+                                        });
+  if (run.exit_status != 0) {
+    std::string why = run.timed_out ? "ran longer than " + std::to_string(static_cast<int>(kAdvancingFrontTimeout)) + " s"
+                      : run.signal ? "was ended by signal " + std::to_string(run.signal)
+                                   : "exited with status " + std::to_string(run.exit_status);
+    for (const auto& line : last_lines(log, 3)) why += "; " + line;
+    throw std::runtime_error("the advancing front (" + helper.filename().string() + ") " + why);
+  }
+  std::ifstream f(out, std::ios::binary);
+  std::uint64_t m = 0;
+  f.read(reinterpret_cast<char*>(&m), sizeof m);
+  std::vector<std::array<std::size_t, 3>> tris(f ? m : 0);
+  for (auto& t : tris) {
+    std::uint64_t v[3];
+    f.read(reinterpret_cast<char*>(v), sizeof v);
+    if (!f || v[0] >= V.size() || v[1] >= V.size() || v[2] >= V.size())
+      throw std::runtime_error("the advancing front's triangles could not be read back from " + out.string());
+    t = {v[0], v[1], v[2]};
+  }
+  return tris;
+}
+
 Mesh advancing_front(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
                      const ReconstructOptions& o, ReconstructResult& r,
                      const std::function<void(double, const std::string&)>& progress) {
@@ -132,19 +189,13 @@ Mesh advancing_front(const std::vector<Eigen::Vector3d>& P, const std::vector<Ei
             .sharpness_angle(o.sharpness_angle));
   }
   if (progress) progress(0.5, "advancing-front reconstruction");
-  std::vector<Point3> points(pts.size());
-  for (std::size_t i = 0; i < pts.size(); ++i) points[i] = pts[i].first;
-  std::vector<std::array<std::size_t, 3>> tris;
-  CGAL::advancing_front_surface_reconstruction(points.begin(), points.end(), std::back_inserter(tris),
-                                               o.radius_ratio_bound, o.beta);
-  // The front hands its triangles over in an order that changes from run to run (its ties are
-  // broken by where the triangulation's cells lie in memory): each triangle is started at its
-  // lowest vertex (keeping its orientation) and the list sorted, so the same cloud gives the same
-  // mesh, and everything after it the same programs.
+  std::vector<Eigen::Vector3d> V(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) V[i] = to_eigen(pts[i].first);
+  std::vector<std::array<std::size_t, 3>> tris = advancing_front_triangles(V, o.radius_ratio_bound, o.beta, progress);
+  // Each triangle started at its lowest vertex (keeping its orientation) and the list sorted: the
+  // mesh does not depend on the order the front found its triangles in.
   for (auto& t : tris) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
   std::sort(tris.begin(), tris.end());
-  std::vector<Eigen::Vector3d> V(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) V[i] = to_eigen(points[i]);
   Mesh m = compact_mesh(V, tris);
   r.unused_points = P.size() - m.num_vertices();
   return m;

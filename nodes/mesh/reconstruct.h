@@ -5,6 +5,9 @@
 //                  sampled by the cloud stay sharp. On noisy clouds, CGAL's sharpness-aware
 //                  bilateral_smooth_point_set (Huang et al. 2013, "Edge-aware point set
 //                  resampling") first moves the points (smooth_iterations > 0; needs normals).
+//                  The front runs as a process of its own, scallop-advancing-front beside the
+//                  running program (helpers/advancing_front_main.cpp), so that its ties fall the
+//                  same way whatever this process did before: the same cloud, the same mesh.
 // poisson          CGAL's Poisson reconstruction (Kazhdan et al. 2006): watertight, but it rounds
 //                  sharp edges and invents surface where there are no points, so faces farther than
 //                  trim_spacings average spacings from every point are removed. Needs normals

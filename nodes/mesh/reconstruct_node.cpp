@@ -11,10 +11,12 @@ namespace scallop::mesh_nodes {
 NodeDecl make_reconstruct_node() {
   NodeDecl d;
   d.type = "mesh.reconstruct";
-  d.version = 2;  // 2: the advancing front's triangles in a fixed order (they changed from run to run)
+  d.version = 3;  // 2: the advancing front's triangles in a fixed order (they changed from run to run); 3: the
+                  // front in a process of its own (its ties no longer follow this process's heap)
   d.description =
       "a cloud -> a triangle mesh: advancing front (interpolates the points, keeps sharp edges; "
-      "optional sharpness-aware bilateral smoothing first for noisy clouds) or Poisson (watertight, "
+      "optional sharpness-aware bilateral smoothing first for noisy clouds; run as a process of its own, "
+      "scallop-advancing-front, so the same cloud always gives the same mesh) or Poisson (watertight, "
       "rounds sharp edges, trimmed where it strays from the points) (CGAL)";
   d.input("cloud", "Cloud", "the points; normals needed for poisson and for smoothing")
       .output("mesh", "Mesh", "triangles, each component oriented like the cloud's normals (outward)")
