@@ -124,10 +124,8 @@ void point_distances(const std::vector<Eigen::Vector3d>& P, const Mesh& m, Recon
   r.distance_max = *std::max_element(d.begin(), d.end());
 }
 
-// CGAL's advancing front over V, run by scallop-advancing-front beside this program: the front
-// breaks ties between its candidates by where their records lie in memory, so in this process
-// the same points gave other triangles after other work (21 of 200 000 differed between a run
-// with the disk cache and one without); a fresh process gives the same ones every time.
+// CGAL's advancing front over V, run by scallop-advancing-front beside this program (why: its
+// file's header).
 std::vector<std::array<std::size_t, 3>> advancing_front_triangles(const std::vector<Eigen::Vector3d>& V,
                                                                   double radius_ratio_bound, double beta,
                                                                   const std::function<void(double, const std::string&)>& progress) {
