@@ -112,6 +112,10 @@ double MeshDistance::signed_distance(const Eigen::Vector3d& p) const {
   const Kernel::Point_3 q = point(p);
   const auto [foot, prim] = impl_->tree.closest_point_and_primitive(q);
   const double d = std::sqrt(CGAL::squared_distance(q, foot));
+  // A point on the mesh (a cloud point that is one of a reconstruction's vertices) has no side to
+  // find, and rays from it graze its own faces, which CGAL then decides in exact arithmetic: that
+  // was most of mesh.cloud_envelope's time.
+  if (d <= 1e-9) return d;
   const Kernel::Triangle_3& t = *prim;
   const bool folded = impl_->folded[impl_->face_of[std::size_t(prim - impl_->tris.cbegin())]];
   const Kernel::Vector_3 normal = CGAL::cross_product(t[1] - t[0], t[2] - t[0]);

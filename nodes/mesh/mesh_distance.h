@@ -33,7 +33,8 @@ class MeshDistance {
   // (corners counter-clockwise seen from outside) where the nearest point lies inside a face;
   // where it lies on an edge or a corner, where faces disagree, or on a face folded back onto a
   // neighbour (normals more than 150 degrees apart: it faces the wrong way), the parity of the
-  // crossings of three skew rays (majority), which needs a closed mesh. +infinity without faces.
+  // crossings of three skew rays (majority), which needs a closed mesh. Within 1e-9 mm of the
+  // faces, that distance unsigned. +infinity without faces.
   double signed_distance(const Eigen::Vector3d& p) const;
   // The least signed distance along the segment [a, b], as a lower bound within
   // max(eps, (floor - truth) / 1000) of the truth wherever the truth is below `floor` (where it is

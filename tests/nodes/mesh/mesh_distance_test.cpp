@@ -28,6 +28,11 @@ TEST(MeshDistance, DistancesRaysAndSidesOfTheUnitCube) {
   EXPECT_NEAR(cube.signed_distance(V(1.3, 1.4, 0.5)), 0.5, 1e-12);
   EXPECT_NEAR(cube.signed_distance(V(2, 2, 2)), std::sqrt(3.0), 1e-12);
   EXPECT_NEAR(cube.signed_distance(V(0.5, 0.5, 0.5)), -0.5, 1e-12);
+  // On the faces (a corner, an edge, a vertex of the grid): no side to tell, the distance unsigned.
+  for (const V& on : {V(1, 1, 1), V(1, 0.5, 0), V(1.0 / 3, 2.0 / 3, 1), V(1, 1, 1e-10)}) {
+    EXPECT_GE(cube.signed_distance(on), 0.0);
+    EXPECT_LT(cube.signed_distance(on), 1e-9);
+  }
   EXPECT_TRUE(std::isinf(MeshDistance(Mesh()).signed_distance(V(0, 0, 0))));
 }
 
