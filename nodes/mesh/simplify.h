@@ -23,6 +23,7 @@ namespace scallop {
 
 struct SimplifyOptions {
   int target_faces = 80000;  // stop at this many triangles (or when nothing can collapse)
+  int max_valence = 12;      // no collapse leaves a vertex with more edges than this
 };
 
 struct SimplifyReport {
@@ -31,10 +32,12 @@ struct SimplifyReport {
   std::size_t feature_edges = 0;  // kept (they are never collapsed)
   std::size_t border_edges = 0;   // kept likewise
   double max_distance = 0;        // mm, largest distance from an input vertex to the output
+  std::size_t max_valence = 0;    // the most edges at one vertex of the output
 };
 
 // mesh  a triangle mesh, manifold (mesh.repair), any feature_edges. A mesh with no more than
-// target_faces triangles comes back unchanged. Returns the simplified mesh: triangles, vertices
+// target_faces triangles comes back unchanged. No collapse leaves a vertex with more than
+// max_valence edges (a vertex that had more keeps them), so fewer may go than asked. Returns the simplified mesh: triangles, vertices
 // renumbered, its feature_edges the input's (renumbered), no normals or labels. Throws
 // std::invalid_argument when a face is not a triangle or the mesh is not manifold.
 Mesh simplify_mesh(const Mesh& mesh, const SimplifyOptions& options, SimplifyReport& report);

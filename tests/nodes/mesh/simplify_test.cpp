@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "nodes/mesh/mesh_topology.h"
 #include "nodes/mesh/sharp_edges.h"
@@ -100,6 +102,26 @@ TEST(Simplify, AnOpenSheetKeepsItsBorder) {
   EXPECT_LE(out.num_faces(), 300u);
 }
 
+// Collapsing a fine cube down to few faces: its edges' vertices never move, so without a cap the
+// faces around them collapse into fans.
+TEST(Simplify, NoVertexGetsMoreEdgesThanTheCap) {
+  const Mesh cube = with_sharp_edges(test::cube_mesh(40, 10.0));  // 19 200 triangles, valence 6 at most
+  SimplifyReport capped, uncapped;
+  const Mesh out = simplify_mesh(cube, {.target_faces = 2000, .max_valence = 12}, capped);
+  simplify_mesh(cube, {.target_faces = 2000, .max_valence = 1000000}, uncapped);
+  EXPECT_GT(uncapped.max_valence, 12u);
+  EXPECT_LE(capped.max_valence, 12u);
+  std::vector<int> faces_at(out.num_vertices(), 0);  // on a closed triangle mesh, a vertex's edges
+  for (std::size_t f = 0; f < out.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) ++faces_at[out.face(f)[k]];
+  EXPECT_EQ(*std::max_element(faces_at.begin(), faces_at.end()), static_cast<int>(capped.max_valence));
+  EXPECT_EQ(out.feature_edges.size(), 480u);      // every feature edge kept
+  EXPECT_LT(off_cube(out, 10.0), 1e-9);
+  const MeshTopology t = mesh_topology(out, mesh_edges(out));
+  EXPECT_EQ(t.genus, 0);
+  EXPECT_EQ(t.non_manifold_edges, 0u);
+}
+
 TEST(Simplify, FewFacesPassUnchanged) {
   const Mesh cube = test::cube_mesh(2);
   SimplifyReport r;
@@ -129,6 +151,7 @@ TEST(Simplify, TheNodeReportsAndNamesItselfInErrors) {
   EXPECT_EQ(report["feature_edges"], 120);
   EXPECT_EQ(report["border_edges"], 0);
   EXPECT_LT(report["max_distance"].get<double>(), 1e-9);
+  EXPECT_LE(report["max_valence"].get<int>(), 12);
   EXPECT_EQ(test::error_of<NodeError>([&] {
               test::run_node(mesh_nodes::make_simplify_node(), nlohmann::json::object(),
                              {{"mesh", std::make_shared<Mesh>(test::unit_cube())}});
