@@ -37,8 +37,9 @@ struct SimplifyReport {
 
 // mesh  a triangle mesh, manifold (mesh.repair), any feature_edges. A mesh with no more than
 // target_faces triangles comes back unchanged. No collapse leaves a vertex with more than
-// max_valence edges (a vertex that had more keeps them), so fewer may go than asked. Returns the simplified mesh: triangles, vertices
-// renumbered, its feature_edges the input's (renumbered), no normals or labels. Throws
+// max_valence edges (a vertex that had more keeps them), so fewer may go than asked. Returns the
+// simplified mesh: triangles, vertices renumbered, its feature_edges the input's (renumbered), no
+// normals or labels. Throws
 // std::invalid_argument when a face is not a triangle or the mesh is not manifold.
 Mesh simplify_mesh(const Mesh& mesh, const SimplifyOptions& options, SimplifyReport& report);
 
