@@ -185,6 +185,7 @@ Line meet(const LocalSurface& a, const LocalSurface& b, const Eigen::Vector3d& m
 
 
 constexpr double kFoldCosine = -0.866;  // faces turning by more than 150 degrees: one turned over
+constexpr double kShortAlongEdge = 0.1;  // of the mean edge: two points of an edge of the part this close are merged
 
 // The faces of a mesh turned over (g its faces' geometry, out_edges its edges): facing against
 // the input face each was cut from (parent), folded onto a neighbour across an edge (turning by
@@ -215,14 +216,32 @@ std::vector<char> turned_faces(const FaceGeometry& g, const MeshEdges& out_edges
 // across their corner; a merge that would pinch the surface (its ends sharing a neighbour beyond
 // the two faces on it, or an end on an open boundary), or turn or fold another face. What is left
 // turned is left to the partial moves. rank: 0 off the part's edges, 1 on one, 2 a corner.
+// A face with an edge along the part's edge shorter than min_length, turning against a face across
+// one of its other edges (cosine below turn_cosine), is mended the same way: two points of one edge
+// of the part that close (each from its own local surfaces, 0.005 mm apart across the line on the
+// domed block's cloud) make a sliver turning by tens of degrees, which the cloud envelope reads as
+// a bend of the part (0.09 mm pushed out there).
 // Returns how many vertices were merged away (no face uses them any more); parent follows out's faces.
 std::size_t merge_across_turned_faces(Mesh& out, const FaceGeometry& input_faces, std::vector<std::uint32_t>& parent,
                                       const std::vector<int>& rank, const std::vector<std::array<int, 2>>& line,
-                                      double max_length) {
+                                      double max_length, double min_length, double turn_cosine) {
   std::size_t merged = 0;
+  // both ends on one edge of the part (a corner is on each of its edges; a curved face is cut into
+  // several regions, so two points of its edge share one region, not always both)
+  auto shares_a_region = [&](std::uint32_t a, std::uint32_t b) {
+    for (int r : line[a])
+      if (r >= 0 && (r == line[b][0] || r == line[b][1])) return true;
+    return false;
+  };
+  auto along_one_edge = [&](std::uint32_t a, std::uint32_t b) {
+    return rank[a] >= 1 && rank[b] >= 1 && (rank[a] == 2 || rank[b] == 2 || line[a] == line[b] || shares_a_region(a, b));
+  };
+  auto short_along_edge = [&](std::uint32_t a, std::uint32_t b) {
+    return along_one_edge(a, b) && !(rank[a] == 2 && rank[b] == 2) && (out.vertices[a] - out.vertices[b]).norm() < min_length;
+  };
   for (int round = 0; round < 20; ++round) {
     const FaceGeometry geometry = face_geometry(out);
-    const std::vector<char> turned = turned_faces(geometry, mesh_edges(out), input_faces, parent);
+    std::vector<char> turned = turned_faces(geometry, mesh_edges(out), input_faces, parent);
     const std::size_t nf = out.num_faces();
     std::vector<std::array<std::uint32_t, 3>> tri(nf);
     std::vector<std::vector<std::uint32_t>> faces_of(out.num_vertices());
@@ -230,6 +249,18 @@ std::size_t merge_across_turned_faces(Mesh& out, const FaceGeometry& input_faces
       tri[f] = {out.face(f)[0], out.face(f)[1], out.face(f)[2]};
       for (std::uint32_t v : tri[f]) faces_of[v].push_back(static_cast<std::uint32_t>(f));
     }
+    // a sliver on a short stretch of the part's edge: turning against a face across its other edges
+    for (std::size_t f = 0; f < nf; ++f)
+      for (int c = 0; c < 3 && !turned[f]; ++c) {
+        if (!short_along_edge(tri[f][c], tri[f][(c + 1) % 3])) continue;
+        for (int o = 1; o < 3; ++o) {
+          const std::uint32_t a = tri[f][(c + o) % 3], b = tri[f][(c + o + 1) % 3];
+          for (std::uint32_t g : faces_of[a])
+            if (g != f && std::find(tri[g].begin(), tri[g].end(), b) != tri[g].end() &&
+                geometry.normal[f].dot(geometry.normal[g]) < turn_cosine)
+              turned[f] = 1;
+        }
+      }
     auto neighbours = [&](std::uint32_t v) {
       std::vector<std::uint32_t> n;
       for (std::uint32_t f : faces_of[v])
@@ -293,7 +324,9 @@ std::size_t merge_across_turned_faces(Mesh& out, const FaceGeometry& input_faces
         if (rank[gone] > rank[keep]) std::swap(keep, gone);
         on_edge.clear();
         // two points of different edges of the part: merged, a face would cut across a corner
-        if (rank[gone] == 1 && rank[keep] == 1 && line[gone][0] >= 0 && line[keep][0] >= 0 && line[gone] != line[keep]) continue;
+        if (rank[gone] == 1 && rank[keep] == 1 && line[gone][0] >= 0 && line[keep][0] >= 0 && line[gone] != line[keep] &&
+            !short_along_edge(keep, gone))
+          continue;
         if (!interior(keep) || !interior(gone)) continue;
         std::vector<std::uint32_t> opposite;  // the third corners of the faces with both ends
         for (std::uint32_t g : faces_of[gone])
@@ -348,9 +381,9 @@ std::size_t merge_across_turned_faces(Mesh& out, const FaceGeometry& input_faces
 // crosses its edge, goes only part of its way: a tenth less each round while a face around it
 // faces against the face it was cut from or folds onto a neighbour (turning by more than 150
 // degrees). All the way back, every piece lies in its input face and cannot turn over. Returns
-// the vertices held short (not on an edge of the part); counts them and the farthest in res.
+// how far each vertex is held short of its place (mm; -1: not held; those are not on an edge of the part).
 template <class Splits>
-std::vector<char> keep_faces_facing_their_parents(const Mesh& input, const FaceGeometry& input_faces,
+std::vector<double> keep_faces_facing_their_parents(const Mesh& input, const FaceGeometry& input_faces,
                                                   const std::vector<std::uint32_t>& parent, const Splits& inserted,
                                                   const MeshEdges& edges, SharpenResult& res) {
   Mesh& out = res.mesh;
@@ -380,14 +413,136 @@ std::vector<char> keep_faces_facing_their_parents(const Mesh& input, const FaceG
           if (moves[out.face(f)[c]]) share[out.face(f)[c]] = round < 39 ? std::max(0.0, share[out.face(f)[c]] - 0.1) : 0.0;
     place();
   }
-  std::vector<char> unmoved(n);
-  for (std::size_t v = 0; v < n; ++v) {
-    unmoved[v] = moves[v] && share[v] < 1;
-    if (!unmoved[v]) continue;
-    ++res.held_back;
-    res.largest_held_back = std::max(res.largest_held_back, (target[v] - out.vertices[v]).norm());
+  std::vector<double> held(n, -1);
+  for (std::size_t v = 0; v < n; ++v)
+    if (moves[v] && share[v] < 1) held[v] = (target[v] - out.vertices[v]).norm();
+  return held;
+}
+
+// A corner of the part (three regions' local surfaces meeting at a point) and the vertex moved onto it.
+struct PlacedCorner {
+  Eigen::Vector3d at;
+  std::uint32_t vertex;
+  std::array<LocalSurface, 3> surfaces;
+};
+
+// Where a corner's vertex was held short of its corner (the chamfer there turned faces over when
+// cut: on the domed block's 200 000-point cloud the reconstruction left a hole across one corner,
+// filled by one triangle, and the corner stayed 0.19 mm crumpled, its faces every way), the faces
+// around the corner are made again: the disk of faces within `radius` of it whose edge loop lies
+// on the three surfaces, fanned from the corner. A fan triangle lies on one face of the part when
+// its two loop points share a surface (a point on an edge's line lies on two), which is required;
+// so is every fan triangle facing the way the faces it replaces did, folding onto no neighbour.
+// Returns whether the disk was replaced (out's vertices keep their indices; those inside the disk
+// are no longer used); labels follow the replaced faces.
+bool fan_held_corner(Mesh& out, const PlacedCorner& corner, double radius, double on_surface) {
+  const std::size_t nf = out.num_faces();
+  std::vector<std::vector<std::uint32_t>> faces_of(out.num_vertices());
+  for (std::size_t f = 0; f < nf; ++f)
+    for (std::size_t c = 0; c < 3; ++c) faces_of[out.face(f)[c]].push_back(static_cast<std::uint32_t>(f));
+  const std::uint32_t v = corner.vertex;
+  if (faces_of[v].empty()) return false;
+  auto off_the_part = [&](const Eigen::Vector3d& x) {
+    return corner.surfaces[0].distance(x) > on_surface && corner.surfaces[1].distance(x) > on_surface &&
+           corner.surfaces[2].distance(x) > on_surface;
+  };
+  // within the radius, or touching a point of it off the part (a crumple reaching farther)
+  auto inside = [&](std::uint32_t f) {
+    bool all_near = true, crumpled = false;
+    for (std::size_t c = 0; c < 3; ++c) {
+      const Eigen::Vector3d& x = out.vertices[out.face(f)[c]];
+      const bool near = (x - corner.at).norm() <= radius;
+      all_near = all_near && near;
+      crumpled = crumpled || (near && off_the_part(x));
+    }
+    return all_near || crumpled;
+  };
+  // the disk: faces within the radius reached from the corner's own across shared vertices
+  std::vector<char> in_disk(nf, 0);
+  std::vector<std::uint32_t> stack;
+  for (std::uint32_t f : faces_of[v]) in_disk[f] = 1, stack.push_back(f);
+  while (!stack.empty()) {
+    const std::uint32_t f = stack.back();
+    stack.pop_back();
+    for (std::size_t c = 0; c < 3; ++c)
+      for (std::uint32_t g : faces_of[out.face(f)[c]])
+        if (!in_disk[g] && inside(g)) in_disk[g] = 1, stack.push_back(g);
   }
-  return unmoved;
+  // its boundary: directed edges whose reverse is not in it, one loop through distinct vertices
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> directed;
+  Eigen::Vector3d normal_sum = Eigen::Vector3d::Zero();
+  std::size_t disk_faces = 0;
+  for (std::size_t f = 0; f < nf; ++f) {
+    if (!in_disk[f]) continue;
+    ++disk_faces;
+    const std::uint32_t* t = out.face(f);
+    normal_sum += (out.vertices[t[1]] - out.vertices[t[0]]).cross(out.vertices[t[2]] - out.vertices[t[0]]);
+    for (std::size_t c = 0; c < 3; ++c) directed.emplace_back(t[c], t[(c + 1) % 3]);
+  }
+  std::sort(directed.begin(), directed.end());
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;
+  for (const auto& [a, b] : directed)
+    if (!std::binary_search(directed.begin(), directed.end(), std::make_pair(b, a))) boundary.emplace_back(a, b);
+  if (boundary.size() < 3) return false;
+  std::sort(boundary.begin(), boundary.end());
+  for (std::size_t i = 1; i < boundary.size(); ++i)
+    if (boundary[i].first == boundary[i - 1].first) return false;  // a vertex twice on the loop: not a disk
+  std::vector<std::uint32_t> loop{boundary[0].first};
+  for (std::size_t i = 0; i < boundary.size(); ++i) {
+    const auto next = std::lower_bound(boundary.begin(), boundary.end(), std::make_pair(loop.back(), std::uint32_t(0)));
+    if (next == boundary.end() || next->first != loop.back()) return false;
+    if (next->second == loop.front()) break;
+    loop.push_back(next->second);
+  }
+  if (loop.size() != boundary.size() || std::find(loop.begin(), loop.end(), v) != loop.end()) return false;
+  // a disk: V - E + F = 1 over its faces
+  std::vector<std::uint32_t> verts;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> undirected;
+  for (const auto& [a, b] : directed) verts.push_back(a), undirected.emplace_back(std::min(a, b), std::max(a, b));
+  std::sort(verts.begin(), verts.end());
+  verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+  std::sort(undirected.begin(), undirected.end());
+  undirected.erase(std::unique(undirected.begin(), undirected.end()), undirected.end());
+  if (std::int64_t(verts.size()) - std::int64_t(undirected.size()) + std::int64_t(disk_faces) != 1) return false;
+  // the loop's points on the part's faces, each on which of the three surfaces
+  std::vector<std::array<bool, 3>> on(loop.size());
+  for (std::size_t i = 0; i < loop.size(); ++i) {
+    bool any = false;
+    for (int s = 0; s < 3; ++s) any |= on[i][s] = corner.surfaces[s].distance(out.vertices[loop[i]]) <= on_surface;
+    if (!any) return false;
+  }
+  std::vector<std::array<std::uint32_t, 3>> fan;
+  std::vector<Eigen::Vector3d> fan_normal;
+  for (std::size_t i = 0; i < loop.size(); ++i) {
+    const std::size_t j = (i + 1) % loop.size();
+    if (!((on[i][0] && on[j][0]) || (on[i][1] && on[j][1]) || (on[i][2] && on[j][2]))) return false;
+    const Eigen::Vector3d n = (out.vertices[loop[i]] - corner.at).cross(out.vertices[loop[j]] - corner.at);
+    if (!(n.norm() > 1e-12) || n.dot(normal_sum) <= 0) return false;
+    fan.push_back({v, loop[i], loop[j]});
+    fan_normal.push_back(n.normalized());
+  }
+  for (std::size_t i = 0; i < fan.size(); ++i)
+    if (fan_normal[i].dot(fan_normal[(i + 1) % fan.size()]) < kFoldCosine) return false;
+  Mesh rebuilt;
+  rebuilt.vertices = std::move(out.vertices);
+  rebuilt.vertices[v] = corner.at;
+  const bool labels = out.has_labels();
+  int label = 0;
+  for (std::size_t f = 0; f < nf; ++f) {
+    if (in_disk[f]) {
+      if (labels) label = out.face_label[f];
+      continue;
+    }
+    rebuilt.add_face({out.face(f)[0], out.face(f)[1], out.face(f)[2]});
+    if (labels) rebuilt.face_label.push_back(out.face_label[f]);
+  }
+  for (const auto& t : fan) {
+    rebuilt.add_face({t[0], t[1], t[2]});
+    if (labels) rebuilt.face_label.push_back(label);
+  }
+  rebuilt.feature_edges = std::move(out.feature_edges);
+  out = std::move(rebuilt);
+  return true;
 }
 
 }  // namespace
@@ -514,8 +669,9 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
   // local planes meet is moved onto it (along its own face: the point lies in all three planes).
   res.mesh.vertices = rest;
   const double sine = std::sin(o.min_angle * std::numbers::pi / 180);
+  std::vector<PlacedCorner> placed_corners;
   {
-    std::vector<Eigen::Vector3d> corners;
+    std::vector<PlacedCorner> corners;
     std::vector<int> around;
     for (std::size_t v = 0; v < nv; ++v) {
       around.clear();
@@ -542,18 +698,20 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
           A.inverse() * Eigen::Vector3d(p0->normal.dot(p0->point), p1->normal.dot(p1->point), p2->normal.dot(p2->point)));
       if (!k.allFinite() || (k - mesh.vertices[v]).norm() > 2 * res.edge_length) continue;
       bool known = false;
-      for (const auto& c : corners) known = known || (c - k).norm() < res.edge_length;
-      if (!known) corners.push_back(k);
+      for (const auto& c : corners) known = known || (c.at - k).norm() < res.edge_length;
+      if (!known) corners.push_back({k, 0, {*p0, *p1, *p2}});
     }
     if (!corners.empty()) {
       const KnnIndex vertices(mesh.vertices);
-      for (const auto& k : corners) {
-        const int v = vertices.nearest(k);
+      for (auto& c : corners) {
+        const int v = vertices.nearest(c.at);
         if (final_label[v] == kCorner) continue;
-        res.largest_offset = std::max(res.largest_offset, (k - mesh.vertices[v]).norm());
-        res.mesh.vertices[v] = k;
+        res.largest_offset = std::max(res.largest_offset, (c.at - mesh.vertices[v]).norm());
+        res.mesh.vertices[v] = c.at;
         final_label[v] = kCorner;
         ++res.corners;
+        c.vertex = static_cast<std::uint32_t>(v);
+        placed_corners.push_back(c);
       }
     }
   }
@@ -728,8 +886,31 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
   }
   for (std::size_t j = 0; j < inserted.size(); ++j) line[nv + j] = inserted[j].regions;
   for (auto& l : line) std::sort(l.begin(), l.end());
-  res.merged_vertices = merge_across_turned_faces(res.mesh, fg, parent, rank, line, 2 * res.edge_length);
-  const std::vector<char> unmoved = keep_faces_facing_their_parents(mesh, fg, parent, inserted, edges, res);
+  res.merged_vertices = merge_across_turned_faces(res.mesh, fg, parent, rank, line, 2 * res.edge_length, kShortAlongEdge * res.edge_length,
+                                                    std::cos(o.min_angle * std::numbers::pi / 180));
+  std::vector<double> held = keep_faces_facing_their_parents(mesh, fg, parent, inserted, edges, res);
+  bool refanned = false;
+  for (const PlacedCorner& c : placed_corners) {
+    if (held[c.vertex] < 0) continue;
+    for (const double radius : {2.0, 3.0, 4.0})
+      if (fan_held_corner(res.mesh, c, radius * res.edge_length, kOffSurface * res.edge_length)) {
+        refanned = true;
+        ++res.corners_refanned;
+        break;
+      }
+  }
+  // the vertices left held short: those of the mesh still (a refanned corner's are placed or gone)
+  std::vector<char> used(res.mesh.num_vertices(), 0), unmoved(res.mesh.num_vertices(), 0);
+  for (std::size_t f = 0; f < res.mesh.num_faces(); ++f)
+    for (std::size_t c = 0; c < 3; ++c) used[res.mesh.face(f)[c]] = 1;
+  for (const PlacedCorner& c : placed_corners)
+    if (res.mesh.vertices[c.vertex] == c.at) held[c.vertex] = -1;
+  for (std::size_t v = 0; v < unmoved.size(); ++v) {
+    unmoved[v] = held[v] >= 0 && used[v];
+    if (!unmoved[v]) continue;
+    ++res.held_back;
+    res.largest_held_back = std::max(res.largest_held_back, held[v]);
+  }
 
   // The restored edges as the mesh's feature edges: both ends on an edge of the part (new points,
   // vertices moved onto one or already on two regions, corners) and the faces turning there.
@@ -744,7 +925,7 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
     const std::uint32_t* f = out_edges.faces(e);
     if (angle_deg(out_faces.normal[f[0]], out_faces.normal[f[1]]) > o.min_angle) res.mesh.feature_edges.push_back({a, b});
   }
-  if (res.merged_vertices > 0) res.mesh = keep_faces(res.mesh, std::vector<bool>(res.mesh.num_faces(), true));  // the merged ones go
+  if (res.merged_vertices > 0 || refanned) res.mesh = keep_faces(res.mesh, std::vector<bool>(res.mesh.num_faces(), true));  // the merged ones go
   if (mesh.has_normals()) res.mesh.normals = vertex_normals(res.mesh);
   return res;
 }

@@ -68,13 +68,15 @@ struct SharpenOptions {
 //                edges), since all the way a face beside them would turn over: where the chamfer is
 //                narrower than the move, or new points crowd along the line
 // largest_held_back  the farthest one of them stays from the line (mm): the chamfer left there
+// corners_refanned  corners whose vertex was held short, their faces within a few edges made
+//                again as a fan from the corner (where the loop around them lies on its three faces)
 // largest_offset the farthest a new point lies from the edge it splits, or a vertex moved (mm):
 //                the deepest chamfer restored
 // edge_length    the mean edge length of the input (mm)
 struct SharpenResult {
   Mesh mesh;
   std::size_t regions = 0, band_vertices = 0, split_edges = 0, moved_vertices = 0, corners = 0, skipped_edges = 0;
-  std::size_t merged_vertices = 0, held_back = 0, projected_vertices = 0;
+  std::size_t merged_vertices = 0, held_back = 0, projected_vertices = 0, corners_refanned = 0;
   double largest_offset = 0, largest_held_back = 0, edge_length = 0;
 };
 
