@@ -241,7 +241,8 @@ std::size_t merge_across_turned_faces(Mesh& out, const FaceGeometry& input_faces
   };
   for (int round = 0; round < 20; ++round) {
     const FaceGeometry geometry = face_geometry(out);
-    std::vector<char> turned = turned_faces(geometry, mesh_edges(out), input_faces, parent);
+    const std::vector<char> turned = turned_faces(geometry, mesh_edges(out), input_faces, parent);
+    std::vector<char> mend = turned;  // turned faces and slivers: the merges start from these
     const std::size_t nf = out.num_faces();
     std::vector<std::array<std::uint32_t, 3>> tri(nf);
     std::vector<std::vector<std::uint32_t>> faces_of(out.num_vertices());
@@ -251,14 +252,14 @@ std::size_t merge_across_turned_faces(Mesh& out, const FaceGeometry& input_faces
     }
     // a sliver on a short stretch of the part's edge: turning against a face across its other edges
     for (std::size_t f = 0; f < nf; ++f)
-      for (int c = 0; c < 3 && !turned[f]; ++c) {
+      for (int c = 0; c < 3 && !mend[f]; ++c) {
         if (!short_along_edge(tri[f][c], tri[f][(c + 1) % 3])) continue;
         for (int o = 1; o < 3; ++o) {
           const std::uint32_t a = tri[f][(c + o) % 3], b = tri[f][(c + o + 1) % 3];
           for (std::uint32_t g : faces_of[a])
             if (g != f && std::find(tri[g].begin(), tri[g].end(), b) != tri[g].end() &&
                 geometry.normal[f].dot(geometry.normal[g]) < turn_cosine)
-              turned[f] = 1;
+              mend[f] = 1;
         }
       }
     auto neighbours = [&](std::uint32_t v) {
@@ -306,7 +307,7 @@ std::size_t merge_across_turned_faces(Mesh& out, const FaceGeometry& input_faces
     std::size_t merged_now = 0;
     for (std::size_t f = 0; f < nf; ++f) {
       const auto t = tri[f];
-      if (!turned[f] || !alive[f] || touched[t[0]] || touched[t[1]] || touched[t[2]]) continue;
+      if (!mend[f] || !alive[f] || touched[t[0]] || touched[t[1]] || touched[t[2]]) continue;
       // Its edges with an end on the part's edges, those along it (both ends) first, each kind
       // shortest first; the first whose merge keeps the surface a surface is merged.
       std::vector<std::pair<double, int>> candidates;
