@@ -64,6 +64,8 @@ struct SharpenOptions {
 //                points of the part: a hole's filling), moved onto the nearest one's
 // merged_vertices  vertices merged into a neighbour on the same edge of the part, or its corner,
 //                since moving both turned a face over (and the merge turns or folds no other)
+// flipped_edges  edges flipped where a face lay turned over across its longest edge with its
+//                corners in place (three points of a face of the part nearly in a line)
 // held_back      moved or new vertices held short of their edge's line (and off the feature
 //                edges), since all the way a face beside them would turn over: where the chamfer is
 //                narrower than the move, or new points crowd along the line
@@ -76,7 +78,7 @@ struct SharpenOptions {
 struct SharpenResult {
   Mesh mesh;
   std::size_t regions = 0, band_vertices = 0, split_edges = 0, moved_vertices = 0, corners = 0, skipped_edges = 0;
-  std::size_t merged_vertices = 0, held_back = 0, projected_vertices = 0, corners_refanned = 0;
+  std::size_t merged_vertices = 0, held_back = 0, projected_vertices = 0, corners_refanned = 0, flipped_edges = 0;
   double largest_offset = 0, largest_held_back = 0, edge_length = 0;
 };
 

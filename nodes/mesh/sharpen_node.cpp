@@ -10,7 +10,7 @@ namespace scallop::mesh_nodes {
 NodeDecl make_sharpen_node() {
   NodeDecl d;
   d.type = "mesh.sharpen";
-  d.version = 7;
+  d.version = 8;
   d.description =
       "sharp edges put back into a triangle mesh that interpolates a cloud (advancing front): the "
       "chamfer its triangles cut across each edge is split where the two faces' local surfaces (quadrics) meet, "
@@ -22,7 +22,7 @@ NodeDecl make_sharpen_node() {
       .output("report", "Report",
               "{regions (smooth faces joined, each within min_angle / 2 of its flattest face: a curved face makes several), band_vertices (on no smooth face: given the region whose "
               "plane they lie on), projected_vertices (band vertices off every region's surface by 0.1 to 1 mean edges, a hole's filling: moved onto their region's), split_edges, moved_vertices (onto an edge's line passing beside them), corners (vertices moved onto the point where three faces meet), skipped_edges (surfaces turning by less than min_angle there, or meeting far "
-              "off), merged_vertices (merged into a neighbour on an edge where moving both turned a face over, or closer than a tenth of a mean edge to it along the edge), corners_refanned (corners whose vertex was held short: the faces within a few edges made again as a fan from the corner), held_back (vertices moved only part of the way, since all of it would turn a face over), "
+              "off), merged_vertices (merged into a neighbour on an edge where moving both turned a face over, or closer than a tenth of a mean edge to it along the edge), corners_refanned (corners whose vertex was held short: the faces within a few edges made again as a fan from the corner), flipped_edges (where a face lay turned over across its longest edge, its corners in place), held_back (vertices moved only part of the way, since all of it would turn a face over), "
               "largest_held_back (mm, the chamfer left there), largest_offset (mm, the deepest chamfer restored), edge_length (mm, mean), vertices, faces}");
   d.options<SharpenOptions>()
       .number("smooth_angle", &SharpenOptions::smooth_angle, 0.1, 90, "deg",
@@ -48,7 +48,7 @@ NodeDecl make_sharpen_node() {
                    {"split_edges", r.split_edges},  {"moved_vertices", r.moved_vertices},
                    {"corners", r.corners},          {"corners_refanned", r.corners_refanned},
                    {"skipped_edges", r.skipped_edges}, {"merged_vertices", r.merged_vertices},
-                   {"held_back", r.held_back},
+                   {"flipped_edges", r.flipped_edges}, {"held_back", r.held_back},
                    {"largest_held_back", r.largest_held_back}, {"largest_offset", r.largest_offset},
                    {"edge_length", r.edge_length},  {"vertices", r.mesh.num_vertices()},
                    {"faces", r.mesh.num_faces()}};

@@ -308,6 +308,49 @@ TEST(Sharpen, ACornerHeldShortIsMadeAgainAsAFan) {
   EXPECT_EQ(folds(r.mesh), 0u);
 }
 
+// A piece of the bundled domed block's reconstruction (examples/make_part.py --cloud 200000 --seed
+// 2, mesh.reconstruct and mesh.repair; the faces within 2 mm of (59.9, 23.45, 15)) where the top,
+// z = 15 + 3 sin(pi x / 60) sin(pi y / 40), meets the side x = 60. A top vertex moved onto the edge
+// there left a face of three top points nearly in a line turned over; merging it into the edge's
+// next point instead (the older way) left that face facing down, the balls riding 0.05 mm off the
+// side beside it. Flipping the face's longest edge mends it: every face near there faces as the
+// part's face it lies on, and the edge's points all lie on the edge.
+TEST(Sharpen, AFaceTurnedOverAcrossItsLongestEdgeIsFlipped) {
+  const Mesh mesh = read_mesh(std::string(SCALLOP_SOURCE_DIR) + "/tests/data/domed_block_edge.off");
+  const Eigen::Vector3d at(59.9, 23.45, 15);
+  auto top = [](double x, double y) { return 15 + 3 * std::sin(M_PI * x / 60) * std::sin(M_PI * y / 40); };
+  auto true_normal = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
+    if (std::abs(p.x() - 60) < std::abs(p.z() - top(p.x(), p.y()))) return Eigen::Vector3d::UnitX();
+    const double dx = 3 * M_PI / 60 * std::cos(M_PI * p.x() / 60) * std::sin(M_PI * p.y() / 40);
+    const double dy = 3 * M_PI / 40 * std::sin(M_PI * p.x() / 60) * std::cos(M_PI * p.y() / 40);
+    return Eigen::Vector3d(-dx, -dy, 1).normalized();
+  };
+  auto faces_off_their_face = [&](const Mesh& m) {
+    std::size_t n = 0;
+    for (std::size_t f = 0; f < m.num_faces(); ++f) {
+      const Eigen::Vector3d c = (m.vertices[m.face(f)[0]] + m.vertices[m.face(f)[1]] + m.vertices[m.face(f)[2]]) / 3;
+      if ((c - at).norm() < 1.5) n += face_area_vector(m, f).normalized().dot(true_normal(c)) < 0.9;
+    }
+    return n;
+  };
+  ASSERT_GT(faces_off_their_face(mesh), 10u);  // the chamfer
+  const SharpenResult r = sharpen_edges(mesh);
+  EXPECT_GE(r.flipped_edges, 1u);
+  EXPECT_EQ(faces_off_their_face(r.mesh), 0u);
+  std::size_t on_the_edge = 0;
+  for (const auto& [v, w] : r.mesh.feature_edges)
+    for (std::uint32_t u : {v, w}) {
+      const Eigen::Vector3d& p = r.mesh.vertices[u];
+      if ((p - at).norm() > 1) continue;
+      ++on_the_edge;
+      EXPECT_LT(std::abs(p.x() - 60), 1e-3) << p.transpose();
+      EXPECT_LT(std::abs(p.z() - top(p.x(), p.y())), 2e-3) << p.transpose();
+    }
+  EXPECT_GT(on_the_edge, 10u);
+  expect_same_topology(mesh, r.mesh);
+  EXPECT_EQ(folds(r.mesh), 0u);
+}
+
 // A block whose top is a dome, z = 8 + a sin(pi x / 20) sin(pi y / 12) (mm), meeting its sides at
 // sharp edges, sampled at random (n points, the bottom left open). The dome is cut into several
 // regions (each within min_angle / 2 of its first face), and two points put on an edge from
