@@ -31,8 +31,6 @@ constexpr int kNearAnchors = 128;  // vertices of known region around a point, f
 // mean edge lengths: a band vertex farther than this from every region's surface is not a point of
 // the part (a clean cloud's lie on it to the fit's bias, 0.003 edges on a box)
 constexpr double kOffSurface = 0.1;
-// mean edge lengths: a point of another region this near a region's local surface continues it
-constexpr double kContinues = 0.25;
 
 // A region's surface near a point: a quadric height w(u, v) over the least-squares plane of its
 // vertices there (frame t1, t2, normal about point), or that plane where a quadric is not
@@ -142,38 +140,6 @@ class LocalSurfaces {
       if (auto p = fit_local_surface(pts)) out.emplace_back(r, *p);
     }
     return out;
-  }
-  // The surface of `region` near q refitted with the points of the other regions there that
-  // continue it: their own surface within `cone` degrees of it at q, each point within
-  // `near_surface` of it. A curved face is cut into several regions, and near where they meet
-  // each has points on one side only: extrapolated past them, its quadric put a point of the
-  // domed block's top edge 0.008 mm above the edge (seed 2 of its 200 000-point cloud).
-  std::optional<LocalSurface> continued(const Eigen::Vector3d& q, const std::vector<std::pair<int, LocalSurface>>& planes,
-                                        int region, double cone, double near_surface) const {
-    const LocalSurface* own = find(planes, region);
-    if (!own || !index_) return std::nullopt;
-    std::vector<int> idx;
-    std::vector<double> d2;
-    index_->query(q, kNearAnchors, idx, d2);
-    std::vector<Eigen::Vector3d> pts;
-    std::size_t added = 0;
-    for (std::size_t j = 0; j < idx.size(); ++j) {
-      if (d2[j] > radius2_) continue;
-      const int r = label_[anchor_[idx[j]]];
-      const Eigen::Vector3d& p = anchor_pos_[idx[j]];
-      if (r == region) {
-        pts.push_back(p);
-        continue;
-      }
-      const LocalSurface* other = find(planes, r);
-      if (!other) continue;
-      const Eigen::Vector3d a = own->gradient(q), b = other->gradient(q);  // the planes' normals face either way
-      if (angle_deg(a, b.dot(a) < 0 ? Eigen::Vector3d(-b) : b) > cone || own->distance(p) >= near_surface) continue;
-      pts.push_back(p);
-      ++added;
-    }
-    if (added == 0) return std::nullopt;
-    return fit_local_surface(pts);
   }
   static const LocalSurface* find(const std::vector<std::pair<int, LocalSurface>>& planes, int region) {
     for (const auto& [r, p] : planes)
@@ -853,11 +819,6 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
     const auto near = planes.near(m);
     const LocalSurface *pa = LocalSurfaces::find(near, ra), *pb = LocalSurfaces::find(near, rb);
     if (!pa || !pb || angle_between_surfaces_deg(*pa, *pb, m) < o.min_angle) return std::nullopt;
-    const auto ca = planes.continued(m, near, ra, cone, kContinues * res.edge_length);
-    const auto cb = planes.continued(m, near, rb, cone, kContinues * res.edge_length);
-    if (ca) pa = &*ca;
-    if (cb) pb = &*cb;
-    if (angle_between_surfaces_deg(*pa, *pb, m) < o.min_angle) return std::nullopt;
     const Line line = meet(*pa, *pb, m);
     // Where the segment passes from nearer a's surface to nearer b's. Neighbouring edges of the
     // chamfer cross there in the order they have along the line, which the cut faces keep; the

@@ -18,10 +18,7 @@
 //   3. where vertices of three regions meet, their surfaces each turning by min_angle or more
 //      against the others there, the vertex nearest the point where the three meet is moved onto
 //      it (a corner); an edge between vertices of two regions whose surfaces turn by min_angle or
-//      more there is split where those surfaces meet (the point of that curve nearest the edge),
-//      each surface fitted there with the points of the other regions that continue it (turning
-//      by less than min_angle / 2, within a quarter edge of it): a region reaching the edge as a
-//      narrow wedge has points on one side only, and its own quadric extrapolated past them;
+//      more there is split where those surfaces meet (the point of that curve nearest the edge);
 //   4. each triangle is cut at its new points, so the chamfer becomes the two faces meeting at
 //      the edge.
 // Where that curve passes beside a vertex rather than across an edge, the vertex is moved onto
