@@ -388,7 +388,7 @@ std::size_t merge_across_turned_faces(Mesh& out, const FaceGeometry& input_faces
 // is not one the mesh has, and the edge flipped is not along the part's edge (both ends ranked).
 // Turned faces the flips leave are left to the partial moves. Returns the edges flipped; parent (and
 // the labels) follow out's faces.
-std::size_t flip_across_turned_faces(Mesh& out, const FaceGeometry& input_faces, const std::vector<std::uint32_t>& parent,
+std::size_t flip_turned_faces_and_slivers(Mesh& out, const FaceGeometry& input_faces, const std::vector<std::uint32_t>& parent,
                                      const std::vector<int>& rank) {
   const FaceGeometry geometry = face_geometry(out);
   const MeshEdges edges = mesh_edges(out);
@@ -962,7 +962,7 @@ SharpenResult sharpen_edges(const Mesh& mesh, const SharpenOptions& o) {
   res.merged_vertices = merge_across_turned_faces(res.mesh, fg, parent, rank, line, 2 * res.edge_length, kShortAlongEdge * res.edge_length,
                                                     std::cos(o.min_angle * std::numbers::pi / 180));
   for (int round = 0; round < 5; ++round) {
-    const std::size_t flipped = flip_across_turned_faces(res.mesh, fg, parent, rank);
+    const std::size_t flipped = flip_turned_faces_and_slivers(res.mesh, fg, parent, rank);
     res.flipped_edges += flipped;
     if (flipped == 0) break;
   }

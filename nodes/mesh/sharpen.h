@@ -65,7 +65,9 @@ struct SharpenOptions {
 // merged_vertices  vertices merged into a neighbour on the same edge of the part, or its corner,
 //                since moving both turned a face over (and the merge turns or folds no other)
 // flipped_edges  edges flipped where a face lay turned over across its longest edge with its
-//                corners in place (three points of a face of the part nearly in a line)
+//                corners in place (three points of a face of the part nearly in a line), or where a
+//                sliver with a corner on a restored edge (narrower than 0.05 of its longest edge)
+//                is made wider by the flip
 // held_back      moved or new vertices held short of their edge's line (and off the feature
 //                edges), since all the way a face beside them would turn over: where the chamfer is
 //                narrower than the move, or new points crowd along the line
