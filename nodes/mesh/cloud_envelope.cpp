@@ -7,13 +7,27 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "nodes/geom/kd_tree.h"
+#include "nodes/geom/local_surface.h"
+#include "nodes/geom/segment.h"
+#include "nodes/geom/union_find.h"
 #include "nodes/mesh/face_geometry.h"
 #include "nodes/mesh/mesh_distance.h"
 
 namespace scallop {
+
+namespace {
+constexpr double kAtPoint = 1e-6;     // mm: a vertex this near a point is that point
+constexpr std::size_t kSidePoints = 2 * kMinSurfacePoints;  // points that make a face's local surface
+// The surface's error at a vertex beyond its points, in times the largest residual of the fit (its
+// shape bias: the part's facets or curvature the quadric misses), as cloud.height_field's model
+constexpr double kMisfits = 3;
+}  // namespace
 
 CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d>& points, int k, double max_gap,
                              double bend_spacings, bool exact_feature_edges) {
@@ -66,9 +80,10 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
   });
   for (double g : e.gap) e.unsupported += g > e.max_gap;
 
-  // Each vertex moves along its normal far enough that the plane of every face around it moves
-  // by the full amount: by 1 / min_f (n_f . n_v), at most 2 (a cube's edge: sqrt 2, its corner:
-  // sqrt 3, which makes the outer mesh of a cube the cube grown by that amount on every side).
+  // Each vertex moves along its normal far enough that the plane of every face around it (and of
+  // every face of the part it was measured against, below) moves by the full amount: by
+  // 1 / min_f (n_f . n_v), at most 2 (a cube's edge: sqrt 2, its corner: sqrt 3, which makes the
+  // outer mesh of a cube the cube grown by that amount on every side).
   const std::vector<Eigen::Vector3d> n = vertex_normals(mesh);
   const FaceGeometry g = face_geometry(mesh);
   std::vector<double> least_cos(nv, 1.0);
@@ -87,6 +102,14 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
     faces.buildIndex();
     const double reach = 3 * e.spacing_median;
     std::vector<double> bend(nv, 0.0);
+    // The least cosine between v's normal and the faces within reach (hits: room for the search).
+    const auto least_cos_within_reach = [&](std::size_t v, std::vector<std::pair<std::uint32_t, double>>& hits) {
+      double c = least_cos[v];
+      faces.radiusSearch(mesh.vertices[v].data(), reach * reach, hits, nanoflann::SearchParams(32, 0, false));
+      for (const auto& [f, d2] : hits)
+        if (g.area[f] > 0) c = std::min(c, g.normal[f].dot(n[v]));
+      return c;
+    };
     // With exact feature edges: the faces within reach on v's side of them (a walk across the
     // other edges), none for a vertex on one.
     const bool sides = exact_feature_edges && !mesh.feature_edges.empty();
@@ -102,9 +125,7 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
       for (std::size_t v = r.begin(); v < r.end(); ++v) {
         double c = least_cos[v];
         if (!sides) {
-          faces.radiusSearch(mesh.vertices[v].data(), reach * reach, hits, nanoflann::SearchParams(32, 0, false));
-          for (const auto& [f, d2] : hits)
-            if (g.area[f] > 0) c = std::min(c, g.normal[f].dot(n[v]));
+          c = least_cos_within_reach(v, hits);
         } else if (on_feature[v]) {
           c = 1;
         } else {
@@ -132,6 +153,90 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
         bend[v] = bend_spacings * e.spacing_median * std::sqrt(1 - c * c);
       }
     });
+    // With exact feature edges, a vertex on one or at no point (where mesh.sharpen extrapolated local
+    // surfaces to meet) against the local surface of the points near it on each face of the part
+    // around it (faces joined across the other edges; a point on the face nearest it, none that lies
+    // on a feature edge, which belongs to either face).
+    if (sides) {
+      UnionFind joined(mesh.num_faces());
+      for (std::size_t k = 0; k < edges.size(); ++k)
+        if (!feature[k])
+          for (std::size_t j = 1; j < edges.faces_on(k); ++j) joined.join(edges.faces(k)[0], edges.faces(k)[j]);
+      std::vector<std::uint32_t> part_face(mesh.num_faces());
+      for (std::size_t f = 0; f < part_face.size(); ++f) part_face[f] = joined.root(std::uint32_t(f));
+      constexpr std::uint32_t kEitherFace = std::numeric_limits<std::uint32_t>::max();
+      std::vector<std::uint32_t> part_face_of_point(points.size());
+      tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t i) {
+        const std::size_t f = distance.closest_face(points[i]);
+        const Eigen::Vector3d q = distance.closest_point(points[i]);
+        part_face_of_point[i] = part_face[f];
+        const std::uint32_t* corner = mesh.face(f);
+        for (std::size_t k = 0, m = mesh.face_size(f); k < m; ++k) {
+          const Eigen::Vector3d &a = mesh.vertices[corner[k]], &b = mesh.vertices[corner[(k + 1) % m]];
+          if (feature[edges.face_edge[mesh.face_start[f] + k]] && segment_distance(q, a, b) <= kAtPoint)
+            part_face_of_point[i] = kEitherFace;
+        }
+      });
+      std::vector<double> off_out(nv, 0.0), off_in(nv, 0.0);
+      std::vector<double> side_cos(nv, 1.0);
+      std::vector<std::uint8_t> no_surface(nv, 0);
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<std::pair<std::uint32_t, double>> hits;
+        std::vector<std::uint32_t> faces_here;
+        std::vector<Eigen::Vector3d> side_points;
+        for (std::size_t v = r.begin(); v < r.end(); ++v) {
+          if (e.gap[v] <= kAtPoint && !on_feature[v]) continue;
+          faces_here.clear();
+          for (std::size_t j = 0; j < around.count(v); ++j) faces_here.push_back(part_face[around.faces(v)[j]]);
+          std::sort(faces_here.begin(), faces_here.end());
+          faces_here.erase(std::unique(faces_here.begin(), faces_here.end()), faces_here.end());
+          for (const std::uint32_t side : faces_here) {
+            Eigen::Vector3d facing = Eigen::Vector3d::Zero();
+            for (std::size_t j = 0; j < around.count(v); ++j)
+              if (const std::uint32_t f = around.faces(v)[j]; part_face[f] == side) facing += g.area[f] * g.normal[f];
+            // The points of this face of the part near v: the first of 6, 12, 24 or 48 spacings
+            // that holds kSidePoints of them.
+            side_points.clear();
+            for (double radius = 2 * reach; radius <= 16 * reach && side_points.size() < kSidePoints; radius *= 2) {
+              tree.radiusSearch(mesh.vertices[v].data(), radius * radius, hits, nanoflann::SearchParams(32, 0, false));
+              side_points.clear();
+              for (const auto& [i, d2] : hits)
+                if (part_face_of_point[i] == side) side_points.push_back(points[i]);
+            }
+            const std::optional<LocalSurface> surface = fit_local_surface(side_points);
+            if (!surface) {  // too few points, or not on a plane and a quadric over it
+              no_surface[v] = 1;
+              continue;
+            }
+            const double outward = surface->normal.dot(facing) < 0 ? -1 : 1;
+            double misfit = 0;
+            for (const auto& p : side_points) misfit = std::max(misfit, std::abs(surface->value(p)));
+            if (misfit > e.spacing_median) {  // points of two faces (an edge not flagged)
+              no_surface[v] = 1;
+              continue;
+            }
+            const double height = outward * surface->value(mesh.vertices[v]);
+            side_cos[v] = std::min(side_cos[v], outward * surface->gradient(mesh.vertices[v]).normalized().dot(n[v]));
+            off_out[v] = std::max(off_out[v], std::max(0.0, -height) + kMisfits * misfit);
+            off_in[v] = std::max(off_in[v], std::max(0.0, height) + kMisfits * misfit);
+          }
+        }
+      });
+      for (std::size_t v = 0; v < nv; ++v) {
+        e.vertices_checked += e.gap[v] > kAtPoint || on_feature[v];
+        if (no_surface[v]) {
+          // As without exact feature edges: the allowance for the faces within reach.
+          ++e.vertices_without_surface;
+          std::vector<std::pair<std::uint32_t, double>> hits;
+          const double c = std::clamp(least_cos_within_reach(v, hits), 0.0, 1.0);
+          bend[v] = std::max(bend[v], bend_spacings * e.spacing_median * std::sqrt(1 - c * c));
+        }
+        e.off_points_max = std::max({e.off_points_max, off_out[v], off_in[v]});
+        least_cos[v] = std::min(least_cos[v], side_cos[v]);
+        e.out[v] = std::max(e.out[v], off_out[v]);
+        e.in[v] = std::max(e.in[v], off_in[v]);
+      }
+    }
     for (std::size_t v = 0; v < nv; ++v) {
       e.bend_allowance_max = std::max(e.bend_allowance_max, bend[v]);
       e.out[v] += bend[v];

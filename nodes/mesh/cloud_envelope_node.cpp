@@ -26,7 +26,9 @@ double quantile(std::vector<double> xs, double q) {
 NodeDecl make_cloud_envelope_node() {
   NodeDecl d;
   d.type = "mesh.cloud_envelope";
-  d.version = 2;  // 2: faces folded onto a neighbour leave the side to the rays (MeshDistance::signed_distance)
+  // 2: faces folded onto a neighbour leave the side to the rays (MeshDistance::signed_distance);
+  // 3: with exact feature edges, vertices at no point bounded by their points' local surfaces
+  d.version = 3;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "
@@ -40,7 +42,10 @@ NodeDecl make_cloud_envelope_node() {
               "outward_max_at, inward_max, inward_p99, inward_median, inward_max_at, surface_uncertainty (the larger "
               "maximum), residual_min, residual_max (the points' signed distances), bend_allowance_max (spacing x "
               "the sine of the largest angle to the faces within 3 spacings), points_beyond and beyond_max (points outside the outer mesh or inside the "
-              "inner one, the farthest), unsupported_vertices, unsupported_at}")
+              "inner one, the farthest), unsupported_vertices, unsupported_at, vertices_checked, off_points_max and vertices_without_surface "
+              "(with exact_feature_edges: vertices on a feature edge or at no point, the largest bound their points' local "
+              "surfaces gave them, and those where a face's points fit no surface, too few or misfit above a spacing, "
+              "given the bend allowance instead)}")
       .param_int("neighbours", 16, 1, 1000, "", "points per vertex (the largest of their deviations bounds the part there)")
       .param_float("max_gap", 0, 0, 1000, "mm",
                    "a vertex farther than this from every point is unsupported (reported); 0: 4 times the median "
@@ -50,7 +55,9 @@ NodeDecl make_cloud_envelope_node() {
                    "this many median spacings times the sine of the bend (1 for a reconstruction that bevels edges)")
       .param_bool("exact_feature_edges", false,
                   "the mesh's feature edges are the part's own (mesh.sharpen's restored edges): the allowance looks "
-                  "only at the faces on a vertex's side of them, and none on them; a chamfer left keeps it");
+                  "only at the faces on a vertex's side of them, and none on them; a chamfer left keeps it. A vertex at "
+                  "no point (a restored edge's or corner's) is bounded instead by its height over the local surface of "
+                  "the points on each face of the part around it, plus 3 times that fit's largest residual");
   d.run = [](NodeContext& ctx) {
     auto mesh = ctx.input<Mesh>("mesh");
     auto cloud = ctx.input<PointCloud>("cloud");
@@ -86,6 +93,9 @@ NodeDecl make_cloud_envelope_node() {
                    {"points_beyond", e.points_beyond},
                    {"beyond_max", e.beyond_max},
                    {"unsupported_vertices", e.unsupported},
+                   {"vertices_checked", e.vertices_checked},
+                   {"off_points_max", e.off_points_max},
+                   {"vertices_without_surface", e.vertices_without_surface},
                    {"unsupported_at", e.unsupported ? json_xyz(mesh->vertices[at_gap]) : nlohmann::json()}};
     if (e.unsupported > 0) {
       char text[300];

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "nodes/cloud/knn.h"
+#include "nodes/geom/local_surface.h"
 #include "nodes/geom/segment.h"
 #include "nodes/mesh/face_geometry.h"
 #include "nodes/mesh/keep_faces.h"
@@ -31,64 +32,6 @@ constexpr int kNearAnchors = 128;  // vertices of known region around a point, f
 // mean edge lengths: a band vertex farther than this from every region's surface is not a point of
 // the part (a clean cloud's lie on it to the fit's bias, 0.003 edges on a box)
 constexpr double kOffSurface = 0.1;
-
-// A region's surface near a point: a quadric height w(u, v) over the least-squares plane of its
-// vertices there (frame t1, t2, normal about point), or that plane where a quadric is not
-// determined (too few points, or all on a line).
-struct LocalSurface {
-  Eigen::Vector3d normal, point, t1, t2;
-  std::array<double, 6> c{};  // w = c0 + c1 u + c2 v + c3 u^2 + c4 uv + c5 v^2, (u, v) in mm
-  // Height of x above the surface (along normal), and its gradient.
-  double value(const Eigen::Vector3d& x) const {
-    const Eigen::Vector3d d = x - point;
-    const double u = d.dot(t1), v = d.dot(t2);
-    return d.dot(normal) - (c[0] + c[1] * u + c[2] * v + c[3] * u * u + c[4] * u * v + c[5] * v * v);
-  }
-  Eigen::Vector3d gradient(const Eigen::Vector3d& x) const {
-    const Eigen::Vector3d d = x - point;
-    const double u = d.dot(t1), v = d.dot(t2);
-    return normal - (c[1] + 2 * c[3] * u + c[4] * v) * t1 - (c[2] + c[4] * u + 2 * c[5] * v) * t2;
-  }
-  double distance(const Eigen::Vector3d& x) const { return std::abs(value(x)) / gradient(x).norm(); }
-};
-
-// The local surface of the points: their plane, then a quadric over it where they determine one.
-// Fewer than kMinSurfacePoints points are a sliver of a region, not its surface (on a sphere cut
-// into regions, a plane through 5 points of one stood 70 degrees off the sphere).
-constexpr std::size_t kMinSurfacePoints = 10;
-std::optional<LocalSurface> fit_local_surface(const std::vector<Eigen::Vector3d>& pts) {
-  if (pts.size() < kMinSurfacePoints) return std::nullopt;
-  Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  for (const auto& p : pts) c += p;
-  c /= double(pts.size());
-  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-  for (const auto& p : pts) C += (p - c) * (p - c).transpose();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
-  // Not a plane where the points lie along a line, or where their spread across the plane is
-  // not well above their spread off it: a thin band of a curved face has its least-squares plane
-  // through its arc, its normal about the surface's tangent (seen on a sphere: 80 degrees off).
-  const Eigen::Vector3d& ev = es.eigenvalues();
-  if (es.info() != Eigen::Success || !(ev[1] > 1e-6 * ev[2]) || !(ev[0] <= 0.25 * ev[1])) return std::nullopt;
-  LocalSurface plane{es.eigenvectors().col(0), c, es.eigenvectors().col(2), es.eigenvectors().col(1)};
-  Eigen::MatrixXd A(pts.size(), 6);
-  Eigen::VectorXd w(pts.size());
-  double scale = 0;
-  for (const auto& p : pts) scale = std::max(scale, (p - c).norm());
-  for (std::size_t i = 0; i < pts.size(); ++i) {
-    const Eigen::Vector3d d = pts[i] - c;
-    const double u = d.dot(plane.t1) / scale, v = d.dot(plane.t2) / scale;
-    A.row(i) << 1, u, v, u * u, u * v, v * v;
-    w[i] = d.dot(plane.normal);
-  }
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const auto& sv = svd.singularValues();
-  if (sv[5] > 1e-3 * sv[0]) {
-    const Eigen::VectorXd q = svd.solve(w);
-    const double k[6] = {1, 1 / scale, 1 / scale, 1 / (scale * scale), 1 / (scale * scale), 1 / (scale * scale)};
-    for (int j = 0; j < 6; ++j) plane.c[j] = q[j] * k[j];
-  }
-  return plane;
-}
 
 // x moved onto all of the surfaces (two: their curve of intersection; three: their common point)
 // by Gauss-Newton steps of least length, from a start on or near it (where their planes meet).

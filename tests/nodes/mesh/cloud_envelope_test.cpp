@@ -93,19 +93,31 @@ TEST(CloudEnvelope, TheBendAllowanceScalesWithBend) {
 // The cube's own edges as feature edges the part has exactly (mesh.sharpen's): no allowance on
 // them, and none beside them either (a vertex sees only the faces on its side); a bend the
 // feature edges do not explain keeps its allowance.
-TEST(CloudEnvelope, ExactFeatureEdgesNeedNoAllowance) {
-  Mesh cube = test::cube_mesh(4, 10);
+// The cube [0, 10]^3 in n by n squares a side, its 12 edges its feature edges.
+Mesh cube_with_feature_edges(int n) {
+  Mesh cube = test::cube_mesh(n, 10);
   const MeshEdges edges = mesh_edges(cube);
   const FaceGeometry g = face_geometry(cube);
   for (std::size_t e = 0; e < edges.size(); ++e)
     if (edges.faces_on(e) == 2 && angle_deg(g.normal[edges.faces(e)[0]], g.normal[edges.faces(e)[1]]) > 45)
       cube.feature_edges.push_back(edges.edges[e]);
+  return cube;
+}
+
+TEST(CloudEnvelope, ExactFeatureEdgesNeedNoAllowance) {
+  Mesh cube = cube_with_feature_edges(4);
   ASSERT_EQ(cube.feature_edges.size(), 12u * 4);
   const std::vector<V> pts = box_side_points(0, 10, 0.5, 0);
   const CloudEnvelope exact = cloud_envelope(cube, pts, 16, 0, 1.0, true);
   EXPECT_EQ(exact.bend_allowance_max, 0.0);
-  for (std::size_t v = 0; v < cube.num_vertices(); ++v) EXPECT_EQ(exact.out[v], 0.0);
-  // the top's front edge (y = 0, z = 10) left out of them: the allowance comes back along it only
+  // the edges' vertices checked against the sides' points: on them, to rounding
+  EXPECT_EQ(exact.vertices_checked, 12u * 3 + 8);
+  EXPECT_LT(exact.off_points_max, 1e-12);
+  EXPECT_EQ(exact.vertices_without_surface, 0u);
+  for (std::size_t v = 0; v < cube.num_vertices(); ++v) EXPECT_LT(exact.out[v], 1e-12);
+  // the top's front edge (y = 0, z = 10) left out of them: the allowance comes back along it, and
+  // at the vertices of the other edges whose face of the part (top and front joined) has points
+  // that fit no surface: the front edge's two corners and the edges' next vertices from them
   const auto front = [&](const std::array<std::uint32_t, 2>& fe) {
     return cube.vertices[fe[0]].z() == 10 && cube.vertices[fe[1]].z() == 10 && cube.vertices[fe[0]].y() == 0 &&
            cube.vertices[fe[1]].y() == 0;
@@ -114,12 +126,51 @@ TEST(CloudEnvelope, ExactFeatureEdgesNeedNoAllowance) {
                            cube.feature_edges.end());
   ASSERT_EQ(cube.feature_edges.size(), 11u * 4);
   const CloudEnvelope partial = cloud_envelope(cube, pts, 16, 0, 1.0, true);
-  EXPECT_NEAR(partial.bend_allowance_max, bend(0.5, 2), 1e-12);
+  EXPECT_NEAR(partial.bend_allowance_max, bend(0.5, 3), 1e-12);  // at the corners
   for (std::size_t v = 0; v < cube.num_vertices(); ++v) {
     const V& p = cube.vertices[v];
     const bool on_front = p.y() == 0 && p.z() == 10 && p.x() > 0 && p.x() < 10;
-    EXPECT_EQ(partial.out[v] > 0, on_front) << p.transpose();
+    const bool beside_front = (p.x() == 0 || p.x() == 10) && ((p.y() == 0 && p.z() >= 7.5) || (p.z() == 10 && p.y() <= 2.5));
+    EXPECT_EQ(partial.out[v] > 1e-12, on_front || beside_front) << p.transpose() << " out " << partial.out[v];
   }
+  EXPECT_EQ(partial.vertices_without_surface, 6u);
+}
+
+TEST(CloudEnvelope, AnEdgeTheMeshPutsInsideThePartIsBoundedByItsFacesPoints) {
+  // The part is the cube [0, 10]^3, sampled 0.25 apart but no nearer its edges than 0.3 (a cloud
+  // has no points on them). The mesh's top front edge (y = 0, z = 10) lies d = 0.02 low, as where
+  // mesh.sharpen extrapolated a quadric to the edge: the top's faces beside it tilt down, and the
+  // points beside them lie at most 0.4 d above them (0.5 mm faces, no point within 0.3 of the
+  // edge), so the points' distances alone leave the part's edge outside the outer mesh. Measured
+  // against the top's points (a plane, fitted exactly: no misfit), each such vertex lies d below
+  // it, and the front's points put it on the front: out = d, in = 0.
+  const double d = 0.02;
+  Mesh cube = cube_with_feature_edges(20);
+  const auto on_front_edge = [](const V& p) { return p.y() == 0 && p.z() == 10 && p.x() > 0 && p.x() < 10; };
+  std::vector<V> pts = box_side_points(0, 10, 0.25, 0.3);
+  for (auto& p : cube.vertices)
+    if (on_front_edge(p)) p.z() -= d;
+  // One of them a point of the cloud as well (a point moved onto the edge, or one the edge runs
+  // through): a point on a feature edge belongs to neither face's surface, the vertex is measured all the same.
+  const V lowered(5, 0, 10 - d);
+  pts.push_back(lowered);
+  const CloudEnvelope e = cloud_envelope(cube, pts, 16, 0, 1.0, true);
+  EXPECT_EQ(e.vertices_without_surface, 0u);
+  EXPECT_NEAR(e.off_points_max, d, 1e-9);
+  double residual_max = 0;
+  for (double r : e.residual) residual_max = std::max(residual_max, r);
+  EXPECT_LT(residual_max, 0.41 * d);  // what the distances alone see
+  std::size_t lowered_vertices = 0;
+  for (std::size_t v = 0; v < cube.num_vertices(); ++v) {
+    if (!on_front_edge(cube.vertices[v] + V(0, 0, d))) continue;
+    ++lowered_vertices;
+    EXPECT_NEAR(e.out[v], d, 1e-9) << cube.vertices[v].transpose();
+    EXPECT_LT(e.in[v], 1e-9) << cube.vertices[v].transpose();
+  }
+  EXPECT_EQ(lowered_vertices, 19u);
+  // The part's edge lies within the outer mesh.
+  const MeshDistance outer(e.outer);
+  for (double x = 0.25; x < 10; x += 0.25) EXPECT_LE(outer.signed_distance(V(x, 0, 10)), 1e-9) << x;
 }
 
 TEST(CloudEnvelope, AMeshInsideThePartIsGrownByTheDistanceOnEverySideEdgeAndCorner) {
