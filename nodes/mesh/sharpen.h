@@ -18,7 +18,10 @@
 //   3. where vertices of three regions meet, their surfaces each turning by min_angle or more
 //      against the others there, the vertex nearest the point where the three meet is moved onto
 //      it (a corner); an edge between vertices of two regions whose surfaces turn by min_angle or
-//      more there is split where those surfaces meet (the point of that curve nearest the edge);
+//      more there is split where those surfaces meet (the point of that curve nearest the edge;
+//      where a region has too few vertices there for a surface, a sliver of a piece of a curved
+//      face, the surface its vertex lies nearest of the others' stands in, if that one meets the
+//      other region's at an edge);
 //   4. each triangle is cut at its new points, so the chamfer becomes the two faces meeting at
 //      the edge.
 // Where that curve passes beside a vertex rather than across an edge, the vertex is moved onto
