@@ -129,12 +129,26 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
         } else if (on_feature[v]) {
           c = 1;
         } else {
+          // A face with a corner the faces' points bound (below) is left out: its tilt through
+          // that corner is counted there. So is its tilt of v's normal: v's other faces give it.
+          const auto measured = [&](std::uint32_t f) {
+            for (std::size_t k = 0; k < mesh.face_size(f); ++k)
+              if (const std::uint32_t u = mesh.face(f)[k]; on_feature[u] || e.gap[u] > kAtPoint) return true;
+            return false;
+          };
           stack.assign(around.faces(v), around.faces(v) + around.count(v));
           seen = stack;
+          Eigen::Vector3d facing = Eigen::Vector3d::Zero();
+          bool beside_measured = false;
+          for (const std::uint32_t f : stack)
+            if (measured(f)) beside_measured = true;
+            else facing += g.area[f] * g.normal[f];
+          const Eigen::Vector3d normal = beside_measured && facing.norm() > 0 ? Eigen::Vector3d(facing.normalized()) : n[v];
+          c = 1;
           while (!stack.empty()) {
             const std::uint32_t f = stack.back();
             stack.pop_back();
-            if (g.area[f] > 0) c = std::min(c, g.normal[f].dot(n[v]));
+            if (g.area[f] > 0 && !measured(f)) c = std::min(c, g.normal[f].dot(normal));
             for (std::size_t k = 0; k < mesh.face_size(f); ++k) {
               const std::uint32_t e = edges.face_edge[mesh.face_start[f] + k];
               if (feature[e]) continue;

@@ -52,7 +52,9 @@ struct CloudEnvelope {
 //         mesh whose edges were restored by mesh.sharpen, which no longer bevels them).
 // exact_feature_edges  the mesh's feature edges are the part's own (mesh.sharpen's restored
 //         edges): the allowance looks only at the faces on a vertex's side of them (reached
-//         without crossing one), and a vertex on one gets none; elsewhere (a chamfer left) as above.
+//         without crossing one) that have no corner on one or at no point (those corners are
+//         bounded below, and a face's tilt through them with them), and a vertex on one gets none;
+//         elsewhere (a chamfer left) as above.
 //         Instead, a vertex at no point of the cloud (farther than 1e-6 mm from every one: where
 //         mesh.sharpen extrapolated local surfaces to meet at an edge or a corner) is measured
 //         against each face of the part around it (faces joined across the other edges): the local

@@ -27,8 +27,9 @@ NodeDecl make_cloud_envelope_node() {
   NodeDecl d;
   d.type = "mesh.cloud_envelope";
   // 2: faces folded onto a neighbour leave the side to the rays (MeshDistance::signed_distance);
-  // 3: with exact feature edges, vertices at no point bounded by their points' local surfaces
-  d.version = 3;
+  // 3: with exact feature edges, vertices at no point bounded by their points' local surfaces;
+  // 4: and the allowance beside them leaves out the faces with a corner so bounded
+  d.version = 4;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "

@@ -168,6 +168,9 @@ TEST(CloudEnvelope, AnEdgeTheMeshPutsInsideThePartIsBoundedByItsFacesPoints) {
     EXPECT_LT(e.in[v], 1e-9) << cube.vertices[v].transpose();
   }
   EXPECT_EQ(lowered_vertices, 19u);
+  // The top's faces beside them tilt (by 2.3 degrees), but only through the corners measured
+  // above: the points one row in get no bend allowance for it (0.25 sin 2.3 = 0.01 mm before).
+  EXPECT_EQ(e.bend_allowance_max, 0.0);
   // The part's edge lies within the outer mesh.
   const MeshDistance outer(e.outer);
   for (double x = 0.25; x < 10; x += 0.25) EXPECT_LE(outer.signed_distance(V(x, 0, 10)), 1e-9) << x;
