@@ -169,7 +169,7 @@ TEST(CloudEnvelope, AnEdgeTheMeshPutsInsideThePartIsBoundedByItsFacesPoints) {
   }
   EXPECT_EQ(lowered_vertices, 19u);
   // The top's faces beside them tilt (by 2.3 degrees), but only through the corners measured
-  // above: the points one row in get no bend allowance for it (0.25 sin 2.3 = 0.01 mm before).
+  // above: the points one row in get no bend allowance for it (0.011 mm before v4).
   EXPECT_EQ(e.bend_allowance_max, 0.0);
   // The part's edge lies within the outer mesh.
   const MeshDistance outer(e.outer);
