@@ -119,6 +119,9 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
     for (const auto& fe : mesh.feature_edges)
       if (sides)
         if (const auto e = edges.find(fe[0], fe[1])) feature[*e] = 1, on_feature[fe[0]] = on_feature[fe[1]] = 1;
+    // The vertices the faces' points bound (below): on a feature edge, or at no point.
+    std::vector<char> bounded(sides ? nv : 0, 0);
+    for (std::size_t v = 0; v < bounded.size(); ++v) bounded[v] = on_feature[v] || e.gap[v] > kAtPoint;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 256), [&](const tbb::blocked_range<std::size_t>& r) {
       std::vector<std::pair<std::uint32_t, double>> hits;
       std::vector<std::uint32_t> stack, seen;
@@ -133,7 +136,7 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
           // that corner is counted there. So is its tilt of v's normal: v's other faces give it.
           const auto measured = [&](std::uint32_t f) {
             for (std::size_t k = 0; k < mesh.face_size(f); ++k)
-              if (const std::uint32_t u = mesh.face(f)[k]; on_feature[u] || e.gap[u] > kAtPoint) return true;
+              if (bounded[mesh.face(f)[k]]) return true;
             return false;
           };
           stack.assign(around.faces(v), around.faces(v) + around.count(v));
@@ -181,8 +184,8 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
       constexpr std::uint32_t kEitherFace = std::numeric_limits<std::uint32_t>::max();
       std::vector<std::uint32_t> part_face_of_point(points.size());
       tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t i) {
-        const std::size_t f = distance.closest_face(points[i]);
-        const Eigen::Vector3d q = distance.closest_point(points[i]);
+        Eigen::Vector3d q;
+        const std::size_t f = distance.closest_face(points[i], q);
         part_face_of_point[i] = part_face[f];
         const std::uint32_t* corner = mesh.face(f);
         for (std::size_t k = 0, m = mesh.face_size(f); k < m; ++k) {
@@ -199,7 +202,7 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
         std::vector<std::uint32_t> faces_here;
         std::vector<Eigen::Vector3d> side_points;
         for (std::size_t v = r.begin(); v < r.end(); ++v) {
-          if (e.gap[v] <= kAtPoint && !on_feature[v]) continue;
+          if (!bounded[v]) continue;
           faces_here.clear();
           for (std::size_t j = 0; j < around.count(v); ++j) faces_here.push_back(part_face[around.faces(v)[j]]);
           std::sort(faces_here.begin(), faces_here.end());
@@ -237,7 +240,7 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
         }
       });
       for (std::size_t v = 0; v < nv; ++v) {
-        e.vertices_checked += e.gap[v] > kAtPoint || on_feature[v];
+        e.vertices_checked += bounded[v];
         if (no_surface[v]) {
           // As without exact feature edges: the allowance for the faces within reach.
           ++e.vertices_without_surface;

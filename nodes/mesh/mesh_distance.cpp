@@ -92,8 +92,15 @@ Eigen::Vector3d MeshDistance::closest_point(const Eigen::Vector3d& p) const {
 }
 
 std::size_t MeshDistance::closest_face(const Eigen::Vector3d& p) const {
+  Eigen::Vector3d at;
+  return closest_face(p, at);
+}
+
+std::size_t MeshDistance::closest_face(const Eigen::Vector3d& p, Eigen::Vector3d& at) const {
+  at = p;
   if (impl_->tris.empty()) return std::numeric_limits<std::size_t>::max();
   const auto hit = impl_->tree.closest_point_and_primitive(point(p));
+  at = {hit.first.x(), hit.first.y(), hit.first.z()};
   return impl_->face_of[std::size_t(hit.second - impl_->tris.cbegin())];
 }
 

@@ -26,6 +26,8 @@ class MeshDistance {
   Eigen::Vector3d closest_point(const Eigen::Vector3d& p) const;
   // The index of the mesh's face (polygon) that holds the nearest point; SIZE_MAX without faces.
   std::size_t closest_face(const Eigen::Vector3d& p) const;
+  // The same, and that nearest point into `at` (one search for both).
+  std::size_t closest_face(const Eigen::Vector3d& p, Eigen::Vector3d& at) const;
   // How far along the ray from p in direction d (unit) the first face lies; +infinity when the
   // ray meets none.
   double ray_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& d) const;
