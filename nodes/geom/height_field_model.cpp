@@ -85,7 +85,7 @@ bool local_plane(const std::vector<Eigen::Vector3d>& P, const std::uint32_t* idx
                  const Eigen::Vector3d& o, double h, Eigen::Vector3d& centroid, Eigen::Matrix3d& frame) {
   double wsum = 0;
   Eigen::Vector3d m = Eigen::Vector3d::Zero();
-  std::vector<double> w(got);
+  std::array<double, 64> w;  // got <= 64
   for (std::size_t j = 0; j < got; ++j) {
     w[j] = std::exp(-2.0 * (P[idx[j]] - o).squaredNorm() / (h * h));
     m += w[j] * P[idx[j]];
@@ -130,7 +130,7 @@ bool HeightFieldModel::Impl::local_fit(double x, double y, const std::uint32_t* 
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
     double wsum = 0;
     Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-    std::vector<double> w(got_xy);
+    std::array<double, 64> w;  // got_xy <= 64
     for (std::size_t j = 0; j < got_xy; ++j) {
       w[j] = std::exp(-2.0 * (xy[idx_xy[j]] - Eigen::Vector2d(x, y)).squaredNorm() / (hxy * hxy + 1e-300));
       c += w[j] * p[idx_xy[j]];
@@ -174,11 +174,8 @@ bool HeightFieldModel::Impl::local_fit(double x, double y, const std::uint32_t* 
       add_weighted_outer_lower(M, b, w);
       rhs += w * l.z() * b;
     }
-    M.triangularView<Eigen::Upper>() = M.transpose();
-    auto ldlt = M.ldlt();
-    if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-8)) return false;
-    const Eigen::Matrix<double, 6, 1> c = ldlt.solve(rhs);
-    if (!c.allFinite()) return false;
+    Eigen::Matrix<double, 6, 1> c;
+    if (!solve_positive_definite(M, rhs, c, 1e-8)) return false;
     // Newton on (a, b): the xy of o + h (a t1 + b t2 + w(a, b) n) must be (x, y).
     double a = 0, b = 0;
     Eigen::Vector3d P, ta, tb;
@@ -397,15 +394,12 @@ bool HeightFieldModel::Impl::xy_fit(double x, double y, const std::uint32_t* idx
     add_weighted_outer_lower(M, b, w);
     rhs += w * z[idx[j]] * b;
   }
-  M.triangularView<Eigen::Upper>() = M.transpose();
   Eigen::Matrix<double, 6, 1> c;
-  auto ldlt = M.ldlt();
-  bool ok = ldlt.info() == Eigen::Success && ldlt.rcond() > 1e-10;
-  if (ok) c = ldlt.solve(rhs);
-  if (!ok || !c.allFinite()) {  // degenerate neighbourhood (collinear points): a plane
-    Eigen::Matrix3d M3 = M.topLeftCorner<3, 3>();
-    Eigen::Vector3d c3 = M3.ldlt().solve(rhs.head<3>());
-    if (!c3.allFinite()) return false;
+  if (!solve_positive_definite(M, rhs, c, 1e-10)) {  // degenerate neighbourhood (collinear points): a plane
+    const Eigen::Matrix3d M3 = M.topLeftCorner<3, 3>();
+    const Eigen::Vector3d rhs3 = rhs.head<3>();
+    Eigen::Vector3d c3;
+    if (!solve_positive_definite(M3, rhs3, c3, 0.0)) return false;
     c.setZero();
     c.head<3>() = c3;
   }

@@ -13,7 +13,7 @@ namespace scallop::path_nodes {
 NodeDecl make_isoparametric_node() {
   NodeDecl d;
   d.type = "path.isoparametric";
-  d.version = 10;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field; 5: strips over the limit summarised in one warning (strips_over_limit_at), warnings said on the terminal, outline passes; 6: one rim pass through the outline's points, both patterns; holes (input loops) are not cut, a rim pass around each; 7: margins of one uncertainty (not 1.25 and 1.5), the fit gap added to it; 8: its strip checks see the height field's uncertainty with that fit's misfit (shape bias) counted; 9: the cusp found by regula falsi; 10: side steps shrunk by the secant
+  d.version = 11;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field; 5: strips over the limit summarised in one warning (strips_over_limit_at), warnings said on the terminal, outline passes; 6: one rim pass through the outline's points, both patterns; holes (input loops) are not cut, a rim pass around each; 7: margins of one uncertainty (not 1.25 and 1.5), the fit gap added to it; 8: its strip checks see the height field's uncertainty with that fit's misfit (shape bias) counted; 9: the cusp found by regula falsi; 10: side steps shrunk by the secant; 11: the fits solved by a fixed-size Cholesky (the same answers to rounding)
   d.description =
       "iso-parametric finishing passes from a UV-mapped cloud: zig-zag on a rectangle map, "
       "concentric on a disk map; forward step from the chord error, side step from the scallop "

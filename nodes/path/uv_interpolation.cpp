@@ -1,7 +1,6 @@
 #include "nodes/path/uv_interpolation.h"
 
 
-#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
@@ -119,14 +118,12 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
   Eigen::Vector3d tu = Eigen::Vector3d::Zero(), tv = Eigen::Vector3d::Zero();
   bool ok = false;
   if (used >= 6) {
-    Eigen::LDLT<Mat6, Eigen::Lower> ldlt(M);
-    const auto dg = ldlt.vectorD().cwiseAbs();
-    if (ldlt.info() == Eigen::Success && dg.minCoeff() > 1e-9 * dg.maxCoeff()) {
-      const Mat6 c = ldlt.solve(rhs);
+    Mat6 c;
+    if (solve_positive_definite(M, rhs, c, 1e-9)) {
       value = c.row(0);
       tu = c.row(1).head<3>().transpose();
       tv = c.row(2).head<3>().transpose();
-      ok = c.allFinite();
+      ok = true;
     }
   }
   if (!ok && used >= 3) {
@@ -134,14 +131,12 @@ SurfaceSample UVInterpolator::operator()(const Eigen::Vector2d& uv_in) const {
     // linear basis's equations are the quadric's first three rows and columns).
     const Eigen::Matrix3d M3 = M.topLeftCorner<3, 3>();
     const Eigen::Matrix<double, 3, 6> rhs3 = rhs.topRows<3>();
-    Eigen::LDLT<Eigen::Matrix3d, Eigen::Lower> ldlt(M3);
-    const auto dg = ldlt.vectorD().cwiseAbs();
-    if (ldlt.info() == Eigen::Success && dg.minCoeff() > 1e-9 * dg.maxCoeff()) {
-      const Eigen::Matrix<double, 3, 6> c = ldlt.solve(rhs3);
+    Eigen::Matrix<double, 3, 6> c;
+    if (solve_positive_definite(M3, rhs3, c, 1e-9)) {
       value = c.row(0);
       tu = c.row(1).head<3>().transpose();
       tv = c.row(2).head<3>().transpose();
-      ok = c.allFinite();
+      ok = true;
     }
   }
   if (!ok) {  // degenerate neighbourhood: the nearest point

@@ -96,8 +96,23 @@ std::uint32_t CentreIndex::nearest(const Eigen::Vector3d& p, double cap, std::ve
 }
 
 void CentreIndex::trace(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double r, double T, double delta,
-                        double& gouge, double& scallop, std::vector<std::uint32_t>& cand) const {
-  near(p + 0.5 * T * n, r + 0.5 * T + half_, cand);
+                        double& gouge, double& scallop, std::vector<std::uint32_t>& cand, std::uint32_t* hint) const {
+  // With a hint whose capsule the ray enters at t_h <= T/2 (or whose centre is within r of p),
+  // every piece that matters lies within r + max(t_h, delta) (r + delta) of p, so its midpoint
+  // within that plus half a piece: the pieces entered sooner, and those near enough for the
+  // gouge. Otherwise every piece that can come within r of the ray [p, p + T n].
+  bool narrowed = false;
+  if (hint && *hint < a_.size()) {
+    constexpr double kSpare = 1e-9;  // rounding of the distances compared
+    if (segment_distance(p, a_[*hint], b_[*hint]) <= r) {
+      near(p, r + delta + half_ + kSpare, cand);
+      narrowed = true;
+    } else if (const double th = capsule_entry(p, n, a_[*hint], b_[*hint], r); th <= 0.5 * T) {
+      near(p, r + std::max(th, delta) + half_ + kSpare, cand);
+      narrowed = true;
+    }
+  }
+  if (!narrowed || cand.empty()) near(p + 0.5 * T * n, r + 0.5 * T + half_, cand);
   thread_local std::vector<double> dist;  // to each candidate
   dist.resize(cand.size());
   double d = INFINITY;
@@ -109,6 +124,7 @@ void CentreIndex::trace(const Eigen::Vector3d& p, const Eigen::Vector3d& n, doub
   gouge = std::max(0.0, r - d + delta);
   if (d <= r) {
     scallop = std::max(0.0, delta - (r - d));
+    if (hint) *hint = cand[nearest];
     return;
   }
   // The ray enters a piece's capsule no sooner than (its distance from p) − r, the distance
@@ -116,9 +132,12 @@ void CentreIndex::trace(const Eigen::Vector3d& p, const Eigen::Vector3d& n, doub
   // cannot come first are skipped (with a nanometre to spare for rounding; the least entry, and
   // so the scallop, is the same as over every piece).
   double t = cand.empty() ? INFINITY : capsule_entry(p, n, a_[cand[nearest]], b_[cand[nearest]], r);
+  std::size_t first = nearest;
   for (std::size_t c = 0; c < cand.size(); ++c)
-    if (dist[c] - r <= t + 1e-6) t = std::min(t, capsule_entry(p, n, a_[cand[c]], b_[cand[c]], r));
+    if (dist[c] - r <= t + 1e-6)
+      if (const double tc = capsule_entry(p, n, a_[cand[c]], b_[cand[c]], r); tc < t) t = tc, first = c;
   scallop = t <= T ? t + delta : std::numeric_limits<double>::quiet_NaN();
+  if (hint) *hint = cand.empty() ? std::numeric_limits<std::uint32_t>::max() : cand[first];
 }
 
 WeightedStats weighted_stats(std::vector<std::pair<double, double>> vw) {

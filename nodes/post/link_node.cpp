@@ -10,7 +10,7 @@ namespace scallop::post_nodes {
 NodeDecl make_link_node() {
   NodeDecl d;
   d.type = "post.link";
-  d.version = 5;  // 2: fails where the passes rise more than 10 r + the part's height range above it; 4: the height field's uncertainty counts its fit's misfit; 5: the moves stored without their padding bytes
+  d.version = 6;  // 2: fails where the passes rise more than 10 r + the part's height range above it; 4: the height field's uncertainty counts its fit's misfit; 5: the moves stored without their padding bytes; 6: the height field solved by a fixed-size Cholesky
                   // 3: links checked against the cloud's height field too
   d.description = "joins passes in order: short feed links where the ball stays above the surface, else retract to a clearance plane";
   d.input("path", "Toolpath", "the passes, in cutting order")

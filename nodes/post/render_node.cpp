@@ -18,7 +18,7 @@ NodeDecl make_render_node() {
   d.type = "post.render";
   // 2: view 'scallop' draws post.simulate's simulation instead of simulating again; 3: meshes;
   // 4: segments; 5: a whole part's scallop (mesh and simulation), view 'back'
-  d.version = 5;
+  d.version = 6;  // 6: pictures deflated at level 1 (the same pixels)
   d.description =
       "picture of the passes over the cloud (top, iso, uv), of the scallop a simulation found (heat map), or of a "
       "mesh (shaded, feature edges red, optionally a colour per face label), PNG and SVG";

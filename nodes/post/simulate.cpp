@@ -258,11 +258,12 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
   tbb::parallel_for(tbb::blocked_range<int>(0, nu), [&](const tbb::blocked_range<int>& rg) {
     std::vector<std::uint32_t> cand;
     for (int j = rg.begin(); j < rg.end(); ++j) {
+      std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();  // the last sample's piece
       for (std::size_t i = 0; i < rows[j].size(); ++i) {
         const Raw& s = rows[j][i];
         SimSample& out = res.samples[row_start[j] + i];
         out.x = s.p.x(), out.y = s.p.y(), out.z = s.p.z(), out.weight = s.w;
-        index.trace(s.p, s.n, r, T, s.u, out.gouge, out.scallop, cand);
+        index.trace(s.p, s.n, r, T, s.u, out.gouge, out.scallop, cand, &hint);
         out.interior = is_interior(s.p.x(), s.p.y());
       }
       std::vector<Raw>().swap(rows[j]);
@@ -307,6 +308,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
       std::vector<std::uint32_t> cand;
       for (std::size_t si = rg.begin(); si < rg.end(); ++si) {
         const SimSample c = res.samples[seeds[si]];
+        std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();
         for (int a = -m; a <= m; ++a)
           for (int b = -m; b <= m; ++b) {
             double du = halfw * spacing * a / m, dv = halfw * spacing * b / m;
@@ -318,7 +320,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
               continue;
             SimSample& out = extra[slot];
             out.x = x, out.y = y, out.z = z, out.weight = 0;
-            index.trace({x, y, z}, n, r, T, u, out.gouge, out.scallop, cand);
+            index.trace({x, y, z}, n, r, T, u, out.gouge, out.scallop, cand, &hint);
             out.interior = no_interior || is_interior(x, y);
             valid[slot] = 1;
           }

@@ -11,7 +11,7 @@ namespace scallop::post_nodes {
 NodeDecl make_simulate_node() {
   NodeDecl d;
   d.type = "post.simulate";
-  d.version = 7;  // 3: scallop and gouge are bounds that include the cloud's uncertainty; 7: and the height field's misfit
+  d.version = 8;  // 3: scallop and gouge are bounds that include the cloud's uncertainty; 7: and the height field's misfit; 8: the height field solved by a fixed-size Cholesky (the same to rounding)
                   // 4: the uncertainty grows at gaps beyond the cloud's edge
                   // 5: pass asks the whole patch, rim included, not the interior only
                   // 6: outputs the simulation (post.render draws it), no heat map of its own
