@@ -275,9 +275,10 @@ class Planner {
   // Largest ratio of the chord deviation of the ball-centre segment c0-c1 (pass s, t0 to t1)
   // to its limit, sampled at 1/4, 1/2 and 3/4, and at least every half sampling step of the map
   // (a denoised cloud keeps small bumps of its residual noise that a long segment can pass
-  // over between quarter points); records the deviations when `record`.
+  // over between quarter points); the largest overcut and undercut into over_max, under_max.
   double chord_ratio(double s, double t0, double t1, const Eigen::Vector3d& c0,
-                     const Eigen::Vector3d& c1, bool record) {
+                     const Eigen::Vector3d& c1, double& over_max, double& under_max) const {
+    over_max = under_max = 0;
     double ratio = 0;
     const Eigen::Vector3d seg = c1 - c0;
     const double L2 = seg.squaredNorm();
@@ -294,10 +295,8 @@ class Planner {
       const double total = (c0 + y * seg - cm).norm();
       ratio = std::max(
           {ratio, over / margin(m).overcut, under / e_under_, total / (0.9 * o_.chord_error)});
-      if (record) {
-        chord_overcut_max = std::max(chord_overcut_max, over);
-        chord_undercut_max = std::max(chord_undercut_max, under);
-      }
+      over_max = std::max(over_max, over);
+      under_max = std::max(under_max, under);
     }
     return ratio;
   }
@@ -395,7 +394,8 @@ class Planner {
       // Formula (2) from the pass's own curvature gives the first guess.
       const double ht = co_.polar ? std::min(0.25, hfd_ / std::max(co_.R - s, 1e-12)) : hfd_;
       const double tc = co_.polar ? t : std::clamp(t, ht, co_.T - ht);
-      const Eigen::Vector3d p0 = at(s, tc).position, pp = at(s, tc + ht).position,
+      // (x is the surface at (s, t): not evaluated again where the stencil is centred there)
+      const Eigen::Vector3d p0 = tc == t ? x.position : at(s, tc).position, pp = at(s, tc + ht).position,
                             pm = at(s, tc - ht).position;
       const Eigen::Vector3d rt = (pp - pm) / (2 * ht), rtt = (pp + pm - 2 * p0) / (ht * ht);
       const double rtn = std::max(rt.norm(), 1e-12);
@@ -431,10 +431,11 @@ class Planner {
       }
       SurfaceSample x1;
       bool unchecked = folded;
+      double over = 0, under = 0;  // the chord deviations of the step taken
       for (int iter = 0;; ++iter) {
         x1 = at(s, last ? co_.T : t + dt);
         if (folded) break;
-        const double ratio = chord_ratio(s, t, t + dt, centre(x), centre(x1), false);
+        const double ratio = chord_ratio(s, t, t + dt, centre(x), centre(x1), over, under);
         if (ratio <= 1) break;
         if (dt <= dt_floor || iter >= 40) {
           ++forward_floor_hits;
@@ -444,7 +445,8 @@ class Planner {
         dt = std::max(dt_floor, dt * std::clamp(0.99 / std::sqrt(ratio), 0.2, 0.99));
         last = false;
       }
-      if (!folded) chord_ratio(s, t, t + dt, centre(x), centre(x1), true);
+      chord_overcut_max = std::max(chord_overcut_max, over);
+      chord_undercut_max = std::max(chord_undercut_max, under);
       const double len = (x1.position - x.position).norm();
       forward_min = std::min(forward_min, len);
       forward_max = std::max(forward_max, len);
