@@ -19,9 +19,11 @@ SurfaceDerivatives ParametricSurface::derivatives(const Eigen::Vector2d& uv) con
     c.y() = std::clamp(uv.y(), std::min(h, 0.5 * d.height), std::max(d.height - h, 0.5 * d.height));
   }
   auto P = [&](double du, double dv) { return (*this)(c + Eigen::Vector2d(du, dv)).position; };
-  const Eigen::Vector3d p0 = P(0, 0), pu = P(h, 0), mu = P(-h, 0), pv = P(0, h), mv = P(0, -h);
   SurfaceDerivatives r;
   r.sample = (*this)(uv);
+  // (the stencil's centre is the sample itself unless it was moved inside)
+  const Eigen::Vector3d p0 = c == uv ? r.sample.position : P(0, 0), pu = P(h, 0), mu = P(-h, 0), pv = P(0, h),
+                        mv = P(0, -h);
   r.ru = (pu - mu) / (2 * h);
   r.rv = (pv - mv) / (2 * h);
   r.ruu = (pu + mu - 2 * p0) / (h * h);

@@ -235,8 +235,9 @@ class Planner {
       const double hs = hfd_, ht = std::min(0.25, hfd_ / std::max(co_.R - s, 1e-12));
       const double sc = std::max(s, hs), tc = t;
       auto P = [&](double ds, double dt) { return at(sc + ds, tc + dt).position; };
-      const Eigen::Vector3d p0 = P(0, 0), ps = P(hs, 0), ms = P(-hs, 0), pt = P(0, ht), mt = P(0, -ht);
       x = at(s, t);
+      const Eigen::Vector3d p0 = sc == s ? x.position : P(0, 0), ps = P(hs, 0), ms = P(-hs, 0), pt = P(0, ht),
+                            mt = P(0, -ht);
       d.rs = (ps - ms) / (2 * hs);
       d.rt = (pt - mt) / (2 * ht);
       d.rss = (ps + ms - 2 * p0) / (hs * hs);
