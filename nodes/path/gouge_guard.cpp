@@ -2,9 +2,12 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <atomic>
 #include <memory>
 #include <mutex>
@@ -22,12 +25,35 @@ struct BallClearance::Impl {
   double r;
   const Outline* outline;
   PointsAdaptor<Eigen::Vector3d> adaptor{points};
-  KdTree<Eigen::Vector3d, 2> tree{2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
+  KdTree<Eigen::Vector3d, 2> tree{2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};   // by xy
+  KdTree<Eigen::Vector3d, 3> tree3{3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};  // in 3-D
   Impl(const HeightFieldModel& s, const std::vector<Eigen::Vector3d>& p, double radius, const Outline* o)
       : surface(s), points(p), r(radius), outline(o) {
-    tree.buildIndex();
+    tbb::parallel_invoke([&] { tree.buildIndex(); }, [&] { tree3.buildIndex(); });
   }
 };
+
+namespace {
+
+// A nanoflann result set: the point nearest a centre c among those whose xy lies within r of
+// c's (as a radius search over the xy tree takes them), and nearer than a first bound.
+struct NearestInDisc {
+  const std::vector<Eigen::Vector3d>& points;
+  Eigen::Vector2d centre_xy;
+  double r2;
+  double best2;  // squared distance of the nearest found, at first the bound squared
+  std::uint32_t best = std::numeric_limits<std::uint32_t>::max();
+  void init() {}
+  std::size_t size() const { return best == std::numeric_limits<std::uint32_t>::max() ? 0 : 1; }
+  bool full() const { return true; }
+  bool addPoint(double d2, std::uint32_t i) {
+    if (d2 < best2 && (points[i].head<2>() - centre_xy).squaredNorm() < r2) best2 = d2, best = i;
+    return true;
+  }
+  double worstDist() const { return best2; }
+};
+
+}  // namespace
 
 BallClearance::BallClearance(const HeightFieldModel& surface, const std::vector<Eigen::Vector3d>& points,
                              double r, const Outline* outline)
@@ -87,7 +113,19 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     const Eigen::Vector3d d = c - res.foot;
     res.clearance = (d.dot(n) >= 0 ? d.norm() : -d.norm()) - r;
   }
-  // The cloud's own points within r of the centre in xy: a witness that needs no fit.
+  // The cloud's own points within r of the centre in xy: a witness that needs no fit. Only those
+  // nearer the centre than r + the clearance found can lower it, so where one was found the
+  // nearest such point is looked for in 3-D below that bound (a million-point cloud has thousands
+  // in the disc, a few in the ball; the same least value).
+  if (std::isfinite(res.clearance)) {
+    const double cap = r + res.clearance;
+    if (cap > 0) {
+      NearestInDisc nearest{impl_->points, c.head<2>(), r * r, cap * cap};
+      impl_->tree3.findNeighbors(nearest, c.data(), nanoflann::SearchParams(32, 0, false));
+      if (nearest.size()) res.clearance = std::min(res.clearance, (c - impl_->points[nearest.best]).norm() - r);
+    }
+    return res;
+  }
   std::vector<std::pair<std::uint32_t, double>> hits;
   impl_->tree.radiusSearch(c.data(), r * r, hits, nanoflann::SearchParams(32, 0, false));
   for (const auto& h : hits) res.clearance = std::min(res.clearance, (c - impl_->points[h.first]).norm() - r);

@@ -81,12 +81,13 @@ void png_write_to_string(png_structp png, png_bytep data, png_size_t length) {
 
 // 2D projection of the chosen view; depth grows away from the viewer.
 struct View {
-  std::string name;
+  bool iso;  // else from the top (the name compared once: a million cloud points are drawn)
+  explicit View(const std::string& name) : iso(name == "iso") {}
   Eigen::Vector2d operator()(const Eigen::Vector3d& p) const {
-    if (name == "iso") return {(p.x() - p.y()) / std::sqrt(2.0), (p.x() + p.y() + 2 * p.z()) / std::sqrt(6.0)};
+    if (iso) return {(p.x() - p.y()) / std::sqrt(2.0), (p.x() + p.y() + 2 * p.z()) / std::sqrt(6.0)};
     return {p.x(), p.y()};
   }
-  double depth(const Eigen::Vector3d& p) const { return name == "iso" ? p.x() + p.y() - p.z() : -p.z(); }
+  double depth(const Eigen::Vector3d& p) const { return iso ? p.x() + p.y() - p.z() : -p.z(); }
 };
 
 // Maps model (x, y-up) coordinates to pixels with a margin, keeping the aspect.
@@ -135,11 +136,11 @@ Scene make_scene(const Toolpath& path, const PointCloud* cloud, const std::strin
   if (cloud && view != "uv" && cloud->size()) {
     double zl = INFINITY, zh = -INFINITY;
     for (const auto& p : cloud->points) zl = std::min(zl, p.z()), zh = std::max(zh, p.z());
-    std::vector<std::size_t> order(cloud->size());
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(),
-              [&](auto a, auto b) { return V.depth(cloud->points[a]) > V.depth(cloud->points[b]); });
-    for (auto i : order) {
+    // farthest first, so nearer points are drawn over them
+    std::vector<std::pair<double, std::size_t>> order(cloud->size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = {-V.depth(cloud->points[i]), i};
+    std::sort(order.begin(), order.end());
+    for (const auto& [key, i] : order) {
       s.cloud_xy.push_back(V(cloud->points[i]));
       s.cloud_t.push_back(zh > zl ? (cloud->points[i].z() - zl) / (zh - zl) : 0.5);
     }

@@ -94,6 +94,35 @@ TEST(BallClearance, SeesTheCloudsPointsBeyondTheEdge) {
   EXPECT_NEAR(res.clearance, nearest - 2.0, 1e-12);
 }
 
+TEST(BallClearance, ACloudPointTheFitSmoothsAwayStillLimitsIt) {
+  // One point 0.3 mm above the plane (a burr the fit over 20 neighbours mostly smooths away):
+  // balls over and beside it clear it by exactly what the point itself says, the least of
+  // |centre - point| - r over the points within r in xy (brute force here).
+  auto cloud = plane_cloud();
+  const Eigen::Vector3d burr(1, 2, plane_z(1, 2) + 0.3);
+  for (auto& p : cloud)
+    if ((p.head<2>() - burr.head<2>()).norm() < 1e-9) p = burr;
+  HeightFieldModel surface(cloud);
+  BallClearance clearance(surface, cloud, 2.0);
+  int limited_by_burr = 0;
+  for (const Eigen::Vector2d offset : {Eigen::Vector2d(0, 0), Eigen::Vector2d(0.4, -0.3), Eigen::Vector2d(1.5, 0.5)})
+    for (double gap : {0.03, 0.0, -0.01}) {
+      const Eigen::Vector3d foot = burr + Eigen::Vector3d(offset.x(), offset.y(), 0);
+      const Eigen::Vector3d centre = burr + (2.0 + gap) * kPlaneNormal + Eigen::Vector3d(offset.x(), offset.y(), 0);
+      double witness = INFINITY;
+      for (const auto& q : cloud)
+        if ((q.head<2>() - centre.head<2>()).squaredNorm() < 4.0) witness = std::min(witness, (q - centre).norm() - 2.0);
+      const auto res = clearance(centre, foot);
+      ASSERT_TRUE(res.on_surface);
+      EXPECT_LE(res.clearance, witness);
+      if (witness < res.clearance + 1e-12) {
+        EXPECT_EQ(res.clearance, witness) << offset.transpose() << " " << gap;
+        ++limited_by_burr;
+      }
+    }
+  EXPECT_GE(limited_by_burr, 6);  // the burr, not the fit, decides those over and near it
+}
+
 TEST(BallClearance, CoversTheEdgeBandAndGapsAtTheRim) {
   // The part's edge lies about half a spacing beyond a cloud's outermost points: a foot there is
   // on the surface (the field extrapolated), one farther out is not. A foot in a gap the sample
