@@ -230,12 +230,28 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
   outline_tree.buildIndex();
   // The outline nodes lie up to a spacing outside the patch: measure from half a spacing in.
   const double edge_offset = use_loops ? 0.0 : 0.5 * spacing;
-  auto is_interior = [&](double x, double y) {
+  // Whether (x, y) is farther than the margin from the outline. `last` carries what the previous
+  // place of a row learnt: the distance to the outline changes no faster than the place moves,
+  // so while a bound from the last search settles the answer no search is needed (most places
+  // are far inside; the same answers).
+  struct OutlineDistance {
+    Eigen::Vector2d at{NAN, NAN};
+    double lo = -INFINITY, hi = INFINITY;  // bounds on the distance at `at`
+  };
+  auto is_interior = [&](double x, double y, OutlineDistance& last) {
     if (edge_set.empty()) return true;
+    const double threshold = margin + edge_offset, moved = (Eigen::Vector2d(x, y) - last.at).norm();
+    constexpr double kSpare = 1e-9;  // for the rounding of the bounds
+    if (std::isfinite(moved)) {
+      last.at = {x, y}, last.lo -= moved, last.hi += moved;
+      if (last.lo > threshold + kSpare) return true;
+      if (last.hi < threshold - kSpare) return false;
+    }
     std::uint32_t i;
     double d2;
     double q[2] = {x, y};
     outline_tree.knnSearch(q, 1, &i, &d2);
+    last.at = {x, y}, last.lo = last.hi = std::sqrt(d2);
     return std::sqrt(d2) - edge_offset > margin;
   };
   // With loops, a refinement sample is on the patch when its nearest grid node is.
@@ -259,12 +275,13 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
     std::vector<std::uint32_t> cand;
     for (int j = rg.begin(); j < rg.end(); ++j) {
       std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();  // the last sample's piece
+      OutlineDistance outline_distance;
       for (std::size_t i = 0; i < rows[j].size(); ++i) {
         const Raw& s = rows[j][i];
         SimSample& out = res.samples[row_start[j] + i];
         out.x = s.p.x(), out.y = s.p.y(), out.z = s.p.z(), out.weight = s.w;
         index.trace(s.p, s.n, r, T, s.u, out.gouge, out.scallop, cand, &hint);
-        out.interior = is_interior(s.p.x(), s.p.y());
+        out.interior = is_interior(s.p.x(), s.p.y(), outline_distance);
       }
       std::vector<Raw>().swap(rows[j]);
       const std::size_t d = done.fetch_add(row_start[j + 1] - row_start[j]) + row_start[j + 1] - row_start[j];
@@ -309,6 +326,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
       for (std::size_t si = rg.begin(); si < rg.end(); ++si) {
         const SimSample c = res.samples[seeds[si]];
         std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();
+        OutlineDistance outline_distance;
         for (int a = -m; a <= m; ++a)
           for (int b = -m; b <= m; ++b) {
             double du = halfw * spacing * a / m, dv = halfw * spacing * b / m;
@@ -321,7 +339,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
             SimSample& out = extra[slot];
             out.x = x, out.y = y, out.z = z, out.weight = 0;
             index.trace({x, y, z}, n, r, T, u, out.gouge, out.scallop, cand, &hint);
-            out.interior = no_interior || is_interior(x, y);
+            out.interior = no_interior || is_interior(x, y, outline_distance);
             valid[slot] = 1;
           }
       }
