@@ -28,8 +28,9 @@ NodeDecl make_cloud_envelope_node() {
   d.type = "mesh.cloud_envelope";
   // 2: faces folded onto a neighbour leave the side to the rays (MeshDistance::signed_distance);
   // 3: with exact feature edges, vertices at no point bounded by their points' local surfaces;
-  // 4: and the allowance beside them leaves out the faces with a corner so bounded
-  d.version = 4;
+  // 4: and the allowance beside them leaves out the faces with a corner so bounded;
+  // 5: a face's points that a quadric misses by more than a quarter spacing (was one) fit no surface
+  d.version = 5;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "
@@ -45,7 +46,7 @@ NodeDecl make_cloud_envelope_node() {
               "the sine of the largest angle to the faces within 3 spacings), points_beyond and beyond_max (points outside the outer mesh or inside the "
               "inner one, the farthest), unsupported_vertices, unsupported_at, vertices_checked, off_points_max and vertices_without_surface "
               "(with exact_feature_edges: vertices on a feature edge or at no point, the largest bound their points' local "
-              "surfaces gave them, and those where a face's points fit no surface, too few or misfit above a spacing, "
+              "surfaces gave them, and those where a face's points fit no surface, too few or misfit above a quarter spacing, "
               "given the bend allowance instead)}")
       .param_int("neighbours", 16, 1, 1000, "", "points per vertex (the largest of their deviations bounds the part there)")
       .param_float("max_gap", 0, 0, 1000, "mm",

@@ -136,6 +136,23 @@ TEST(CloudEnvelope, ExactFeatureEdgesNeedNoAllowance) {
   EXPECT_EQ(partial.vertices_without_surface, 6u);
 }
 
+TEST(CloudEnvelope, AFacesPointsNoQuadricFitsGiveTheAllowanceNotABound) {
+  // The cube's top rippled by 0.15 mm (period 2 mm), its points 0.5 apart: a quadric over them
+  // misses some by more than a quarter spacing. Its vertices (on the top's edges, or at no
+  // point) then get the bend allowance, not a bound of three such misfits: on the fandisk's cloud
+  // those moved vertices up to 1.1 mm beside neighbours moved 0.05, and the outer mesh folded.
+  Mesh cube = cube_with_feature_edges(4);
+  std::vector<V> pts = box_side_points(0, 10, 0.5, 0);
+  for (auto& p : pts)
+    if (p.z() == 10 && p.x() > 0 && p.x() < 10 && p.y() > 0 && p.y() < 10)
+      p.z() += 0.15 * std::sin(M_PI * p.x()) * std::sin(M_PI * p.y());
+  const CloudEnvelope e = cloud_envelope(cube, pts, 16, 0, 1.0, true);
+  // the top's 25 vertices but the 5 inside it that the ripple leaves on a point (x or y = 5)
+  EXPECT_EQ(e.vertices_without_surface, 20u);
+  EXPECT_LT(e.off_points_max, 1e-9);  // the flat sides' bounds, on them
+  EXPECT_GT(e.bend_allowance_max, 0.0);
+}
+
 TEST(CloudEnvelope, AnEdgeTheMeshPutsInsideThePartIsBoundedByItsFacesPoints) {
   // The part is the cube [0, 10]^3, sampled 0.25 apart but no nearer its edges than 0.3 (a cloud
   // has no points on them). The mesh's top front edge (y = 0, z = 10) lies d = 0.02 low, as where
