@@ -182,6 +182,28 @@ TEST(Simulate, LoweredRasterGougesByTheNormalComponent) {
   EXPECT_TRUE(found) << res.report["fail_reasons"].dump();
 }
 
+TEST(Simulate, InteriorIsFartherThanTheMarginFromTheOutline) {
+  // Every sample's interior flag, by brute force: the nearest outline node (grid nodes just
+  // outside the patch) less half a spacing, against the margin sqrt(8 r h). (The simulation
+  // carries a bound on that distance along each row and searches only where it does not settle
+  // the answer.)
+  const double r = 3, h = 0.02;
+  const auto res = run(raster(r, 0.7), h);
+  ASSERT_FALSE(res.outline.empty());
+  const double margin = std::sqrt(8 * r * h);
+  std::size_t interior = 0, checked = 0;
+  for (const auto& q : res.samples) {
+    double d = INFINITY;
+    for (const auto& o : res.outline) d = std::min(d, (o - Eigen::Vector2d(q.x, q.y)).norm());
+    const double beyond = d - 0.5 * res.spacing - margin;
+    if (std::abs(beyond) < 1e-9) continue;  // on the margin, to rounding
+    EXPECT_EQ(q.interior, beyond > 0) << q.x << " " << q.y;
+    interior += q.interior, ++checked;
+  }
+  EXPECT_GT(interior, checked / 2);  // both kinds seen
+  EXPECT_LT(interior, checked);
+}
+
 TEST(Simulate, RemovedPassDoublesTheGap) {
   const double r = 3, s = 0.7;
   auto res = run(raster(r, s, 0, 10), 0.02);  // pass 10 runs at y = 6
