@@ -5,10 +5,10 @@
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <atomic>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
