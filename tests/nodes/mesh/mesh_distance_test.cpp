@@ -78,6 +78,39 @@ TEST(MeshDistance, AFaceFoldedBackOntoItsNeighbourDoesNotTellTheSide) {
   EXPECT_NEAR(d.signed_distance(V(0.5, 0.5, 0.6)), -0.4, 1e-12);
 }
 
+TEST(MeshDistance, AFaceTheMovesTurnedOverIsLeftToTheRays) {
+  // The 4 x 4 cube's top with two vertices moved (as mesh.cloud_envelope moves a mesh's vertices
+  // along diverging normals): the face (a, b, c) turns over (its normal points down, 130 degrees
+  // from its unmoved place, 81-120 from its neighbours) and crosses them. The point a little
+  // behind it, where it is the nearest face, is outside the solid the moved faces enclose (three
+  // rays agree), but by that face's normal alone it reads inside.
+  const Mesh unmoved = test::cube_mesh(4);
+  Mesh moved = unmoved;
+  const auto index = [&](const Eigen::Vector3d& p) {
+    for (std::uint32_t v = 0; v < unmoved.num_vertices(); ++v)
+      if ((unmoved.vertices[v] - p).norm() < 1e-12) return v;
+    throw std::logic_error("no such vertex");
+  };
+  const std::uint32_t a = index(V(0.5, 0.25, 1)), b = index(V(0.75, 0.25, 1)), c = index(V(0.5, 0.5, 1));
+  moved.vertices[a] = V(0.652, -0.114, 1.296);
+  moved.vertices[b] = V(0.302, 0.618, 1.107);
+  const Eigen::Vector3d n = (moved.vertices[b] - moved.vertices[a]).cross(moved.vertices[c] - moved.vertices[a]).normalized();
+  ASSERT_LT(n.z(), 0);
+  const Eigen::Vector3d behind = (moved.vertices[a] + moved.vertices[b] + moved.vertices[c]) / 3 - 0.02 * n;
+  const MeshDistance d(moved, &unmoved);
+  const std::uint32_t* nearest = moved.face(d.closest_face(behind));
+  EXPECT_EQ(std::vector<std::uint32_t>(nearest, nearest + 3), (std::vector<std::uint32_t>{a, b, c}));
+  EXPECT_NEAR(d(behind), 0.02, 1e-12);
+  EXPECT_NEAR(d.signed_distance(behind), 0.02, 1e-12);
+  EXPECT_NEAR(MeshDistance(moved).signed_distance(behind), -0.02, 1e-12);  // the defect, without its place
+  // Inside the part and far from the fold, the same answer either way.
+  EXPECT_NEAR(d.signed_distance(V(0.5, 0.5, 0.3)), -0.3, 1e-12);
+  EXPECT_NEAR(d.signed_distance(V(0.5, 0.5, -0.4)), 0.4, 1e-12);
+  // Faces that are not the mesh's own are refused.
+  const Mesh other = test::cube_mesh(3);
+  EXPECT_THROW(MeshDistance(moved, &other), std::invalid_argument);
+}
+
 TEST(MeshDistance, TheLeastAlongASegmentIsFoundBetweenItsSamples) {
   const MeshDistance cube(test::cube_mesh(3));
   // Parallel to the edge x = z = 1 at 0.2 from both faces: sqrt(0.08) from y = 0 to 1, more
