@@ -7,9 +7,13 @@
 // nearest to v from the mesh:
 //   out_v = max(0, max_i d_i)   the farthest a point near v lies outside the mesh
 //   in_v  = max(0, max_i -d_i)  the farthest one lies inside
-// Both grow by s sin(theta_v), s the median point spacing, theta_v the largest angle between v's
-// normal and the faces within 3 s of v: an edge or a corner of the part between its points may
-// stick out of the mesh by about that much. The outer
+// Both grow by the bend allowance: s sin(theta_v), s the median point spacing, theta_v the largest
+// angle between v's normal and the faces within 3 s of v: an edge or a corner of the part between
+// its points may stick out of the mesh by about that much; and at the corners of a face that
+// bridges a wider gap g in the cloud (the farthest its centroid and edge midpoints lie from every
+// point), at least g min(1, tan phi_f), phi_f the largest angle between the face and its
+// neighbours: the part may bend anywhere in the gap (out_v for the neighbours below the face's
+// plane, a crest; in_v for those above, a valley). The outer
 // mesh moves v along its normal until the plane of every face around v has moved by out_v (v
 // moves at most 2 out_v), the inner by in_v inward. The points the two meshes still leave out
 // (a fold of the mesh) are counted, with the farthest. Where the cloud samples
@@ -48,12 +52,13 @@ struct CloudEnvelope {
 //         trustworthy inside/outside at edges (MeshDistance::signed_distance).
 // points  #P >= k the cloud the mesh was made from (mm).
 // k       points per vertex; max_gap  0: 4 times the median point spacing.
-// bend    the bend allowance in spacings: s above is bend times the median spacing (1; less on a
+// bend    the bend allowance's factor: s and g above are bend times the spacing and gap (1; less on a
 //         mesh whose edges were restored by mesh.sharpen, which no longer bevels them).
 // exact_feature_edges  the mesh's feature edges are the part's own (mesh.sharpen's restored
 //         edges): the allowance looks only at the faces on a vertex's side of them (reached
-//         without crossing one) that have no corner on one or at no point (those corners are
-//         bounded below, and a face's tilt through them with them), and a vertex on one gets none;
+//         without crossing one; a face's neighbours across the other edges) that have no corner on
+//         one or at no point (those corners are bounded below, and a face's tilt through them with
+//         them), and a vertex on one gets none from its own faces;
 //         elsewhere (a chamfer left) as above.
 //         Instead, a vertex at no point of the cloud (farther than 1e-6 mm from every one: where
 //         mesh.sharpen extrapolated local surfaces to meet at an edge or a corner) is measured

@@ -30,7 +30,9 @@ NodeDecl make_cloud_envelope_node() {
   // 3: with exact feature edges, vertices at no point bounded by their points' local surfaces;
   // 4: and the allowance beside them leaves out the faces with a corner so bounded;
   // 5: a face's points that a quadric misses by more than a quarter spacing (was one) fit no surface
-  d.version = 5;
+  // 6: points beyond the outer or inner mesh: faces its moves turned over leave the side to the rays;
+  //    the bend allowance over the gap a face bridges in the cloud where it is wider than the spacing
+  d.version = 6;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "
@@ -43,7 +45,8 @@ NodeDecl make_cloud_envelope_node() {
               "{points, vertices, neighbours, spacing_median, max_gap, outward_max, outward_p99, outward_median, "
               "outward_max_at, inward_max, inward_p99, inward_median, inward_max_at, surface_uncertainty (the larger "
               "maximum), residual_min, residual_max (the points' signed distances), bend_allowance_max (spacing x "
-              "the sine of the largest angle to the faces within 3 spacings), points_beyond and beyond_max (points outside the outer mesh or inside the "
+              "the sine of the largest angle to the faces within 3 spacings; or a wider gap a face bridges in the "
+              "cloud x the tangent of its angle to its neighbours), points_beyond and beyond_max (points outside the outer mesh or inside the "
               "inner one, the farthest), unsupported_vertices, unsupported_at, vertices_checked, off_points_max and vertices_without_surface "
               "(with exact_feature_edges: vertices on a feature edge or at no point, the largest bound their points' local "
               "surfaces gave them, and those where a face's points fit no surface, too few or misfit above a quarter spacing, "
@@ -54,7 +57,8 @@ NodeDecl make_cloud_envelope_node() {
                    "point spacing")
       .param_float("bend", 1, 0, 10, "spacings",
                    "the bend allowance: where the mesh bends, the part may bend sharper between its points by up to "
-                   "this many median spacings times the sine of the bend (1 for a reconstruction that bevels edges)")
+                   "this many median spacings times the sine of the bend, or as many gaps a face bridges in the cloud "
+                   "times the tangent of its bend against its neighbours (1 for a reconstruction that bevels edges)")
       .param_bool("exact_feature_edges", false,
                   "the mesh's feature edges are the part's own (mesh.sharpen's restored edges): the allowance looks "
                   "only at the faces on a vertex's side of them, and none on them; a chamfer left keeps it. A vertex at "

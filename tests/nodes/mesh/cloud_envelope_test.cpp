@@ -199,7 +199,7 @@ TEST(CloudEnvelope, AMeshInsideThePartIsGrownByTheDistanceOnEverySideEdgeAndCorn
   // faces, edges (along the bisector) and corners (along the diagonal) alike.
   const double a = 0.05;
   const Mesh cube = test::cube_mesh(4, 10);
-  const CloudEnvelope e = cloud_envelope(cube, box_side_points(-a, 10 + a, 0.25, 0.3), 16);
+  const CloudEnvelope e = cloud_envelope(cube, box_side_points(-a, 10 + a, 0.25, 0.1), 16);
   for (std::size_t v = 0; v < cube.num_vertices(); ++v) {
     const V sides = sides_sum(cube.vertices[v]);
     const double b = bend(0.25, int(sides.lpNorm<1>()));
@@ -209,6 +209,39 @@ TEST(CloudEnvelope, AMeshInsideThePartIsGrownByTheDistanceOnEverySideEdgeAndCorn
   }
   for (double r : e.residual) EXPECT_NEAR(r, a, 1e-12);
   EXPECT_EQ(e.points_beyond, 0u);
+}
+
+TEST(CloudEnvelope, AFaceOverAHoleInTheSamplingMayHideABend) {
+  // The part: a roof z = -t |x| with a gentle crest (6 degrees each side) along the y axis. The
+  // cloud samples it every 0.25 but not within 0.45 of the crest; the mesh's vertices lie on it at
+  // x = -2.5, -1.5, ..., 2.5, so its faces between x = -0.5 and 0.5 bridge the hole flat, 0.5 t
+  // below the crest (as the fandisk's cloud left a 0.95 mm face over facets of the part). The
+  // spacing's allowance there is about 0.25 sin 3 degrees = 0.013; the faces' gap (0.5) times the
+  // slope against their neighbours (t) covers the crest.
+  const double t = std::tan(6 * M_PI / 180);
+  const auto roof = [&](double x, double y) { return V(x, y, -t * std::abs(x)); };
+  Mesh m;
+  for (int j = 0; j <= 5; ++j)
+    for (int i = 0; i <= 5; ++i) m.vertices.push_back(roof(-2.5 + i, j));
+  for (std::uint32_t j = 0; j < 5; ++j)
+    for (std::uint32_t i = 0; i < 5; ++i) {
+      const std::uint32_t a = 6 * j + i;
+      m.add_face({a, a + 1, a + 7});
+      m.add_face({a, a + 7, a + 6});
+    }
+  std::vector<V> pts;
+  for (int j = 0; j <= 20; ++j)
+    for (int i = -10; i <= 10; ++i)
+      if (std::abs(i) >= 2) pts.push_back(roof(0.25 * i, 0.25 * j));
+  const CloudEnvelope e = cloud_envelope(m, pts, 16);
+  EXPECT_NEAR(e.spacing_median, 0.25, 1e-12);
+  for (double r : e.residual) EXPECT_NEAR(r, 0, 1e-12);
+  const MeshDistance outer(e.outer);
+  for (double y = 1; y <= 4; y += 0.125) EXPECT_LE(outer.signed_distance(roof(0, y)), 1e-9) << y;
+  // Faces the sampling covers get nothing: the vertices a face or more from the hole.
+  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+    if (std::abs(m.vertices[v].x()) > 1) EXPECT_LT(e.out[v], 1e-8) << m.vertices[v].transpose();
+  EXPECT_NEAR(e.bend_allowance_max, 0.5 * t, 1e-9);
 }
 
 TEST(CloudEnvelope, ABevelledEdgeIsCoveredByTheOuterMesh) {
@@ -241,7 +274,7 @@ TEST(CloudEnvelope, NoiseOnBothSidesBoundsBothWays) {
   // bend allowance at its edges and corners).
   const double a = 0.02;
   const Mesh cube = test::cube_mesh(4, 10);
-  std::vector<V> pts = box_side_points(0, 10, 0.25, 0.3);
+  std::vector<V> pts = box_side_points(0, 10, 0.25, 0.1);
   for (std::size_t i = 0; i < pts.size(); ++i) {
     const V& p = pts[i];
     pts[i] += (i % 2 ? a : -a) * sides_sum(p);
@@ -286,7 +319,7 @@ TEST(CloudEnvelopeNode, ReportsTheBoundsAndWarnsOfUnsupportedVertices) {
   const NodeDecl d = mesh_nodes::make_cloud_envelope_node();
   EXPECT_EQ(d.type, "mesh.cloud_envelope");
   auto cloud = std::make_shared<PointCloud>();
-  cloud->points = box_side_points(-0.05, 10.05, 0.25, 0.3);
+  cloud->points = box_side_points(-0.05, 10.05, 0.25, 0.1);
   auto out = test::run_node(d, {}, {{"mesh", std::make_shared<Mesh>(test::cube_mesh(4, 10))}, {"cloud", cloud}});
   const auto& j = std::dynamic_pointer_cast<const Report>(out.at("report"))->data;
   EXPECT_NEAR(j.at("outward_max").get<double>(), 0.05 + bend(0.25, 3), 1e-12);  // at a corner
