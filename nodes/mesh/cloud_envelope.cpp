@@ -130,10 +130,12 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
     const bool sides = exact_feature_edges && !mesh.feature_edges.empty();
     const MeshEdges edges = mesh_edges(mesh);
     const VertexFaces around = sides ? vertex_faces(mesh) : VertexFaces();
-    std::vector<char> feature(sides ? edges.size() : 0, 0), on_feature(sides ? nv : 0, 0);
+    std::vector<char> feature(edges.size(), 0), on_feature(sides ? nv : 0, 0);
     for (const auto& fe : mesh.feature_edges)
-      if (sides)
-        if (const auto e = edges.find(fe[0], fe[1])) feature[*e] = 1, on_feature[fe[0]] = on_feature[fe[1]] = 1;
+      if (const auto e = edges.find(fe[0], fe[1])) {
+        feature[*e] = 1;
+        if (sides) on_feature[fe[0]] = on_feature[fe[1]] = 1;
+      }
     // The vertices the faces' points bound (below): on a feature edge, or at no point.
     std::vector<char> bounded(sides ? nv : 0, 0);
     for (std::size_t v = 0; v < bounded.size(); ++v) bounded[v] = on_feature[v] || e.gap[v] > kAtPoint;
@@ -187,8 +189,9 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
     });
     // A face bridging a hole in the sampling wider than the spacing: the part may bend anywhere
     // between its corners, as much as the face bends against its neighbours (across its edges that
-    // are not feature edges, with exact ones; and as above, leaving out the faces with a corner the
-    // faces' points bound): up to the gap times the tangent of that angle (at most the gap), out of
+    // are not feature edges: a bend the mesh has as an edge is the allowance's above, and with exact
+    // ones, leaving out the faces with a corner the faces' points bound): up to the gap times the
+    // tangent of that angle (at most the gap), out of
     // the mesh where a neighbour bends away below the face's plane (a crest), into it where one
     // bends up (a valley). The fandisk cloud's mesh had a 0.95 mm face over a hole 0.34 mm from
     // every point, between faces 6 degrees from it on facets of the part: their edge stood 0.035 mm
@@ -204,7 +207,7 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
       double crest = 1, valley = 1;  // the least cosines to the neighbours below and above the face's plane
       for (std::size_t k = 0; k < mesh.face_size(f); ++k) {
         const std::uint32_t edge = edges.face_edge[mesh.face_start[f] + k];
-        if (sides && feature[edge]) continue;
+        if (feature[edge]) continue;
         for (std::size_t j = 0; j < edges.faces_on(edge); ++j)
           if (const std::uint32_t h = edges.faces(edge)[j]; h != f && g.area[h] > 0 && !corner_bounded(h)) {
             double& c = g.normal[f].dot(g.centroid[h] - g.centroid[f]) < 0 ? crest : valley;
