@@ -51,7 +51,7 @@ struct MeshDistance::Impl {
   Tree tree;
 };
 
-MeshDistance::MeshDistance(const Mesh& mesh, const Mesh* unmoved) : impl_(std::make_unique<Impl>()) {
+MeshDistance::MeshDistance(const Mesh& mesh, const Mesh* unmoved) : impl_(std::make_shared<Impl>()) {
   if (unmoved && (unmoved->vertices.size() != mesh.vertices.size() || unmoved->face_start != mesh.face_start ||
                   unmoved->face_vertices != mesh.face_vertices))
     throw std::invalid_argument("the unmoved mesh's faces differ from the mesh's");
@@ -82,21 +82,35 @@ MeshDistance::MeshDistance(const Mesh& mesh, const Mesh* unmoved) : impl_(std::m
 }
 
 MeshDistance::~MeshDistance() = default;
+MeshDistance::MeshDistance(MeshDistance&&) noexcept = default;
+MeshDistance& MeshDistance::operator=(MeshDistance&&) noexcept = default;
 
-double MeshDistance::operator()(const Eigen::Vector3d& p) const {
+MeshDistance MeshDistance::placed(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) const {
+  MeshDistance d;
+  d.impl_ = impl_;
+  d.placed_ = true;
+  // Placed twice: the motions composed.
+  d.rotation_ = rotation * rotation_;
+  d.translation_ = rotation * translation_ + translation;
+  return d;
+}
+
+double MeshDistance::operator()(const Eigen::Vector3d& p) const { return unsigned_in_mesh(to_mesh(p)); }
+
+double MeshDistance::unsigned_in_mesh(const Eigen::Vector3d& p) const {
   if (impl_->tris.empty()) return std::numeric_limits<double>::infinity();
   return std::sqrt(impl_->tree.squared_distance(point(p)));
 }
 
 double MeshDistance::operator()(const Eigen::Vector3d& p, const Eigen::Vector3d& hint) const {
   if (impl_->tris.empty()) return std::numeric_limits<double>::infinity();
-  return std::sqrt(impl_->tree.squared_distance(point(p), point(hint)));
+  return std::sqrt(impl_->tree.squared_distance(point(to_mesh(p)), point(to_mesh(hint))));
 }
 
 Eigen::Vector3d MeshDistance::closest_point(const Eigen::Vector3d& p) const {
   if (impl_->tris.empty()) return p;
-  const Kernel::Point_3 q = impl_->tree.closest_point(point(p));
-  return {q.x(), q.y(), q.z()};
+  const Kernel::Point_3 q = impl_->tree.closest_point(point(to_mesh(p)));
+  return from_mesh({q.x(), q.y(), q.z()});
 }
 
 std::size_t MeshDistance::closest_face(const Eigen::Vector3d& p) const {
@@ -107,14 +121,15 @@ std::size_t MeshDistance::closest_face(const Eigen::Vector3d& p) const {
 std::size_t MeshDistance::closest_face(const Eigen::Vector3d& p, Eigen::Vector3d& at) const {
   at = p;
   if (impl_->tris.empty()) return std::numeric_limits<std::size_t>::max();
-  const auto hit = impl_->tree.closest_point_and_primitive(point(p));
-  at = {hit.first.x(), hit.first.y(), hit.first.z()};
+  const auto hit = impl_->tree.closest_point_and_primitive(point(to_mesh(p)));
+  at = from_mesh({hit.first.x(), hit.first.y(), hit.first.z()});
   return impl_->face_of[std::size_t(hit.second - impl_->tris.cbegin())];
 }
 
 double MeshDistance::ray_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& d) const {
   if (impl_->tris.empty()) return std::numeric_limits<double>::infinity();
-  const Kernel::Ray_3 ray(point(p), Kernel::Direction_3(d.x(), d.y(), d.z()));
+  const Eigen::Vector3d dm = placed_ ? Eigen::Vector3d(rotation_.transpose() * d) : d;
+  const Kernel::Ray_3 ray(point(to_mesh(p)), Kernel::Direction_3(dm.x(), dm.y(), dm.z()));
   const auto hit = impl_->tree.first_intersection(ray);
   if (!hit) return std::numeric_limits<double>::infinity();
   if (const Kernel::Point_3* q = boost::get<Kernel::Point_3>(&hit->first))
@@ -122,7 +137,9 @@ double MeshDistance::ray_distance(const Eigen::Vector3d& p, const Eigen::Vector3
   return 0;  // the ray runs along a face from p
 }
 
-double MeshDistance::signed_distance(const Eigen::Vector3d& p) const {
+double MeshDistance::signed_distance(const Eigen::Vector3d& p) const { return signed_in_mesh(to_mesh(p)); }
+
+double MeshDistance::signed_in_mesh(const Eigen::Vector3d& p) const {
   if (impl_->tris.empty()) return std::numeric_limits<double>::infinity();
   const Kernel::Point_3 q = point(p);
   const auto [foot, prim] = impl_->tree.closest_point_and_primitive(q);
@@ -151,10 +168,12 @@ double MeshDistance::signed_distance(const Eigen::Vector3d& p) const {
   return odd >= 2 ? -d : d;
 }
 
-double MeshDistance::least_along(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double step, double floor,
+double MeshDistance::least_along(const Eigen::Vector3d& a_placed, const Eigen::Vector3d& b_placed, double step, double floor,
                                  double eps, Eigen::Vector3d& where, std::size_t& evaluations,
                                  bool is_signed) const {
-  auto distance = [&](const Eigen::Vector3d& p) { return is_signed ? signed_distance(p) : (*this)(p); };
+  // In the mesh's own frame, `where` taken back at the end.
+  const Eigen::Vector3d a = to_mesh(a_placed), b = to_mesh(b_placed);
+  auto distance = [&](const Eigen::Vector3d& p) { return is_signed ? signed_in_mesh(p) : unsigned_in_mesh(p); };
   const double L = (b - a).norm();
   const int k = std::max(1, static_cast<int>(std::ceil(L / step)));
   std::vector<double> d(k + 1);
@@ -192,6 +211,7 @@ double MeshDistance::least_along(const Eigen::Vector3d& a, const Eigen::Vector3d
     todo.push_back({t0, tm, d0, dm});
     todo.push_back({tm, t1, dm, d1});
   }
+  where = from_mesh(where);
   return bound;
 }
 

@@ -285,7 +285,7 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
       for (auto& v : placed.vertices) v = setup.rotation * v + setup.translation;
       double top_z = -INFINITY, bottom_z = INFINITY;
       for (const auto& v : placed.vertices) top_z = std::max(top_z, v.z()), bottom_z = std::min(bottom_z, v.z());
-      const MeshDistance placed_distance(placed);
+      const MeshDistance placed_distance = distance.placed(setup.rotation, setup.translation);
       const std::vector<Eigen::Vector3d> placed_normal = face_geometry(placed).normal;
       // Each cell's ball dropped from above the part; kept where it touches the part from the
       // outside of the face it touches (through a hole in the mesh, a ball would fall onto the

@@ -32,6 +32,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
   std::vector<Toolpath> cuts(setups.size());
   std::vector<SetupProgram> progs(setups.size());
   const double tolerance = part_clearance_tolerance(path.chord_error);
+  const MeshDistance part_distance(part);  // one tree, placed in each setup's frame
   for (std::size_t index = 0; index < setups.size(); ++index) {
     const Setup& s = setups[index];
     Toolpath& local = cuts[index];
@@ -54,11 +55,10 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
       }
     }
     if (local.passes.empty() || part.num_faces() == 0) continue;
-    Mesh placed = part;
-    for (auto& v : placed.vertices) v = s.rotation * v + s.translation;
     double top_z = -std::numeric_limits<double>::infinity();
-    for (const auto& v : placed.vertices) top_z = std::max(top_z, v.z());
-    const KeepOffStats kept = keep_off_part(local, max_drop, MeshDistance(placed), top_z, tolerance);
+    for (const auto& v : part.vertices) top_z = std::max(top_z, (s.rotation * v + s.translation).z());
+    const KeepOffStats kept =
+        keep_off_part(local, max_drop, part_distance.placed(s.rotation, s.translation), top_z, tolerance);
     SetupProgram& prog = progs[index];
     prog.lifted = kept.lifted, prog.lift_max = kept.lift_max, prog.dropped = kept.dropped, prog.splits = kept.splits;
     prog.lowered = kept.lowered, prog.lower_max = kept.lower_max;
@@ -89,13 +89,13 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     // Every ball left out (no clear way to any of them; an ABC plate's noisy cloud had such a
     // clamping, and linking nothing stopped the whole part): no program for this setup.
     if (local.passes.empty()) continue;
-    Mesh placed = part;
-    for (auto& v : placed.vertices) v = s.rotation * v + s.translation;
+    std::vector<Eigen::Vector3d> placed(part.vertices.size());
+    for (std::size_t v = 0; v < placed.size(); ++v) placed[v] = s.rotation * part.vertices[v] + s.translation;
     SetupProgram& prog = progs[index];
     prog.setup = index;
-    const MeshDistance distance(placed);
+    const MeshDistance distance = part_distance.placed(s.rotation, s.translation);
     LinkOptions linking = link;
-    if (placed.num_faces() > 0) {
+    if (part.num_faces() > 0) {
       // Links kept as far off the part as the balls: checked against its faces, not only its
       // vertices.
       const double r = path.tool_radius;
@@ -106,7 +106,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
         return distance.least_along(a, b, r / 4, r - tolerance, 1e-4, nearest, evaluations, false) >= r - tolerance;
       };
     }
-    const LinkedPath linked = link_passes(local, placed.vertices, linking);
+    const LinkedPath linked = link_passes(local, placed, linking);
     prog.name = s.name;
     prog.file = "setup_" + std::to_string(out.size() + 1) + ".ngc";
     GCodeOptions g = gcode;

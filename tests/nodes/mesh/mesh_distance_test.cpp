@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <cmath>
 #include <limits>
 #include <random>
@@ -109,6 +111,45 @@ TEST(MeshDistance, AFaceTheMovesTurnedOverIsLeftToTheRays) {
   // Faces that are not the mesh's own are refused.
   const Mesh other = test::cube_mesh(3);
   EXPECT_THROW(MeshDistance(moved, &other), std::invalid_argument);
+}
+
+TEST(MeshDistance, APlacedOneAnswersAsTheMovedMesh) {
+  // The cube with a corner cut off (no symmetry to hide a wrong motion), moved rigidly: the
+  // placed view of its tree answers every question as a tree of the moved mesh does.
+  Mesh m = test::cube_mesh(3);
+  for (auto& v : m.vertices)
+    if (v.x() > 0.9 && v.y() > 0.9 && v.z() > 0.9) v = V(0.8, 0.8, 0.8);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, V(1, 2, 3).normalized()).toRotationMatrix();
+  const V t(5, -2, 0.5);
+  Mesh moved = m;
+  for (auto& v : moved.vertices) v = R * v + t;
+  const MeshDistance base(m), truth(moved);
+  const MeshDistance placed = base.placed(R, t);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(-1, 2);
+  for (int i = 0; i < 200; ++i) {
+    const V p = R * V(U(rng), U(rng), U(rng)) + t, q = R * V(U(rng), U(rng), U(rng)) + t;
+    EXPECT_NEAR(placed(p), truth(p), 1e-12);
+    EXPECT_NEAR(placed.signed_distance(p), truth.signed_distance(p), 1e-12);
+    EXPECT_LT((placed.closest_point(p) - truth.closest_point(p)).norm(), 1e-12);
+    V at, at_truth;  // the face may differ where two hold the nearest point (an edge)
+    placed.closest_face(p, at), truth.closest_face(p, at_truth);
+    EXPECT_LT((at - at_truth).norm(), 1e-12);
+    const V d = (q - p).normalized();
+    const double hit = placed.ray_distance(p, d), hit_truth = truth.ray_distance(p, d);
+    if (std::isinf(hit_truth)) EXPECT_TRUE(std::isinf(hit));
+    else EXPECT_NEAR(hit, hit_truth, 1e-12);
+    V where, where_truth;
+    std::size_t n = 0;
+    EXPECT_NEAR(placed.least_along(p, q, 0.1, 0.3, 1e-6, where, n), truth.least_along(p, q, 0.1, 0.3, 1e-6, where_truth, n), 1e-9);
+    EXPECT_LT((where - where_truth).norm(), 1e-6);
+  }
+  // Placed again: the motions compose.
+  const Eigen::Matrix3d R2 = Eigen::AngleAxisd(-1.1, V(0, 1, 0)).toRotationMatrix();
+  const V t2(0, 0, 3), p(7, 1, 4);
+  Mesh twice = moved;
+  for (auto& v : twice.vertices) v = R2 * v + t2;
+  EXPECT_NEAR(placed.placed(R2, t2).signed_distance(p), MeshDistance(twice).signed_distance(p), 1e-12);
 }
 
 TEST(MeshDistance, TheLeastAlongASegmentIsFoundBetweenItsSamples) {
