@@ -148,8 +148,10 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     out.clearance = ball_clearance(distance, s.p, n, r, tol);
     if (!(out.clearance >= 0)) {
       out.kind = 2;
-      double lo = 0, hi = r;  // the largest radius that reaches, by bisection
-      for (int it = 0; it < 30; ++it) {
+      // The largest radius that reaches, by bisection, to r / 32768 below (6e-5 mm at r = 2): 30
+      // halvings were a third of the fandisk cloud's certificate, 68 s -> 47 s.
+      double lo = 0, hi = r;
+      for (int it = 0; it < 15; ++it) {
         const double mid = 0.5 * (lo + hi);
         (reaches(s.p, n, mid) ? lo : hi) = mid;
       }
