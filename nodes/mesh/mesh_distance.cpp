@@ -52,8 +52,7 @@ struct MeshDistance::Impl {
 };
 
 MeshDistance::MeshDistance(const Mesh& mesh, const Mesh* unmoved) : impl_(std::make_shared<Impl>()) {
-  if (unmoved && (unmoved->vertices.size() != mesh.vertices.size() || unmoved->face_start != mesh.face_start ||
-                  unmoved->face_vertices != mesh.face_vertices))
+  if (unmoved && !unmoved->same_faces(mesh))
     throw std::invalid_argument("the unmoved mesh's faces differ from the mesh's");
   impl_->tris = triangles(mesh);
   impl_->face_of.reserve(impl_->tris.size());

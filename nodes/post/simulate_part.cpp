@@ -111,14 +111,11 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
 
   const MeshDistance distance(part);
   if (outer && outer->num_faces() == 0) throw std::invalid_argument("the outer mesh has no face");
-  if (inner_mesh && (inner_mesh->vertices.size() != part.vertices.size() || inner_mesh->face_start != part.face_start ||
-                     inner_mesh->face_vertices != part.face_vertices))
+  if (inner_mesh && !inner_mesh->same_faces(part))
     throw std::invalid_argument("the inner mesh is not the part's mesh with its vertices moved (its faces differ)");
   // The outer mesh is the part's moved outward: a face the moves turned over does not tell the side.
-  const bool outer_moved = outer && outer->face_start == part.face_start && outer->face_vertices == part.face_vertices &&
-                           outer->vertices.size() == part.vertices.size();
   const std::unique_ptr<const MeshDistance> outer_distance =
-      outer ? std::make_unique<const MeshDistance>(*outer, outer_moved ? &part : nullptr) : nullptr;
+      outer ? std::make_unique<const MeshDistance>(*outer, outer->same_faces(part) ? &part : nullptr) : nullptr;
   const MeshDistance& gouge_distance = outer ? *outer_distance : distance;  // what balls must stay off
   const CentreIndex keep_off(edges_to_keep_off(part, tris, o.feature_angle), std::max(spacing, margin / 2));
   const CentreIndex centres(feed, centre_piece_length(feed, spacing, r));

@@ -46,6 +46,11 @@ struct Mesh final : Value {
   bool has_normals() const { return !normals.empty() && normals.size() == vertices.size(); }
   bool has_labels() const { return !face_label.empty() && face_label.size() == num_faces(); }
   bool all_triangles() const { return face_vertices.size() == 3 * num_faces(); }
+  // The same faces over as many vertices: a copy of `other` with its vertices moved.
+  bool same_faces(const Mesh& other) const {
+    return vertices.size() == other.vertices.size() && face_start == other.face_start &&
+           face_vertices == other.face_vertices;
+  }
 
   std::string type_name() const override { return "Mesh"; }
   void serialize(std::ostream& out) const override;

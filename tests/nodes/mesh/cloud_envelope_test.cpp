@@ -240,7 +240,9 @@ TEST(CloudEnvelope, AFaceOverAHoleInTheSamplingMayHideABend) {
   for (double y = 1; y <= 4; y += 0.125) EXPECT_LE(outer.signed_distance(roof(0, y)), 1e-9) << y;
   // Faces the sampling covers get nothing: the vertices a face or more from the hole.
   for (std::size_t v = 0; v < m.num_vertices(); ++v)
-    if (std::abs(m.vertices[v].x()) > 1) EXPECT_LT(e.out[v], 1e-8) << m.vertices[v].transpose();
+    if (std::abs(m.vertices[v].x()) > 1) {
+      EXPECT_LT(e.out[v], 1e-8) << m.vertices[v].transpose();
+    }
   EXPECT_NEAR(e.bend_allowance_max, 0.5 * t, 1e-9);
 }
 
