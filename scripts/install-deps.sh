@@ -10,7 +10,8 @@ packages=(build-essential cmake ninja-build ccache pkg-config
   libocct-data-exchange-dev libocct-visualization-dev libocct-modeling-algorithms-dev  # B-spline fit, STEP
   blender  # mesh.quad_remesh runs QuadriFlow inside Blender, headless
   slurm-wlm munge  # batch --executor slurm; tests/cli/slurm_test.cpp starts a one-node cluster
-  clang libclang-rt-14-dev)  # scripts/fuzz.sh: clang++ and libFuzzer's runtime (libclang_rt.fuzzer-x86_64.a)
+  clang libclang-rt-14-dev  # scripts/fuzz.sh: clang++ and libFuzzer's runtime (libclang_rt.fuzzer-x86_64.a)
+  python3-numpy python3-scipy python3-matplotlib)  # bench/*.py and ../shared/tools, the measurements
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
