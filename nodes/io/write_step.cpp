@@ -12,6 +12,8 @@
 #include <Message_Printer.hxx>
 #include <STEPControl_Reader.hxx>
 #include <STEPControl_Writer.hxx>
+#include <StepData_StepModel.hxx>
+#include <StepShape_AdvancedFace.hxx>
 #include <ShapeAnalysis_FreeBounds.hxx>
 #include <Standard_Failure.hxx>
 #include <TColStd_Array1OfInteger.hxx>
@@ -107,9 +109,12 @@ StepSummary read_step_summary(const std::string& path) {
   quiet_opencascade();
   STEPControl_Reader reader;
   if (reader.ReadFile(path.c_str()) != IFSelect_RetDone) throw std::runtime_error("cannot read STEP file '" + path + "'");
+  StepSummary s;
+  const Handle(StepData_StepModel) model = reader.StepModel();
+  for (int e = 1; e <= model->NbEntities(); ++e)
+    s.file_faces += model->Value(e)->IsKind(STANDARD_TYPE(StepShape_AdvancedFace));
   reader.TransferRoots();
   const TopoDS_Shape shape = reader.OneShape();
-  StepSummary s;
   // Each face and shell once, however often the shape's structure reaches it.
   TopTools_IndexedMapOfShape shells, faces;
   TopExp::MapShapes(shape, TopAbs_SHELL, shells);

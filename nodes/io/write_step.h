@@ -15,6 +15,9 @@ struct WriteStepOptions {
 
 // What a STEP file holds, as OpenCASCADE reads it back.
 struct StepSummary {
+  std::size_t file_faces = 0;  // ADVANCED_FACE entities in the file: what was written
+  // After the reader's shape healing, which may split a face whose patch pinches or twists (the
+  // fandisk's noisy cloud gave a 2 x 19-pole sliver whose edges cross near its tip: 3 faces).
   std::size_t faces = 0, shells = 0, free_edges = 0;  // free: on one face only (outlines, gaps)
   std::size_t bspline_faces = 0;                      // faces whose surface is a B-spline
 };

@@ -10,7 +10,7 @@ namespace scallop::io_nodes {
 NodeDecl make_write_step_node() {
   NodeDecl d;
   d.type = "io.write_step";
-  d.version = 1;
+  d.version = 2;
   d.description =
       "writes fitted B-spline patches as a STEP file (AP214, mm; faces sewn along shared borders) that CAD tools "
       "open, and reads it back to check";
@@ -18,7 +18,7 @@ NodeDecl make_write_step_node() {
   d.cache_on_disk = false;
   d.input("surfaces", "Surfaces", "the patches (surface.fit_bspline)")
       .output("file", "File", "the written file")
-      .output("report", "Report", "{faces, bspline_faces, shells, free_edges}: the file as OpenCASCADE reads it back")
+      .output("report", "Report", "{file_faces, faces, bspline_faces, shells, free_edges}: the faces in the file, and the file as OpenCASCADE reads it back (faces after its shape healing)")
       .param_output_path("path", "the file to write (required, .step or .stp), relative to the output folder (-o); a "
                                  "path that would leave it is refused");
   d.options<WriteStepOptions>()
@@ -35,12 +35,16 @@ NodeDecl make_write_step_node() {
               write_step(*surfaces, path, o);
               back = read_step_summary(path);
             }));
-    if (back.faces != surfaces->patches.size())
-      throw NodeError("the STEP file reads back with " + std::to_string(back.faces) + " faces, not the " +
+    if (back.file_faces != surfaces->patches.size())
+      throw NodeError("the STEP file holds " + std::to_string(back.file_faces) + " faces, not the " +
                       std::to_string(surfaces->patches.size()) + " patches written");
+    if (back.faces != back.file_faces)
+      ctx.warn("OpenCASCADE's reader splits the file's " + std::to_string(back.file_faces) + " faces into " +
+               std::to_string(back.faces) + " (its shape healing cuts a patch that pinches or twists); the file holds "
+               "one face per patch");
     Report r;
-    r.data = {{"faces", back.faces}, {"bspline_faces", back.bspline_faces}, {"shells", back.shells},
-              {"free_edges", back.free_edges}};
+    r.data = {{"file_faces", back.file_faces}, {"faces", back.faces}, {"bspline_faces", back.bspline_faces},
+              {"shells", back.shells}, {"free_edges", back.free_edges}};
     ctx.set("report", std::move(r));
   };
   return d;
