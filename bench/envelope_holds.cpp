@@ -5,17 +5,20 @@
 //   envelope_holds OUTER.ply INNER.ply MESH.ply TRUE_MESH [SCALE] [SAMPLES]
 //
 // OUTER/INNER: the node's outputs (io.write_mesh); MESH: the mesh it moved (their faces, to tell
-// a face the moves turned over); TRUE_MESH: the part (OFF/STL/PLY) times SCALE (1); SAMPLES: at
-// most, 1 000 000. Prints, for each bound, how many samples lie beyond it by more than 1 um, 5 um and
-// 20 um, and the farthest with where.
+// a face the moves turned over); TRUE_MESH: the part (OFF/STL/PLY) times SCALE (1), or with
+// CLOUD=1 a cloud whose points are the places; SAMPLES: at most, 1 000 000. Prints, for each bound, how many samples lie beyond it by more than 1 um, 5 um and
+// 20 um, and the farthest with where; then the places beyond by more than 5 um, gathered within
+// 1 mm of each other: how many, and the farthest of each.
 #include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <string>
 #include <vector>
 
+#include "nodes/io/read_cloud.h"
 #include "nodes/io/read_mesh.h"
 #include "nodes/mesh/mesh_distance.h"
 #include "nodes/post/part_samples.h"
@@ -44,6 +47,25 @@ void report(const char* what, const std::vector<Eigen::Vector3d>& pts, const std
   }
   std::printf("%s: %zu / %zu / %zu of %zu samples beyond by > 0.001 / 0.005 / 0.02 mm; farthest %.4f mm at (%.3f, %.3f, %.3f)\n",
               what, over[0], over[1], over[2], beyond.size(), beyond[far], pts[far].x(), pts[far].y(), pts[far].z());
+  struct Place {
+    std::size_t farthest, count;
+  };
+  std::vector<Place> places;
+  for (std::size_t i = 0; i < beyond.size(); ++i) {
+    if (!(beyond[i] > 0.005)) continue;
+    Place* near = nullptr;
+    for (Place& p : places)
+      if ((pts[p.farthest] - pts[i]).norm() < 1.0) near = &p;
+    if (!near) {
+      places.push_back({i, 1});
+      continue;
+    }
+    ++near->count;
+    if (beyond[i] > beyond[near->farthest]) near->farthest = i;
+  }
+  for (const Place& p : places)
+    std::printf("  %zu samples near (%.3f, %.3f, %.3f), by up to %.4f mm\n", p.count, pts[p.farthest].x(),
+                pts[p.farthest].y(), pts[p.farthest].z(), beyond[p.farthest]);
 }
 
 }  // namespace
@@ -55,8 +77,13 @@ int main(int argc, char** argv) {
   }
   try {
     const Mesh outer = scallop::read_mesh(argv[1]), inner = scallop::read_mesh(argv[2]), mesh = scallop::read_mesh(argv[3]);
-    const Mesh truth = scallop::read_mesh(argv[4], argc > 5 ? std::stod(argv[5]) : 1.0);
-    const std::vector<Eigen::Vector3d> pts = samples_of(truth, argc > 6 ? std::stoul(argv[6]) : 1000000);
+    const double scale = argc > 5 ? std::stod(argv[5]) : 1.0;
+    // CLOUD=1: the fourth file is a cloud, and its points are the places.
+    const char* cloud = std::getenv("CLOUD");
+    const std::vector<Eigen::Vector3d> pts =
+        cloud && std::string(cloud) == "1"
+            ? scallop::read_cloud(argv[4], scale).points
+            : samples_of(scallop::read_mesh(argv[4], scale), argc > 6 ? std::stoul(argv[6]) : 1000000);
     const scallop::MeshDistance to_outer(outer, &mesh), to_inner(inner, &mesh);
     std::vector<double> outside(pts.size()), inside(pts.size());
     tbb::parallel_for(std::size_t(0), pts.size(), [&](std::size_t i) {

@@ -32,7 +32,8 @@ NodeDecl make_cloud_envelope_node() {
   // 5: a face's points that a quadric misses by more than a quarter spacing (was one) fit no surface
   // 6: points beyond the outer or inner mesh: faces its moves turned over leave the side to the rays;
   //    the bend allowance over the gap a face bridges in the cloud where it is wider than the spacing
-  d.version = 6;
+  // 7: points beyond: faces turned more than 10 degrees leave the side to the rays (was 90)
+  d.version = 7;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "

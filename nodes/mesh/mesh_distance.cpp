@@ -47,9 +47,12 @@ Triangles triangles(const Mesh& m) {
 struct MeshDistance::Impl {
   Triangles tris;
   std::vector<std::size_t> face_of;  // #tris: the polygon each triangle was fanned from
-  std::vector<char> folded;          // per polygon: turned more than 150 degrees from a neighbour, or 90 from its unmoved place
+  std::vector<char> folded;          // per polygon: turned more than 150 degrees from a neighbour, or 10 from its unmoved place
   Tree tree;
 };
+
+// A face of a moved mesh whose normal is within 10 degrees of its unmoved place's tells the side.
+constexpr double kTrustedTurnCos = 0.98480775301220802;  // cos 10 degrees
 
 MeshDistance::MeshDistance(const Mesh& mesh, const Mesh* unmoved) : impl_(std::make_shared<Impl>()) {
   if (unmoved && !unmoved->same_faces(mesh))
@@ -70,11 +73,14 @@ MeshDistance::MeshDistance(const Mesh& mesh, const Mesh* unmoved) : impl_(std::m
       for (std::size_t j = i + 1; j < edges.faces_on(e); ++j)
         if (normal[edges.faces(e)[i]].dot(normal[edges.faces(e)[j]]) < -0.866)
           impl_->folded[edges.faces(e)[i]] = impl_->folded[edges.faces(e)[j]] = 1;
-  // Turned over by the moves: the fandisk cloud's outer mesh had a face turned 111 degrees that
-  // crossed its neighbours, and a ball centre 2.3 mm outside the part read 2.0 mm inside by it.
+  // Turned by the moves: the fandisk cloud's outer mesh had a face turned 111 degrees that
+  // crossed its neighbours, and a ball centre 2.3 mm outside the part read 2.0 mm inside by it;
+  // its noisy cloud's, one turned 82 degrees (4.0 mm). A face turned less than 90 degrees may
+  // cross its neighbours too (a search over two moved corners of a cube's face found its normal
+  // wrong at turns down to 43 degrees), so every face turned more than 10 goes to the rays.
   if (unmoved)
     for (std::size_t f = 0; f < mesh.num_faces(); ++f)
-      if (normal[f].dot(face_area_vector(*unmoved, f)) < 0) impl_->folded[f] = 1;
+      if (!(normal[f].dot(face_area_vector(*unmoved, f).normalized()) >= kTrustedTurnCos)) impl_->folded[f] = 1;
   impl_->tree.insert(impl_->tris.begin(), impl_->tris.end());
   impl_->tree.build();
   impl_->tree.accelerate_distance_queries();

@@ -16,8 +16,9 @@ class MeshDistance {
  public:
   // mesh     any polygons, each fanned from its first corner.
   // unmoved  null, or the same faces before mesh's vertices were moved (mesh.cloud_envelope's outer
-  //          and inner meshes are its input moved along the normals): a face turned more than 90
-  //          degrees against its place there is folded too (signed_distance). Faces that differ:
+  //          and inner meshes are its input moved along the normals): a face turned more than 10
+  //          degrees against its place there may cross its neighbours, and is left to the rays too
+  //          (signed_distance). Faces that differ:
   //          std::invalid_argument.
   explicit MeshDistance(const Mesh& mesh, const Mesh* unmoved = nullptr);
   ~MeshDistance();
@@ -45,8 +46,8 @@ class MeshDistance {
   // Signed distance, negative inside the part: the side of the nearest face's outward normal
   // (corners counter-clockwise seen from outside) where the nearest point lies inside a face;
   // where it lies on an edge or a corner, where faces disagree, or on a face folded back onto a
-  // neighbour (normals more than 150 degrees apart: it faces the wrong way) or turned over against
-  // its unmoved place (a fold the moves made, which may cross its neighbours), the parity of the
+  // neighbour (normals more than 150 degrees apart: it faces the wrong way) or turned more than 10
+  // degrees against its unmoved place (the moves may have folded it across its neighbours), the parity of the
   // crossings of three skew rays (majority), which needs a closed mesh. Within 1e-9 mm of the
   // faces, that distance unsigned. +infinity without faces.
   double signed_distance(const Eigen::Vector3d& p) const;

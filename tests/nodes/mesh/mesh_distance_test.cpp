@@ -108,6 +108,23 @@ TEST(MeshDistance, AFaceTheMovesTurnedOverIsLeftToTheRays) {
   // Inside the part and far from the fold, the same answer either way.
   EXPECT_NEAR(d.signed_distance(V(0.5, 0.5, 0.3)), -0.3, 1e-12);
   EXPECT_NEAR(d.signed_distance(V(0.5, 0.5, -0.4)), 0.4, 1e-12);
+  // Turned less than 90 degrees, a face may still cross its neighbours: with these two moves
+  // (found by a random search over moves of a and b) it turns 43 degrees and its normal reads the
+  // point behind it inside, where the rays find it outside.
+  for (const auto& [ma, mb] : {std::pair{V(0.823, 0.647, 1.302), V(0.583, 0.571, 1.102)},
+                               std::pair{V(0.623, 0.552, 1.214), V(0.440, 0.591, 1.066)}}) {
+    Mesh bent = unmoved;
+    bent.vertices[a] = ma;
+    bent.vertices[b] = mb;
+    const Eigen::Vector3d nb = (mb - ma).cross(bent.vertices[c] - ma).normalized();
+    EXPECT_LT(nb.z(), std::cos(40 * M_PI / 180));
+    const Eigen::Vector3d p = (ma + mb + bent.vertices[c]) / 3 - 0.02 * nb;
+    const MeshDistance bd(bent, &unmoved);
+    const std::uint32_t* f = bent.face(bd.closest_face(p));
+    EXPECT_EQ(std::vector<std::uint32_t>(f, f + 3), (std::vector<std::uint32_t>{a, b, c}));
+    EXPECT_NEAR(bd.signed_distance(p), 0.02, 1e-12);
+    EXPECT_NEAR(MeshDistance(bent).signed_distance(p), -0.02, 1e-12);  // by the normal
+  }
   // Faces that are not the mesh's own are refused.
   const Mesh other = test::cube_mesh(3);
   EXPECT_THROW(MeshDistance(moved, &other), std::invalid_argument);
