@@ -31,7 +31,7 @@ constexpr double kMostMisfit = 0.25;  // spacings: a face's local surface missin
 }  // namespace
 
 CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d>& points, int k, double max_gap,
-                             double bend_spacings, bool exact_feature_edges) {
+                             double bend_spacings, bool exact_feature_edges, double spread) {
   if (mesh.num_faces() == 0) throw std::invalid_argument("the mesh has no face");
   if (k < 1) throw std::invalid_argument("k must be >= 1");
   if (points.size() < std::size_t(k) || points.size() < 2)
@@ -41,6 +41,7 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
     if (!p.allFinite()) throw std::invalid_argument("the cloud has a point that is not finite");
   if (!(max_gap >= 0)) throw std::invalid_argument("max_gap must be >= 0");
   if (!(bend_spacings >= 0)) throw std::invalid_argument("bend must be >= 0");
+  if (!(spread >= 0)) throw std::invalid_argument("spread must be >= 0");
 
   CloudEnvelope e;
   const MeshDistance distance(mesh);
@@ -73,10 +74,19 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
       const std::size_t found = tree.knnSearch(mesh.vertices[v].data(), std::size_t(k), idx.data(), d2.data());
       e.gap[v] = std::sqrt(d2[0]);
+      double mean = 0, sq = 0;
       for (std::size_t j = 0; j < found; ++j) {
         e.out[v] = std::max(e.out[v], e.residual[idx[j]]);
         e.in[v] = std::max(e.in[v], -e.residual[idx[j]]);
+        mean += e.residual[idx[j]];
       }
+      mean /= double(found);
+      for (std::size_t j = 0; j < found; ++j) sq += (e.residual[idx[j]] - mean) * (e.residual[idx[j]] - mean);
+      // The noise's spread: the largest of k deviations reaches only about 1.8 of it above their
+      // mean, and the part may stand above that where the noise hides its shape.
+      const double s = spread * std::sqrt(sq / double(found));
+      e.out[v] += s;
+      e.in[v] += s;
     }
   });
   for (double g : e.gap) e.unsupported += g > e.max_gap;

@@ -32,7 +32,8 @@ NodeDecl make_cloud_envelope_node() {
   // 5: a face's points that a quadric misses by more than a quarter spacing (was one) fit no surface
   // 6: points beyond the outer or inner mesh: faces its moves turned over leave the side to the rays;
   //    the bend allowance over the gap a face bridges in the cloud where it is wider than the spacing
-  // 7: points beyond: faces turned more than 10 degrees leave the side to the rays (was 90)
+  // 7: points beyond: faces turned more than 10 degrees leave the side to the rays (was 90); the
+  //    points' spread added to both bounds (spread, 1)
   d.version = 7;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
@@ -60,6 +61,11 @@ NodeDecl make_cloud_envelope_node() {
                    "the bend allowance: where the mesh bends, the part may bend sharper between its points by up to "
                    "this many median spacings times the sine of the bend, or as many gaps a face bridges in the cloud "
                    "times the tangent of its bend against its neighbours (1 for a reconstruction that bevels edges)")
+      .param_float("spread", 1, 0, 10, "standard deviations",
+                   "added to both bounds at each vertex: this many standard deviations of its points' distances about "
+                   "their mean (the noise; 0 on a mesh through its points): the largest of 16 noisy deviations reaches "
+                   "only about 1.8 above their mean, and where the noise hides the part's shape (a mild edge the "
+                   "denoising rounds) the part may stand above that")
       .param_bool("exact_feature_edges", false,
                   "the mesh's feature edges are the part's own (mesh.sharpen's restored edges): the allowance looks "
                   "only at the faces on a vertex's side of them, and none on them; a chamfer left keeps it. A vertex at "
@@ -71,7 +77,7 @@ NodeDecl make_cloud_envelope_node() {
     CloudEnvelope e;
     try {
       e = cloud_envelope(*mesh, cloud->points, int(ctx.integer("neighbours")), ctx.number("max_gap"), ctx.number("bend"),
-                         ctx.flag("exact_feature_edges"));
+                         ctx.flag("exact_feature_edges"), ctx.number("spread"));
     } catch (const std::invalid_argument& ex) {
       throw NodeError(std::string("mesh.cloud_envelope: ") + ex.what());
     }

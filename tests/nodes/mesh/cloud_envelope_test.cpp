@@ -289,6 +289,26 @@ TEST(CloudEnvelope, NoiseOnBothSidesBoundsBothWays) {
     EXPECT_NEAR(e.out[v], a + b, 1e-12);
     EXPECT_NEAR(e.in[v], a + b, 1e-12);
   }
+  // With the spread: of each vertex's 16 points m lie a above and 16 - m a below, m = 7, 8 or 9
+  // (the grid's checkerboard; ties decide), so their distances' standard deviation about their
+  // mean is a sqrt(1 - ((m - 8) / 8)^2): a or a sqrt(63 / 64), added to both bounds c = 1.5 times.
+  // At edges and corners points of two or three sides mix (their distances still within a of the
+  // mesh): there the spread adds something, at most 1.5 a.
+  const CloudEnvelope spread = cloud_envelope(cube, pts, 16, 0, 1, false, 1.5);
+  for (std::size_t v = 0; v < cube.num_vertices(); ++v) {
+    const int sides = int(sides_sum(cube.vertices[v]).lpNorm<1>());
+    for (double added : {spread.out[v] - e.out[v], spread.in[v] - e.in[v]}) {
+      if (sides == 1)
+        EXPECT_TRUE(std::abs(added - 1.5 * a) < 1e-12 || std::abs(added - 1.5 * a * std::sqrt(63.0 / 64)) < 1e-12)
+            << cube.vertices[v].transpose() << ": " << added;
+      EXPECT_GT(added, 0);
+      EXPECT_LE(added, 1.5 * a + 1e-12);
+    }
+  }
+  // Points all a outside (no noise, the mesh inside the part) have no spread.
+  const CloudEnvelope offset = cloud_envelope(cube, box_side_points(-a, 10 + a, 0.25, 0.1), 16, 0, 1, false, 1.5);
+  const CloudEnvelope plain = cloud_envelope(cube, box_side_points(-a, 10 + a, 0.25, 0.1), 16);
+  for (std::size_t v = 0; v < cube.num_vertices(); ++v) EXPECT_NEAR(offset.out[v], plain.out[v], 1e-12);
 }
 
 TEST(CloudEnvelope, AVertexFarFromThePointsIsUnsupported) {
@@ -315,6 +335,8 @@ TEST(CloudEnvelope, BadInputIsRefused) {
             "the cloud has a point that is not finite");
   EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cloud_envelope(cube, pts, 4, -1); }), "max_gap must be >= 0");
   EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cloud_envelope(cube, pts, 4, 0, -1); }), "bend must be >= 0");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cloud_envelope(cube, pts, 4, 0, 1, false, -1); }),
+            "spread must be >= 0");
 }
 
 TEST(CloudEnvelopeNode, ReportsTheBoundsAndWarnsOfUnsupportedVertices) {
