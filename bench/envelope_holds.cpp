@@ -6,9 +6,10 @@
 //
 // OUTER/INNER: the node's outputs (io.write_mesh); MESH: the mesh it moved (their faces, to tell
 // a face the moves turned over); TRUE_MESH: the part (OFF/STL/PLY) times SCALE (1), or with
-// CLOUD=1 a cloud whose points are the places; SAMPLES: at most, 1 000 000. Prints, for each bound, how many samples lie beyond it by more than 1 um, 5 um and
-// 20 um, and the farthest with where; then the places beyond by more than 5 um, gathered within
-// 1 mm of each other: how many, and the farthest of each.
+// CLOUD=1 a cloud whose points are the places; SAMPLES: at most, 1 000 000. Prints, for each
+// bound, how many samples lie beyond it by more than 1 um, 5 um and 20 um, and the farthest with
+// where; then the places beyond by more than 5 um, gathered within 1 mm of each other: how many,
+// and the farthest of each.
 #include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
 

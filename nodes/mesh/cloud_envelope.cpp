@@ -84,9 +84,9 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
       for (std::size_t j = 0; j < found; ++j) sq += (e.residual[idx[j]] - mean) * (e.residual[idx[j]] - mean);
       // The noise's spread: the largest of k deviations reaches only about 1.8 of it above their
       // mean, and the part may stand above that where the noise hides its shape.
-      const double s = spread * std::sqrt(sq / double(found));
-      e.out[v] += s;
-      e.in[v] += s;
+      const double noise = spread * std::sqrt(sq / double(found));
+      e.out[v] += noise;
+      e.in[v] += noise;
     }
   });
   for (double g : e.gap) e.unsupported += g > e.max_gap;

@@ -5,10 +5,10 @@
 //
 // For each vertex v, with d_i the signed distances (positive outside) of the cloud's k points
 // nearest to v from the mesh:
-//   out_v = max(0, max_i d_i) + c s_v   the farthest a point near v lies outside the mesh
-//   in_v  = max(0, max_i -d_i) + c s_v  the farthest one lies inside
-// s_v the standard deviation of the d_i about their mean (the noise; 0 where the mesh interpolates
-// the points), c the `spread`: the largest of 16 noisy deviations reaches only about 1.8 s_v above
+//   out_v = max(0, max_i d_i) + c sigma_v   the farthest a point near v lies outside the mesh
+//   in_v  = max(0, max_i -d_i) + c sigma_v  the farthest one lies inside
+// sigma_v the standard deviation of the d_i about their mean (the noise; 0 where the mesh interpolates
+// the points), c the `spread`: the largest of 16 noisy deviations reaches only about 1.8 sigma_v above
 // their mean, and where the noise hides the part's shape it may stand above that (the fandisk x 50's
 // cloud at sigma 0.02: a 22.6 degree edge, milder than the sharp angle and rounded by the
 // denoising, 0.053 mm above the mesh, whose nearest points lie 0.18 mm and more off its apex).
