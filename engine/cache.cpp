@@ -274,7 +274,8 @@ DiskCache::Check DiskCache::check(const std::string& key) const {
   return {false, why};
 }
 
-DiskCache::Lookup DiskCache::load(const std::string& key, const ValueTypes& types) const {
+DiskCache::Lookup DiskCache::load(const std::string& key, const ValueTypes& types,
+                                   const std::set<std::string>* ports) const {
   Lookup r;
   std::string path = entry_path(key);
   if (!fs::exists(path)) {
@@ -304,9 +305,11 @@ DiskCache::Lookup DiskCache::load(const std::string& key, const ValueTypes& type
       if (!vt || !vt->deserialize) return reject("damaged entry (unknown value type " + type + ")");
       std::size_t at = buf.position() + body_at;
       if (size > bytes.size() - kHashLen - at) return reject("damaged entry (payload runs past the end)");
-      MemoryBuffer pbuf(bytes.data() + at, size);
-      std::istream pin(&pbuf);
-      r.outputs[port] = vt->deserialize(pin);
+      if (!ports || ports->count(port)) {
+        MemoryBuffer pbuf(bytes.data() + at, size);
+        std::istream pin(&pbuf);
+        r.outputs[port] = vt->deserialize(pin);
+      }
       buf.skip(size);
     }
   } catch (const std::exception& e) {

@@ -12,6 +12,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 #include <string>
 
 #include "engine/value.h"
@@ -34,7 +35,10 @@ class DiskCache {
     std::map<std::string, ValuePtr> outputs;
     std::string why;  // for a miss: as Check::why, or "damaged entry (<what the decoder said>)"
   };
-  Lookup load(const std::string& key, const ValueTypes& types) const;
+  // ports, when given: decode only these outputs (the others stay in the file, unread: a node's
+  // picture or simulation is not decoded for its report alone).
+  Lookup load(const std::string& key, const ValueTypes& types,
+              const std::set<std::string>* ports = nullptr) const;
 
   struct Check {
     bool sound = false;

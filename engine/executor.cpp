@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <mutex>
+#include <set>
 
 #include "engine/hash.h"
 #include "engine/memory.h"
@@ -141,6 +142,15 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
     runs[i] = !have[i] && (needed[i] || heal);
   }
 
+  // Which outputs of a node must be decoded from its entry: the graph's outputs and what the
+  // nodes that run read.
+  std::vector<std::set<std::string>> wanted_ports(n);
+  for (const auto& [name, src] : plan.outputs) wanted_ports[src.node].insert(src.port);
+  for (int i = 0; i < n; ++i)
+    if (runs[i])
+      for (const auto& [port, src] : plan.nodes[i].inputs)
+        if (src.node >= 0) wanted_ports[src.node].insert(src.port);
+
   // The memory high-water mark restarts whenever a node starts with no other running, so each
   // node's peak is its own when nodes run one at a time.
   std::atomic<int> running{0};
@@ -188,7 +198,7 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
       rec.cache = "hit";
       rec.why = "same type, version, parameters and inputs";
       if (needed[i]) {
-        auto hit = options.cache->load(keys[i], registry.values());
+        auto hit = options.cache->load(keys[i], registry.values(), &wanted_ports[i]);
         if (hit.hit) {
           out = std::move(hit.outputs);
         } else {  // the entry went bad after it was checked: its inputs were never loaded

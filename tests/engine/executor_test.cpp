@@ -6,7 +6,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <Eigen/Core>
 #include <filesystem>
+#include <set>
+#include <sstream>
 #include <tuple>
 
 #include "engine/file_ref.h"
@@ -338,6 +341,39 @@ TEST(Cache, NodeNotCachedOnDiskWhoseConsumersAreCachedDoesNotRun) {
   EXPECT_EQ(r.find("pass")->status, "skipped");
   EXPECT_EQ(r.find("pass")->cache, "off");
   EXPECT_EQ(r.find("pass")->why, "not run: nothing downstream needs it");
+}
+
+TEST(Cache, LoadDecodesOnlyThePortsAsked) {
+  Registry reg = test::make_test_registry();
+  test::TempDir dir;
+  DiskCache cache(dir.str());
+  cache.store("k", {{"one", std::make_shared<Number>(1)}, {"two", std::make_shared<Number>(2)}});
+  const std::set<std::string> two{"two"};
+  DiskCache::Lookup some = cache.load("k", reg.values(), &two), all = cache.load("k", reg.values());
+  ASSERT_TRUE(some.hit && all.hit);
+  ASSERT_EQ(some.outputs.size(), 1u);
+  EXPECT_EQ(std::dynamic_pointer_cast<const Number>(some.outputs.at("two"))->value, 2.0);
+  ASSERT_EQ(all.outputs.size(), 2u);
+  EXPECT_EQ(std::dynamic_pointer_cast<const Number>(all.outputs.at("one"))->value, 1.0);
+}
+
+TEST(Cache, VectorsReadBackWholeAcrossTheReadersChunks) {
+  // bin::read_vector reads 64 KiB at a time: lengths below, at and across a chunk's end
+  for (std::size_t n : {0, 1, 8191, 8192, 8193, 20001}) {
+    std::vector<double> v(n);
+    std::vector<Eigen::Vector3d> w(n);
+    for (std::size_t i = 0; i < n; ++i) v[i] = 0.5 * double(i), w[i] = {double(i), -double(i), 1.0 / (i + 1)};
+    std::stringstream io;
+    bin::write_vector(io, v);
+    bin::write_vector(io, w);
+    EXPECT_EQ(bin::read_vector<double>(io), v) << n;
+    EXPECT_EQ(bin::read_vector<Eigen::Vector3d>(io), w) << n;
+  }
+  std::stringstream cut;
+  bin::write_vector(cut, std::vector<double>(10000, 1.0));
+  std::string bytes = cut.str();
+  std::stringstream truncated(bytes.substr(0, bytes.size() - 8));
+  EXPECT_THROW(bin::read_vector<double>(truncated), std::runtime_error);
 }
 
 TEST(Cache, KeyDoesNotDependOnInputFileName) {
