@@ -14,8 +14,8 @@
 // denoising, 0.053 mm above the mesh, whose nearest points lie 0.18 mm and more off its apex).
 // Both grow by the bend allowance: s sin(theta_v), s the median point spacing, theta_v the largest
 // angle between v's normal and the faces within 3 s of v: an edge or a corner of the part between
-// its points may stick out of the mesh by about that much; and at the corners of a face that
-// bridges a wider gap g in the cloud (the farthest its centroid and edge midpoints lie from every
+// its points may stick out of the mesh by about that much (with exact_feature_edges, below, the
+// crease a face may hide instead); and at the corners of a face that bridges a wider gap g in the cloud (the farthest its centroid and edge midpoints lie from every
 // point), at least g min(1, tan phi_f), phi_f the largest angle between the face and its
 // neighbours: the part may bend anywhere in the gap (out_v for the neighbours below the face's
 // plane, a crest; in_v for those above, a valley). The outer
@@ -45,7 +45,7 @@ struct CloudEnvelope {
   double spacing_median = 0;       // median distance from a point to its nearest other point (mm)
   double max_gap = 0;              // the gap above which a vertex is unsupported (mm)
   std::size_t unsupported = 0;     // vertices with gap > max_gap
-  double bend_allowance_max = 0;   // the largest s sin(theta_v) added (mm)
+  double bend_allowance_max = 0;   // the largest bend allowance added (mm)
   std::size_t points_beyond = 0;   // points farther than 1e-6 mm outside the outer mesh or inside the inner one
   double beyond_max = 0;           // the farthest of them (mm)
   std::size_t vertices_checked = 0;  // with exact feature edges: vertices on one or at no point, bounded by their points' surfaces
@@ -60,14 +60,18 @@ struct CloudEnvelope {
 // bend    the bend allowance's factor: s and g above are bend times the spacing and gap (1; less on a
 //         mesh whose edges were restored by mesh.sharpen, which no longer bevels them).
 // exact_feature_edges  the mesh's feature edges are the part's own (mesh.sharpen's restored
-//         edges): the allowance looks only at the faces on a vertex's side of them (reached
-//         without crossing one; a face's neighbours across the other edges) that have no corner on
-//         one or at no point (those corners are bounded below, and a face's tilt through them with
-//         them), and a vertex on one gets none from its own faces;
-//         elsewhere (a chamfer left) as above.
+//         edges), its other vertices points of the part: the allowance is instead the crease each
+//         face may hide between its corners, bend * l_f / 2 * tan(T_f / 2) (T_f the largest angle
+//         between two of the face and the faces sharing a corner with it: those below its plane for
+//         out, a crest; above it for in, a valley; l_f its longest edge, at most twice the larger of
+//         s and the gap g_f it bridges), each vertex the
+//         largest of its faces'; faces with a corner on a feature edge or at no point are left out
+//         (those corners are bounded below, and a face's tilt through them with them), and a vertex
+//         on a feature edge gets none from its own faces.
 //         Instead, a vertex at no point of the cloud (farther than 1e-6 mm from every one: where
 //         mesh.sharpen extrapolated local surfaces to meet at an edge or a corner) is measured
-//         against each face of the part around it (faces joined across the other edges): the local
+//         against each face of the part around it (the faces reached from its own across the other
+//         edges without leaving the points' search radius): the local
 //         surface (quadric) of that face's points nearest it (the first of 6, 12, 24 or 48 spacings
 //         holding 20; a point on the face nearest it), its height h above that surface and the
 //         fit's largest residual m give out_v >= max(0, -h) + 3 m, in_v >= max(0, h) + 3 m (the

@@ -34,7 +34,11 @@ NodeDecl make_cloud_envelope_node() {
   //    the bend allowance over the gap a face bridges in the cloud where it is wider than the spacing
   // 7: points beyond: faces turned more than 10 degrees leave the side to the rays (was 90); the
   //    points' spread added to both bounds (spread, 1)
-  d.version = 7;
+  // 8: with exact feature edges, the bend allowance is the crease each face may hide between its
+  //    corners (its longest edge / 2 x tan of half the turn around it), crest out, valley in, and no
+  //    allowance for the gaps faces bridge (the crease's chord counts them); a vertex's face of the
+  //    part is the faces reached within its points' search radius (was joined over the whole mesh)
+  d.version = 8;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "
@@ -47,7 +51,8 @@ NodeDecl make_cloud_envelope_node() {
               "{points, vertices, neighbours, spacing_median, max_gap, outward_max, outward_p99, outward_median, "
               "outward_max_at, inward_max, inward_p99, inward_median, inward_max_at, surface_uncertainty (the larger "
               "maximum), residual_min, residual_max (the points' signed distances), bend_allowance_max (spacing x "
-              "the sine of the largest angle to the faces within 3 spacings; or a wider gap a face bridges in the "
+              "the sine of the largest angle to the faces within 3 spacings, with exact_feature_edges the largest crease a face "
+              "may hide, half its longest edge x the tangent of half the turn around it; or a wider gap a face bridges in the "
               "cloud x the tangent of its angle to its neighbours), points_beyond and beyond_max (points outside the outer mesh or inside the "
               "inner one, the farthest), unsupported_vertices, unsupported_at, vertices_checked, off_points_max and vertices_without_surface "
               "(with exact_feature_edges: vertices on a feature edge or at no point, the largest bound their points' local "
@@ -67,8 +72,10 @@ NodeDecl make_cloud_envelope_node() {
                    "only about 1.8 above their mean, and where the noise hides the part's shape (a mild edge the "
                    "denoising rounds) the part may stand above that")
       .param_bool("exact_feature_edges", false,
-                  "the mesh's feature edges are the part's own (mesh.sharpen's restored edges): the allowance looks "
-                  "only at the faces on a vertex's side of them, and none on them; a chamfer left keeps it. A vertex at "
+                  "the mesh's feature edges are the part's own (mesh.sharpen's restored edges) and its other vertices "
+                  "points of the part: the bend allowance is the crease a face may hide between its corners (half its "
+                  "longest edge x the tangent of half the largest angle between it and the faces sharing a corner, "
+                  "outward for a crest, inward for a valley), none at a vertex on a feature edge. A vertex at "
                   "no point (a restored edge's or corner's) is bounded instead by its height over the local surface of "
                   "the points on each face of the part around it, plus 3 times that fit's largest residual");
   d.run = [](NodeContext& ctx) {
