@@ -226,8 +226,8 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
     // whose triangles' edges are longer than the nearest-point spacing (the block x 5's: 75 % of
     // the faces have a gap above it, median 0.43 mm for a spacing of 0.31).
     std::vector<double> gap_out(nv, 0.0), gap_in(nv, 0.0);
-    for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
-      if (sides || !(face_gap[f] > e.spacing_median) || !(g.area[f] > 0)) continue;
+    for (std::size_t f = 0; !sides && f < mesh.num_faces(); ++f) {
+      if (!(face_gap[f] > e.spacing_median) || !(g.area[f] > 0)) continue;
       double crest = 1, valley = 1;  // the least cosines to the neighbours below and above the face's plane
       for (std::size_t k = 0; k < mesh.face_size(f); ++k) {
         const std::uint32_t edge = edges.face_edge[mesh.face_start[f] + k];
@@ -305,22 +305,20 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
             }
           }
         };
+        constexpr std::uint32_t kNoSide = std::numeric_limits<std::uint32_t>::max();
         std::vector<std::uint32_t> side_start;  // one face of v's on each side
         std::vector<std::uint32_t> side_of;     // #around(v): which of them
         for (std::size_t v = r.begin(); v < r.end(); ++v) {
           if (!bounded[v]) continue;
           const Eigen::Vector3d& x = mesh.vertices[v];
           side_start.clear();
-          side_of.assign(around.count(v), 0);
+          side_of.assign(around.count(v), kNoSide);
           for (std::size_t j = 0; j < around.count(v); ++j) {
-            const std::uint32_t f = around.faces(v)[j];
-            std::size_t k = 0;
-            for (; k < side_start.size(); ++k) {
-              reach_faces(side_start[k], x, 2 * reach);
-              if (reached[f] == round) break;
-            }
-            if (k == side_start.size()) side_start.push_back(f);
-            side_of[j] = std::uint32_t(k);
+            if (side_of[j] != kNoSide) continue;
+            reach_faces(around.faces(v)[j], x, 2 * reach);
+            for (std::size_t i = j; i < around.count(v); ++i)
+              if (reached[around.faces(v)[i]] == round) side_of[i] = std::uint32_t(side_start.size());
+            side_start.push_back(around.faces(v)[j]);
           }
           for (std::size_t side = 0; side < side_start.size(); ++side) {
             Eigen::Vector3d facing = Eigen::Vector3d::Zero();

@@ -15,10 +15,11 @@
 // Both grow by the bend allowance: s sin(theta_v), s the median point spacing, theta_v the largest
 // angle between v's normal and the faces within 3 s of v: an edge or a corner of the part between
 // its points may stick out of the mesh by about that much (with exact_feature_edges, below, the
-// crease a face may hide instead); and at the corners of a face that bridges a wider gap g in the cloud (the farthest its centroid and edge midpoints lie from every
-// point), at least g min(1, tan phi_f), phi_f the largest angle between the face and its
-// neighbours: the part may bend anywhere in the gap (out_v for the neighbours below the face's
-// plane, a crest; in_v for those above, a valley). The outer
+// crease a face may hide instead); and at the corners of a face that bridges a wider gap g in the
+// cloud (the farthest its centroid and edge midpoints lie from every point), at least
+// g min(1, tan phi_f), phi_f the largest angle between the face and its neighbours: the part may
+// bend anywhere in the gap (out_v for the neighbours below the face's plane, a crest; in_v for
+// those above, a valley; not with exact_feature_edges, whose crease counts the gap). The outer
 // mesh moves v along its normal until the plane of every face around v has moved by out_v (v
 // moves at most 2 out_v), the inner by in_v inward. The points the two meshes still leave out
 // (a fold of the mesh) are counted, with the farthest. Where the cloud samples
@@ -64,15 +65,13 @@ struct CloudEnvelope {
 //         face may hide between its corners, bend * l_f / 2 * tan(T_f / 2) (T_f the largest angle
 //         between two of the face and the faces sharing a corner with it: those below its plane for
 //         out, a crest; above it for in, a valley; l_f its longest edge, at most twice the larger of
-//         s and the gap g_f it bridges), each vertex the
-//         largest of its faces'; faces with a corner on a feature edge or at no point are left out
+//         s and the gap g_f it bridges), each vertex the largest of its faces'; faces with a corner on a feature edge or at no point are left out
 //         (those corners are bounded below, and a face's tilt through them with them), and a vertex
 //         on a feature edge gets none from its own faces.
 //         Instead, a vertex at no point of the cloud (farther than 1e-6 mm from every one: where
 //         mesh.sharpen extrapolated local surfaces to meet at an edge or a corner) is measured
 //         against each face of the part around it (the faces reached from its own across the other
-//         edges without leaving the points' search radius): the local
-//         surface (quadric) of that face's points nearest it (the first of 6, 12, 24 or 48 spacings
+//         edges without leaving the points' search radius): the local surface (quadric) of that face's points nearest it (the first of 6, 12, 24 or 48 spacings
 //         holding 20; a point on the face nearest it), its height h above that surface and the
 //         fit's largest residual m give out_v >= max(0, -h) + 3 m, in_v >= max(0, h) + 3 m (the
 //         residual counts the shape the quadric misses, facets or curvature, as cloud.height_field's
