@@ -6,13 +6,17 @@
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/polygon_mesh_to_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/shape_predicates.h>
 #include <CGAL/Polygon_mesh_processing/border.h>
 #include <CGAL/Polygon_mesh_processing/stitch_borders.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <array>
 #include <cstdint>
 #include <set>
@@ -160,6 +164,27 @@ Mesh repair_mesh(const Mesh& soup, const RepairOptions& options, RepairReport& r
       PMP::triangulate_and_refine_hole(sm, h, std::back_inserter(faces), std::back_inserter(vertices));
       ++(faces.empty() ? report.holes_left : report.holes_filled);
     }
+  }
+  if (options.slivers > 0 && CGAL::is_triangle_mesh(sm) && sm.number_of_edges() > 0) {
+    double mean = 0;
+    for (auto e : sm.edges()) mean += PMP::edge_length(e, sm);
+    const double size = options.slivers * mean / double(sm.number_of_edges());
+    const double cap = std::cos(160 * std::numbers::pi / 180), needle = 4;
+    const auto slivers = [&] {
+      std::size_t n = 0;
+      for (auto f : sm.faces()) {
+        const auto h = PMP::is_needle_triangle_face(f, sm, needle);
+        const auto c = PMP::is_cap_triangle_face(f, sm, cap);
+        n += (h != SurfaceMesh::null_halfedge() && PMP::edge_length(h, sm) <= size) ||
+             (c != SurfaceMesh::null_halfedge() &&
+              CGAL::squared_distance(sm.point(sm.target(sm.next(c))), Kernel::Line_3(sm.point(sm.source(c)), sm.point(sm.target(c)))) <= size * size);
+      }
+      return n;
+    };
+    report.slivers_found = slivers();
+    PMP::experimental::remove_almost_degenerate_faces(sm.faces(), sm, cap, needle, size,
+                                                      CGAL::parameters::flip_triangle_height_threshold(size));
+    report.slivers_left = slivers();
   }
   sm.collect_garbage();
   points.clear();

@@ -19,6 +19,13 @@ struct RepairOptions {
   // triangulate_and_refine_hole): the gaps an interpolating reconstruction leaves in a closed
   // part's surface. 0: none (an open part's border stays; it is far longer).
   int fill_holes = 0;
+  // Slivers mended, their size in mean edge lengths (CGAL's remove_almost_degenerate_faces): a
+  // face whose shortest edge is under this and a quarter of its longest loses that edge (its ends
+  // merged), a face with a corner over 160 degrees no higher than this is flipped across its
+  // longest edge. Two points of a random cloud 0.01 edges apart make such faces, and a move of either
+  // beside an edge of the part turns them over (mesh.sharpen). The surface moves by at most this.
+  // 0: none (a CAD mesh's long thin triangles are its shape).
+  double slivers = 0;
 };
 
 // What repair_mesh changed, step by step (each count 0 on a clean, consistently oriented mesh).
@@ -40,6 +47,8 @@ struct RepairReport {
   std::size_t borders_stitched = 0;           // pairs of border edges joined (stitch_borders)
   std::size_t holes_filled = 0;               // holes closed (fill_holes)
   std::size_t holes_left = 0;                 // holes longer than fill_holes, or that CGAL could not close
+  std::size_t slivers_found = 0;              // faces that were slivers by options.slivers
+  std::size_t slivers_left = 0;               // of those, left (CGAL declined the change)
   std::size_t faces_turned_outward = 0;       // faces of closed components reversed (orient_to_bound_a_volume)
   std::size_t solids_merged = 0;              // closed components merged into one they cross (their union)
   std::size_t solids_not_merged = 0;          // crossing ones left apart (one intersects itself)

@@ -11,7 +11,7 @@ namespace scallop::mesh_nodes {
 NodeDecl make_repair_node() {
   NodeDecl d;
   d.type = "mesh.repair";
-  d.version = 2;  // 2: crossing solids merged into their union
+  d.version = 3;  // 2: crossing solids merged into their union; 3: slivers
   d.description =
       "repairs a polygon soup with CGAL: merges duplicate points, drops degenerate and duplicate faces, orients "
       "consistently, stitches borders, splits non-manifold edges and vertices, turns closed parts outward, merges solids that cross "
@@ -23,7 +23,7 @@ NodeDecl make_repair_node() {
       .output("report", "Report",
               "{changes: {points_merged, faces_simplified, pinched_faces_split, degenerate_faces_removed, "
               "duplicate_faces_removed, isolated_vertices_removed, faces_reversed, non_manifold_edges_cut, "
-              "non_manifold_vertices_split, borders_stitched, holes_filled, holes_left, faces_turned_outward, solids_merged, solids_not_merged}, "
+              "non_manifold_vertices_split, borders_stitched, holes_filled, holes_left, slivers_found, slivers_left, faces_turned_outward, solids_merged, solids_not_merged}, "
               "before, after: the topology as io.read_mesh reports it}")
       .param_bool("orient_outward", true,
                   "orient each closed component so that the mesh bounds a volume (normals out of the material)")
@@ -32,13 +32,19 @@ NodeDecl make_repair_node() {
                   "orient_outward")
       .param_int("fill_holes", 0, 0, 1000000, "edges",
                  "holes with at most this many border edges are closed with triangles (the gaps an interpolating "
-                 "reconstruction leaves in a closed part); 0: none");
+                 "reconstruction leaves in a closed part); 0: none")
+      .param_float("slivers", 0.0, 0, 0.5, "mean edge lengths",
+                    "slivers mended (CGAL's remove_almost_degenerate_faces): an edge shorter than this (and a quarter of "
+                    "its face's longest) collapsed, a face with a corner over 160 degrees and no higher than this flipped; "
+                    "the surface moves by at most this. For a reconstruction from a random cloud, whose near points make "
+                    "faces that moving either turns over; 0 (a CAD mesh's thin triangles are its shape): none");
   d.run = [](NodeContext& ctx) {
     auto in = ctx.input<Mesh>("mesh");
     RepairOptions options;
     options.orient_outward = ctx.flag("orient_outward");
     options.merge_overlapping = ctx.flag("merge_overlapping");
     options.fill_holes = static_cast<int>(ctx.integer("fill_holes"));
+    options.slivers = ctx.number("slivers");
     RepairReport r;
     Mesh out;
     try {
@@ -59,6 +65,8 @@ NodeDecl make_repair_node() {
                               {"borders_stitched", r.borders_stitched},
                               {"holes_filled", r.holes_filled},
                               {"holes_left", r.holes_left},
+                              {"slivers_found", r.slivers_found},
+                              {"slivers_left", r.slivers_left},
                               {"faces_turned_outward", r.faces_turned_outward},
                               {"solids_merged", r.solids_merged},
                               {"solids_not_merged", r.solids_not_merged}};

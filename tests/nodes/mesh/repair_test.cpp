@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <utility>
 #include <vector>
 
 #include "engine/node.h"
@@ -132,6 +135,51 @@ TEST(Repair, FillHolesClosesTheHolesUpToItsLength) {
   for (std::size_t f = 0; f < closed.num_faces(); ++f)
     volume += closed.vertices[closed.face(f)[0]].dot(face_area_vector(closed, f)) / 6.0;
   EXPECT_NEAR(volume, 64.0, 1e-9);  // the patch lies in the top's plane
+}
+
+// The largest corner angle of any face (degrees) and the shortest edge.
+std::pair<double, double> largest_angle_and_shortest_edge(const Mesh& m) {
+  double angle = 0, shortest = INFINITY;
+  for (std::size_t f = 0; f < m.num_faces(); ++f)
+    for (std::size_t c = 0; c < 3; ++c) {
+      const V &a = m.vertices[m.face(f)[c]], &b = m.vertices[m.face(f)[(c + 1) % 3]], &o = m.vertices[m.face(f)[(c + 2) % 3]];
+      shortest = std::min(shortest, (b - a).norm());
+      angle = std::max(angle, std::acos(std::clamp((a - o).normalized().dot((b - o).normalized()), -1.0, 1.0)) * 180 / M_PI);
+    }
+  return {angle, shortest};
+}
+
+// Two slivers a random cloud's reconstruction makes, in a plane: a point 0.01 from another
+// (needles: the edge between them goes) and a point 0.007 off the diagonal of a square (a cap,
+// flipped). With slivers = 0 (the default) both stay.
+TEST(Repair, SliversAreCollapsedOrFlippedWithinTheirSize) {
+  Mesh needles;  // a hexagon fanned from two points 0.01 apart
+  needles.vertices = {V(0, 0, 0), V(0.01, 0, 0)};
+  for (int k = 0; k < 6; ++k) needles.vertices.emplace_back(std::cos(k * M_PI / 3), std::sin(k * M_PI / 3), 0);
+  for (auto f : {std::array<std::uint32_t, 3>{1, 2, 3}, {1, 7, 2}, {1, 3, 0}, {0, 3, 4}, {0, 4, 5}, {0, 5, 6}, {0, 6, 7}, {0, 7, 1}})
+    needles.add_face({f[0], f[1], f[2]});
+  Mesh cap;  // a unit square, a point 0.007 below its diagonal
+  cap.vertices = {V(0, 0, 0), V(1, 0, 0), V(1, 1, 0), V(0, 1, 0), V(0.5, 0.49, 0)};
+  for (auto f : {std::array<std::uint32_t, 3>{0, 1, 4}, {1, 2, 4}, {0, 4, 2}, {0, 2, 3}}) cap.add_face({f[0], f[1], f[2]});
+  for (const auto& [mesh, faces_after] : {std::pair{needles, 6u}, std::pair{cap, 4u}}) {
+    RepairOptions o;
+    RepairReport r;
+    Mesh out = repair_mesh(mesh, o, r);
+    EXPECT_EQ(out.num_faces(), mesh.num_faces());
+    EXPECT_EQ(r.slivers_found, 0u);  // not looked for
+    o.slivers = 0.05;
+    out = repair_mesh(mesh, o, r);
+    EXPECT_EQ(r.slivers_found, faces_after == 6u ? 2u : 1u);
+    EXPECT_EQ(r.slivers_left, 0u);
+    EXPECT_EQ(out.num_faces(), faces_after);
+    const auto [angle, shortest] = largest_angle_and_shortest_edge(out);
+    EXPECT_LT(angle, 160);
+    EXPECT_GT(shortest, 0.5);
+    for (const V& v : out.vertices) EXPECT_EQ(v.z(), 0);
+    const MeshTopology t = mesh_topology(out, mesh_edges(out));
+    EXPECT_EQ(t.components, 1);
+    EXPECT_EQ(t.boundary_loops, 1);
+  }
 }
 
 TEST(Repair, ACleanCubeIsLeftAsItIs) {
@@ -286,6 +334,8 @@ TEST(Repair, NodeReportsTheChangesAndTheTopologyBeforeAndAfter) {
                                                {"borders_stitched", 0},
                                                {"holes_filled", 0},
                                                {"holes_left", 0},
+                                               {"slivers_found", 0},
+                                               {"slivers_left", 0},
                                                {"faces_turned_outward", 0},
                                                {"solids_merged", 0},
                                                {"solids_not_merged", 0}}));
