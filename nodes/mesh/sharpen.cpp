@@ -195,10 +195,18 @@ std::size_t merge_across_turned_faces(Mesh& out, const FaceGeometry& input_faces
       tri[f] = {out.face(f)[0], out.face(f)[1], out.face(f)[2]};
       for (std::uint32_t v : tri[f]) faces_of[v].push_back(static_cast<std::uint32_t>(f));
     }
-    // a sliver on a short stretch of the part's edge: turning against a face across its other edges
+    // a sliver on a short stretch of the part's edge: turning against a face across its other edges,
+    // or on a stretch so short that its ends are one point (two vertices of the ABC plate's cloud
+    // 0.003 mm apart, moved onto the line, landed 2e-6 mm apart: Blender's QuadriFlow refuses a
+    // mesh with an edge under 1e-4 as not manifold)
+    const double coincident = 0.01 * min_length;
     for (std::size_t f = 0; f < nf; ++f)
       for (int c = 0; c < 3 && !mend[f]; ++c) {
         if (!short_along_edge(tri[f][c], tri[f][(c + 1) % 3])) continue;
+        if ((out.vertices[tri[f][c]] - out.vertices[tri[f][(c + 1) % 3]]).norm() < coincident) {
+          mend[f] = 1;
+          continue;
+        }
         for (int o = 1; o < 3; ++o) {
           const std::uint32_t a = tri[f][(c + o) % 3], b = tri[f][(c + o + 1) % 3];
           for (std::uint32_t g : faces_of[a])

@@ -10,7 +10,7 @@ namespace scallop::mesh_nodes {
 NodeDecl make_sharpen_node() {
   NodeDecl d;
   d.type = "mesh.sharpen";
-  d.version = 10;
+  d.version = 11;
   d.description =
       "sharp edges put back into a triangle mesh that interpolates a cloud (advancing front): the "
       "chamfer its triangles cut across each edge is split where the two faces' local surfaces (quadrics) meet, "

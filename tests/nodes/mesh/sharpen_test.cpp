@@ -157,6 +157,29 @@ TEST(Sharpen, ABoxsChamferedEdgesAndCornersAreRestored) {
   EXPECT_EQ(folds(r.mesh), 0u);
 }
 
+// Two points on either side of an edge at nearly the same place along it (here 0.002 mm from it
+// and 2e-6 mm apart along it, at 20 places on the box's top edges) are moved onto its line: the
+// edge between them would be 2e-6 mm long (on the ABC plate's cloud Blender's QuadriFlow then refused the
+// mesh as not manifold). They are merged into one.
+TEST(Sharpen, PointsMovedOntoOnePlaceOfAnEdgeAreOne) {
+  const Eigen::Vector3d lo(0, 0, 0), hi(20, 12, 8);
+  std::vector<Eigen::Vector3d> P, N;
+  box_cloud(lo, hi, 30000, P, N);
+  for (int k = 1; k <= 10; ++k) {
+    const double x = 1.8 * k, d = 0.002;
+    for (const double y : {lo.y(), hi.y()}) {
+      const double inward = y == lo.y() ? 1 : -1;
+      P.emplace_back(x, y + inward * d, hi.z()), N.emplace_back(0, 0, 1);
+      P.emplace_back(x + 2e-6, y, hi.z() - d), N.emplace_back(0, -inward, 0);
+    }
+  }
+  const SharpenResult r = sharpen_edges(reconstruct_surface(P, N, {}).mesh);
+  const MeshEdges edges = mesh_edges(r.mesh);
+  double shortest = INFINITY;
+  for (const auto& [v, w] : edges.edges) shortest = std::min(shortest, (r.mesh.vertices[v] - r.mesh.vertices[w]).norm());
+  EXPECT_GT(shortest, 1e-3 * r.edge_length) << shortest;
+}
+
 // A vertex that is not a point of the part (mesh.repair's filling of a hole left one 0.107 mm
 // inside a side of the domed block's cloud mesh, 0.3 mm from an edge) is put back onto its face:
 // here two pushed 0.3 mean edges into the box's top, one amid it and one beside an edge.
