@@ -62,7 +62,7 @@ struct QuadRemeshOptions {
   int target_faces = 4000;          // quads asked of QuadriFlow (it gives about as many)
   double target_edge_length = 0;    // mm; > 0: target_faces = area / length^2 instead
   int seed = 0;                     // QuadriFlow's random seed: the same seed, the same quads
-  int tries = 3;                    // seeds tried (seed, seed + 1, ...) while the quads are not usable
+  int tries = 6;                    // seeds tried (seed, seed + 1, ...) while the quads are not usable (the ABC plate's 200 000-point cloud: seed 4)
   double angle_deg = 50;            // an edge is sharp when its faces' normals differ by more
   double feature_tolerance = 0.1;   // of the output's mean edge length (feature share above)
   std::string blender;              // Blender's executable; "": $SCALLOP_BLENDER, else blender on PATH
