@@ -90,6 +90,20 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
     }
   });
   for (double g : e.gap) e.unsupported += g > e.max_gap;
+  // Every point also bounds the corners of the face it lies nearest: a large face (a hole's
+  // filling) has points over its middle that are among no corner's k nearest. On the ABC plate's
+  // cloud 255 points stood up to 0.22 mm outside the outer mesh beside a filled hole, and the
+  // balls kept off that mesh cut them 0.14 mm deep.
+  {
+    std::vector<std::uint32_t> face_of(points.size());
+    tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t i) { face_of[i] = std::uint32_t(distance.closest_face(points[i])); });
+    for (std::size_t i = 0; i < points.size(); ++i)
+      for (std::size_t c = 0, m = mesh.face_size(face_of[i]); c < m; ++c) {
+        const std::uint32_t v = mesh.face(face_of[i])[c];
+        e.out[v] = std::max(e.out[v], e.residual[i]);
+        e.in[v] = std::max(e.in[v], -e.residual[i]);
+      }
+  }
 
   // Each vertex moves along its normal far enough that the plane of every face around it (and of
   // every face of the part it was measured against, below) moves by the full amount: by

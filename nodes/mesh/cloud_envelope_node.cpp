@@ -38,7 +38,7 @@ NodeDecl make_cloud_envelope_node() {
   //    corners (its longest edge / 2 x tan of half the turn around it), crest out, valley in, and no
   //    allowance for the gaps faces bridge (the crease's chord counts them); a vertex's face of the
   //    part is the faces reached within its points' search radius (was joined over the whole mesh)
-  d.version = 8;
+  d.version = 9;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "

@@ -280,6 +280,22 @@ TEST(CloudEnvelope, AMeshInsideThePartIsGrownByTheDistanceOnEverySideEdgeAndCorn
   EXPECT_EQ(e.points_beyond, 0u);
 }
 
+// A cube 10 mm across of two triangles a side (as large as a hole's filling), its points on it but
+// for a patch 0.5 above its top, away from its faces' centroids and edges' middles (where the rule
+// for a face over a hole in the sampling would see it): those are among no corner's 16 nearest
+// points (the corners' bend allowance is 0.2), but each bounds the corners of the face it lies
+// nearest, so the outer mesh holds them all.
+TEST(CloudEnvelope, PointsOverTheMiddleOfALargeFaceBoundItsCorners) {
+  const Mesh cube = test::cube_mesh(1, 10);
+  std::vector<V> pts = box_side_points(0, 10, 0.25, 0);
+  for (V& p : pts)
+    if (p.z() == 10 && std::abs(p.x() - 7.5) <= 0.5 && std::abs(p.y() - 1.5) <= 0.5) p.z() += 0.5;
+  const CloudEnvelope e = cloud_envelope(cube, pts, 16);
+  EXPECT_EQ(e.points_beyond, 0u);
+  const MeshDistance outer(e.outer);
+  for (const V& p : pts) EXPECT_LE(outer.signed_distance(p), 1e-9) << p.transpose();
+}
+
 TEST(CloudEnvelope, AFaceOverAHoleInTheSamplingMayHideABend) {
   // The part: a roof z = -t |x| with a gentle crest (6 degrees each side) along the y axis. The
   // cloud samples it every 0.25 but not within 0.45 of the crest; the mesh's vertices lie on it at
