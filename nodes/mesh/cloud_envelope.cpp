@@ -91,9 +91,8 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
   });
   for (double g : e.gap) e.unsupported += g > e.max_gap;
   // Every point also bounds the corners of the face it lies nearest: a large face (a hole's
-  // filling) has points over its middle that are among no corner's k nearest. On the ABC plate's
-  // cloud 255 points stood up to 0.22 mm outside the outer mesh beside a filled hole, and the
-  // balls kept off that mesh cut them 0.14 mm deep.
+  // filling) has points over its middle that are among no corner's k nearest, and the outer mesh
+  // would pass under them.
   {
     std::vector<std::uint32_t> face_of(points.size());
     tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t i) { face_of[i] = std::uint32_t(distance.closest_face(points[i])); });
