@@ -92,17 +92,17 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
   for (double g : e.gap) e.unsupported += g > e.max_gap;
   // Every point also bounds the corners of the face it lies nearest: a large face (a hole's
   // filling) has points over its middle that are among no corner's k nearest, and the outer mesh
-  // would pass under them.
-  {
-    std::vector<std::uint32_t> face_of(points.size());
-    tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t i) { face_of[i] = std::uint32_t(distance.closest_face(points[i])); });
-    for (std::size_t i = 0; i < points.size(); ++i)
-      for (std::size_t c = 0, m = mesh.face_size(face_of[i]); c < m; ++c) {
-        const std::uint32_t v = mesh.face(face_of[i])[c];
-        e.out[v] = std::max(e.out[v], e.residual[i]);
-        e.in[v] = std::max(e.in[v], -e.residual[i]);
-      }
-  }
+  // would pass under them. (The nearest face and its nearest point serve the feature edges below.)
+  std::vector<std::uint32_t> nearest_face(points.size());
+  std::vector<Eigen::Vector3d> nearest_at(points.size());
+  tbb::parallel_for(std::size_t(0), points.size(),
+                    [&](std::size_t i) { nearest_face[i] = std::uint32_t(distance.closest_face(points[i], nearest_at[i])); });
+  for (std::size_t i = 0; i < points.size(); ++i)
+    for (std::size_t c = 0, m = mesh.face_size(nearest_face[i]); c < m; ++c) {
+      const std::uint32_t v = mesh.face(nearest_face[i])[c];
+      e.out[v] = std::max(e.out[v], e.residual[i]);
+      e.in[v] = std::max(e.in[v], -e.residual[i]);
+    }
 
   // Each vertex moves along its normal far enough that the plane of every face around it (and of
   // every face of the part it was measured against, below) moves by the full amount: by
@@ -271,9 +271,9 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
       constexpr std::uint32_t kEitherFace = std::numeric_limits<std::uint32_t>::max();
       std::vector<std::uint32_t> face_of_point(points.size());
       tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t i) {
-        Eigen::Vector3d q;
-        const std::size_t f = distance.closest_face(points[i], q);
-        face_of_point[i] = std::uint32_t(f);
+        const Eigen::Vector3d& q = nearest_at[i];
+        const std::uint32_t f = nearest_face[i];
+        face_of_point[i] = f;
         const std::uint32_t* corner = mesh.face(f);
         for (std::size_t k = 0, m = mesh.face_size(f); k < m; ++k) {
           const Eigen::Vector3d &a = mesh.vertices[corner[k]], &b = mesh.vertices[corner[(k + 1) % m]];

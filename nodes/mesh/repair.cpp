@@ -15,10 +15,10 @@
 #include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
-#include <cmath>
-#include <numbers>
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <set>
 #include <stdexcept>
 #include <string>
