@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 
+#include "nodes/geom/kd_tree.h"
 #include "nodes/mesh/mesh_topology.h"
 
 namespace scallop {
@@ -86,6 +87,31 @@ MeshDistance::MeshDistance(const Mesh& mesh, const Mesh* unmoved) : impl_(std::m
   impl_->tree.accelerate_distance_queries();
 }
 
+struct MeshDistance::HeldPoints {
+  std::vector<Eigen::Vector3d> points;
+  PointsAdaptor<Eigen::Vector3d> adaptor{points};
+  KdTree<Eigen::Vector3d, 3> tree{3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
+  explicit HeldPoints(std::vector<Eigen::Vector3d> p) : points(std::move(p)) { tree.buildIndex(); }
+};
+
+MeshDistance MeshDistance::with_points(const std::vector<Eigen::Vector3d>& points) const {
+  for (const auto& p : points)
+    if (!p.allFinite()) throw std::invalid_argument("a point the part holds is not finite");
+  MeshDistance d;
+  d.impl_ = impl_;
+  d.placed_ = placed_, d.rotation_ = rotation_, d.translation_ = translation_;
+  if (!points.empty()) d.held_ = std::make_shared<const HeldPoints>(points);
+  return d;
+}
+
+double MeshDistance::to_held_points(const Eigen::Vector3d& p) const {
+  if (!held_) return std::numeric_limits<double>::infinity();
+  std::uint32_t i = 0;
+  double d2 = 0;
+  held_->tree.knnSearch(p.data(), 1, &i, &d2);
+  return std::sqrt(d2);
+}
+
 MeshDistance::~MeshDistance() = default;
 MeshDistance::MeshDistance(MeshDistance&&) noexcept = default;
 MeshDistance& MeshDistance::operator=(MeshDistance&&) noexcept = default;
@@ -93,6 +119,7 @@ MeshDistance& MeshDistance::operator=(MeshDistance&&) noexcept = default;
 MeshDistance MeshDistance::placed(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) const {
   MeshDistance d;
   d.impl_ = impl_;
+  d.held_ = held_;
   d.placed_ = true;
   // Placed twice: the motions composed.
   d.rotation_ = rotation * rotation_;
@@ -103,13 +130,18 @@ MeshDistance MeshDistance::placed(const Eigen::Matrix3d& rotation, const Eigen::
 double MeshDistance::operator()(const Eigen::Vector3d& p) const { return unsigned_in_mesh(to_mesh(p)); }
 
 double MeshDistance::unsigned_in_mesh(const Eigen::Vector3d& p) const {
+  return std::min(faces_unsigned(p), to_held_points(p));
+}
+
+double MeshDistance::faces_unsigned(const Eigen::Vector3d& p) const {
   if (impl_->tris.empty()) return std::numeric_limits<double>::infinity();
   return std::sqrt(impl_->tree.squared_distance(point(p)));
 }
 
 double MeshDistance::operator()(const Eigen::Vector3d& p, const Eigen::Vector3d& hint) const {
-  if (impl_->tris.empty()) return std::numeric_limits<double>::infinity();
-  return std::sqrt(impl_->tree.squared_distance(point(to_mesh(p)), point(to_mesh(hint))));
+  const Eigen::Vector3d q = to_mesh(p);
+  if (impl_->tris.empty()) return to_held_points(q);
+  return std::min(std::sqrt(impl_->tree.squared_distance(point(q), point(to_mesh(hint)))), to_held_points(q));
 }
 
 Eigen::Vector3d MeshDistance::closest_point(const Eigen::Vector3d& p) const {
@@ -145,6 +177,10 @@ double MeshDistance::ray_distance(const Eigen::Vector3d& p, const Eigen::Vector3
 double MeshDistance::signed_distance(const Eigen::Vector3d& p) const { return signed_in_mesh(to_mesh(p)); }
 
 double MeshDistance::signed_in_mesh(const Eigen::Vector3d& p) const {
+  return std::min(faces_signed(p), to_held_points(p));
+}
+
+double MeshDistance::faces_signed(const Eigen::Vector3d& p) const {
   if (impl_->tris.empty()) return std::numeric_limits<double>::infinity();
   const Kernel::Point_3 q = point(p);
   const auto [foot, prim] = impl_->tree.closest_point_and_primitive(q);

@@ -21,6 +21,14 @@ class MeshDistance {
   //          (signed_distance). Faces that differ:
   //          std::invalid_argument.
   explicit MeshDistance(const Mesh& mesh, const Mesh* unmoved = nullptr);
+  // The same faces, and points the part is known to hold besides (the cloud it was measured at,
+  // in the mesh's frame): the distances (unsigned, signed, least_along) are to the union of the
+  // solid and the points, the nearer of the faces and the nearest point. Where a mesh made from a
+  // cloud does not hold all of it (a fold, a filled hole: 165 of the ABC plate's 200 000 points
+  // stood up to 0.36 mm outside its outer mesh), a ball kept off the part is kept off them too.
+  // Rays, closest_point and closest_face see the faces only. A point that is not finite:
+  // std::invalid_argument.
+  MeshDistance with_points(const std::vector<Eigen::Vector3d>& points) const;
   ~MeshDistance();
   MeshDistance(const MeshDistance&) = delete;
   MeshDistance& operator=(const MeshDistance&) = delete;
@@ -68,12 +76,17 @@ class MeshDistance {
 
  private:
   struct Impl;
+  struct HeldPoints;
   MeshDistance() = default;
   Eigen::Vector3d to_mesh(const Eigen::Vector3d& p) const { return placed_ ? Eigen::Vector3d(rotation_.transpose() * (p - translation_)) : p; }
   Eigen::Vector3d from_mesh(const Eigen::Vector3d& p) const { return placed_ ? Eigen::Vector3d(rotation_ * p + translation_) : p; }
   double unsigned_in_mesh(const Eigen::Vector3d& p) const;  // p in the mesh's own frame
   double signed_in_mesh(const Eigen::Vector3d& p) const;
+  double faces_unsigned(const Eigen::Vector3d& p) const;  // the faces alone, the mesh's frame
+  double faces_signed(const Eigen::Vector3d& p) const;
+  double to_held_points(const Eigen::Vector3d& p) const;  // +infinity without them
   std::shared_ptr<Impl> impl_;
+  std::shared_ptr<const HeldPoints> held_;
   bool placed_ = false;
   Eigen::Matrix3d rotation_ = Eigen::Matrix3d::Identity();
   Eigen::Vector3d translation_ = Eigen::Vector3d::Zero();

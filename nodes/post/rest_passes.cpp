@@ -59,7 +59,7 @@ void trace_left(const std::vector<PartSample>& samples, const std::vector<PartTr
 }  // namespace
 
 RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::vector<Toolpath>& cuts,
-                           const RestOptions& o) {
+                           const RestOptions& o, const std::vector<Eigen::Vector3d>& held_points) {
   const double r = o.tool_radius, H = o.scallop;
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
   if (!(H > 0) || !(H < r)) throw std::invalid_argument("the scallop limit must be > 0 and below the tool radius");
@@ -75,7 +75,7 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
   const double nominal = std::sqrt(8 * r * H), T = 20 * H, limit = 0.8 * H;
   res.spacing = part_sample_spacing(tris, nominal / 6, o.max_samples);
   std::vector<PartSample> samples = sample_part(tris, res.spacing);
-  const MeshDistance distance(part);
+  const MeshDistance distance = MeshDistance(part).with_points(held_points);
 
   // Samples measured (not base, reachable) and what the setups' own passes leave there.
   const bool has_base = o.base_normal.norm() > 0;

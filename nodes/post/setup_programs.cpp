@@ -21,7 +21,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
                                          const std::vector<Setup>& setups, const Mesh& part,
                                          const LinkOptions& link, const GCodeOptions& gcode,
                                          const std::vector<double>& patch_off_part, const RestOptions* rest,
-                                         RestResult* rest_result) {
+                                         RestResult* rest_result, const std::vector<Eigen::Vector3d>& held_points) {
   if (std::accumulate(passes_per_patch.begin(), passes_per_patch.end(), std::size_t(0)) != path.passes.size())
     throw std::invalid_argument("the patches' pass counts do not add up to the toolpath's " +
                                 std::to_string(path.passes.size()) + " passes");
@@ -32,7 +32,11 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
   std::vector<Toolpath> cuts(setups.size());
   std::vector<SetupProgram> progs(setups.size());
   const double tolerance = part_clearance_tolerance(path.chord_error);
-  const MeshDistance part_distance(part);  // one tree, placed in each setup's frame
+  // One tree, placed in each setup's frame.
+  const MeshDistance part_distance = MeshDistance(part).with_points(held_points);
+  // The part's vertices and the points it holds, for the highest point in each setup.
+  std::vector<Eigen::Vector3d> part_points = part.vertices;
+  part_points.insert(part_points.end(), held_points.begin(), held_points.end());
   for (std::size_t index = 0; index < setups.size(); ++index) {
     const Setup& s = setups[index];
     Toolpath& local = cuts[index];
@@ -56,7 +60,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     }
     if (local.passes.empty() || part.num_faces() == 0) continue;
     double top_z = -std::numeric_limits<double>::infinity();
-    for (const auto& v : part.vertices) top_z = std::max(top_z, (s.rotation * v + s.translation).z());
+    for (const auto& v : part_points) top_z = std::max(top_z, (s.rotation * v + s.translation).z());
     const KeepOffStats kept =
         keep_off_part(local, max_drop, part_distance.placed(s.rotation, s.translation), top_z, tolerance);
     SetupProgram& prog = progs[index];
@@ -72,7 +76,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     RestOptions o = *rest;
     o.tool_radius = path.tool_radius, o.scallop = path.scallop_height, o.chord = path.chord_error;
     all.assign(setups.begin(), setups.end());
-    RestResult result = add_rest_passes(part, all, cuts, o);
+    RestResult result = add_rest_passes(part, all, cuts, o, held_points);
     progs.resize(all.size());
     for (std::size_t index = 0; index < all.size(); ++index)
       progs[index].rest_passes = result.passes[index], progs[index].rest_length = result.length[index];
@@ -89,8 +93,8 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     // Every ball left out (no clear way to any of them; an ABC plate's noisy cloud had such a
     // clamping, and linking nothing stopped the whole part): no program for this setup.
     if (local.passes.empty()) continue;
-    std::vector<Eigen::Vector3d> placed(part.vertices.size());
-    for (std::size_t v = 0; v < placed.size(); ++v) placed[v] = s.rotation * part.vertices[v] + s.translation;
+    std::vector<Eigen::Vector3d> placed(part_points.size());
+    for (std::size_t v = 0; v < placed.size(); ++v) placed[v] = s.rotation * part_points[v] + s.translation;
     SetupProgram& prog = progs[index];
     prog.setup = index;
     const MeshDistance distance = part_distance.placed(s.rotation, s.translation);

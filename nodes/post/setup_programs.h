@@ -5,7 +5,8 @@
 // A part point p is at R p + t in setup s's frame ([R|t] = its part_to_machine), a normal n at
 // R n. Where the patch's surface stands above the part (patch_off_part), each ball is first
 // lowered along -z until it touches the part. The balls are kept off the whole part, not only off
-// the patch they cut (keep_off_part.h); the lifts are counted (stock left). Links are kept as far
+// the patch they cut (keep_off_part.h), and off the cloud's points where given; the lifts are
+// counted (stock left). Links are kept as far
 // off the part (checked against its vertices and its faces), and the clearance plane set above
 // its points (link.h).
 #pragma once
@@ -63,6 +64,9 @@ struct SetupProgram {
 //               `path`; places no setup comes down to may get setups of their own, numbered
 //               after `setups`: SetupProgram::setup indexes setups then rest_result->added_setups),
 //               and rest_result gets what was found
+// held_points   points the part holds besides its faces (the cloud the mesh was made from, part
+//               frame): the balls, moves and links are kept off them too, and the clearance plane
+//               clears them (where the mesh does not hold its cloud, a fold or a filled hole)
 // Returns one program per setup that cuts anything (a setup none of whose balls could be kept off
 // the part gets none). Throws std::invalid_argument when the counts
 // do not add up; link_passes' and write_gcode's errors pass through.
@@ -70,7 +74,8 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
                                          const std::vector<Setup>& setups, const Mesh& part,
                                          const LinkOptions& link, const GCodeOptions& gcode,
                                          const std::vector<double>& patch_off_part = {},
-                                         const RestOptions* rest = nullptr, RestResult* rest_result = nullptr);
+                                         const RestOptions* rest = nullptr, RestResult* rest_result = nullptr,
+                                         const std::vector<Eigen::Vector3d>& held_points = {});
 
 // The setups file: {"format": "scallop-setups/1", "units": "mm", "setups": [{name, gcode,
 // part_to_machine}]}.

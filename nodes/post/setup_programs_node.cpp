@@ -8,6 +8,7 @@
 #include "nodes/io/write_support.h"
 #include "nodes/mesh/setup_base.h"
 #include "nodes/post/setup_programs.h"
+#include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
 #include "nodes/types/mesh.h"
 #include "nodes/types/toolpath.h"
@@ -28,7 +29,7 @@ struct SetupProgramsOptions {
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 12;  // 12: a move lacking less than its ends' height difference goes up by what it lacks; 11: the rest search also refines the thin band beside concave edges a ball of 0.9 r reaches; 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
+  d.version = 13;  // 13: the balls, moves and links kept off the cloud's points too (input cloud); 12: a move lacking less than its ends' height difference goes up by what it lacks; 11: the rest search also refines the thin band beside concave edges a ball of 0.9 r reaches; 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
                   // 3: moves and links kept off the part's faces exactly (MeshDistance::least_along)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), kept off "
@@ -42,6 +43,9 @@ NodeDecl make_setup_programs_node() {
       .input("base", "Report",
              "mesh.setup_base's report: faces within base_angle of its base_direction sit on the table, and rest "
              "passes leave them; absent: every face may get rest passes", false)
+      .input("cloud", "Cloud",
+             "the points the part was measured at (the cloud `mesh` was made from): balls, moves and links are kept "
+             "off them too, where the mesh does not hold them all (a fold, a filled hole)", false)
       .output("file", "File", "the setups file")
       .output("programs", "SetupPaths", "each program's moves with its part_to_machine (post.simulate_part)")
       .output("report", "Report", "{setups: [{name, gcode, passes, moves, clearance_z (mm, machine frame), lifted (ball positions kept off "
@@ -105,7 +109,9 @@ NodeDecl make_setup_programs_node() {
     std::vector<SetupProgram> programs;
     try {
       setups = setups_from_report(setups_report, counts.size());
-      programs = setup_programs(*path, counts, setups, *mesh, link, g, off_part, &rest, &rest_result);
+      const auto cloud = ctx.has_input("cloud") ? ctx.input<PointCloud>("cloud") : nullptr;
+      programs = setup_programs(*path, counts, setups, *mesh, link, g, off_part, &rest, &rest_result,
+                                cloud ? cloud->points : std::vector<Eigen::Vector3d>{});
     } catch (const std::exception& e) {
       throw NodeError(std::string("post.setup_programs: ") + e.what());
     }

@@ -196,6 +196,39 @@ TEST(MeshDistance, TheLeastAlongASegmentIsFoundBetweenItsSamples) {
 }
 
 
+TEST(MeshDistance, PointsThePartHoldsBesideItsFacesCountAsPartOfIt) {
+  // The unit cube and two points its faces do not hold: one 0.3 above the top's middle, one
+  // inside. Distances are to the union: the nearer of the faces and the points.
+  const MeshDistance faces(test::cube_mesh(3));
+  const MeshDistance part = faces.with_points({V(0.5, 0.5, 1.3), V(0.5, 0.5, 0.5)});
+  EXPECT_NEAR(part(V(0.5, 0.5, 2)), 0.7, 1e-12);  // the faces: 1
+  EXPECT_NEAR(part(V(0.5, 0.5, 2), V(0.5, 0.5, 1)), 0.7, 1e-12);
+  EXPECT_NEAR(part(V(3, 3, 3)), faces(V(3, 3, 3)), 1e-12);
+  EXPECT_NEAR(part.signed_distance(V(0.5, 0.5, 1.5)), 0.2, 1e-12);
+  EXPECT_NEAR(part.signed_distance(V(0.5, 0.5, 1.1)), 0.1, 1e-12);  // the faces nearer
+  EXPECT_NEAR(part.signed_distance(V(0.5, 0.5, 0.6)), -0.4, 1e-12);  // inside: the inner point does not count
+  // A segment over the point comes within 0.2 of it, 0.5 of the faces.
+  V where;
+  std::size_t evaluations = 0;
+  const double least = part.least_along(V(-1, 0.5, 1.5), V(2, 0.5, 1.5), 0.4, 1, 1e-6, where, evaluations, false);
+  EXPECT_LE(least, 0.2 + 1e-12);
+  EXPECT_GE(least, 0.2 - 1e-3 * (1 - 0.2));  // to a thousandth of its depth under the floor
+  EXPECT_NEAR(where.x(), 0.5, 1e-3);
+  // Rays and the nearest face see the faces only.
+  EXPECT_TRUE(std::isinf(part.ray_distance(V(0.5, 0.5, 1.1), V(0, 0, 1))));
+  EXPECT_NEAR(part.closest_point(V(0.5, 0.5, 1.4)).z(), 1, 1e-12);
+  // Placed, the points move with the faces.
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, V(1, 2, 3).normalized()).toRotationMatrix();
+  const V t(5, -2, 0.5);
+  EXPECT_NEAR(part.placed(R, t)(R * V(0.5, 0.5, 2) + t), 0.7, 1e-12);
+  EXPECT_NEAR(faces.placed(R, t).with_points({V(0.5, 0.5, 1.3)})(R * V(0.5, 0.5, 2) + t), 0.7, 1e-12);
+  // Without faces, the points alone; none: as before.
+  EXPECT_NEAR(MeshDistance(Mesh()).with_points({V(0, 0, 0)})(V(0, 3, 4)), 5, 1e-12);
+  EXPECT_NEAR(faces.with_points({})(V(0.5, 0.5, 2)), 1, 1e-12);
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { faces.with_points({V(0, std::nan(""), 0)}); }),
+            "a point the part holds is not finite");
+}
+
 // CGAL's exact predicates turn a NaN into a GMP rational, and GMP ends the process (SIGFPE): the
 // query is refused with an exception the node reports instead.
 TEST(MeshDistance, APointThatIsNotFiniteIsRefusedNotACrash) {
