@@ -67,9 +67,16 @@ struct CloudEnvelope {
 //         out, a crest; above it for in, a valley; l_f its longest edge, at most twice the larger of
 //         s and the gap g_f it bridges), each vertex the largest of its faces'; faces with a corner on a feature edge or at no point are left out
 //         (those corners are bounded below, and a face's tilt through them with them), and a vertex
-//         on a feature edge gets none from its own faces.
+//         on a feature edge gets none from its own faces. Where the points over a face and a
+//         spacing around it fit one local surface (quadric, largest residual m at most a quarter
+//         spacing, the face bridging no gap wider than twice their own spacing), the face's
+//         allowance is at most that surface's height over the face's plane (1.1 times the largest
+//         on a grid of sixths of the face; out where it stands above, in where below) plus 3 m:
+//         a random cloud's faces turn against each other far more than a smooth part bends.
 //         Instead, a vertex at no point of the cloud (farther than 1e-6 mm from every one: where
-//         mesh.sharpen extrapolated local surfaces to meet at an edge or a corner) is measured
+//         mesh.sharpen extrapolated local surfaces to meet at an edge or a corner; off a feature
+//         edge and within a quarter spacing of a point, as where mesh.repair collapsed a sliver,
+//         that distance bounds it both ways instead) is measured
 //         against each face of the part around it (the faces reached from its own across the other
 //         edges without leaving the points' search radius): the local surface (quadric) of that face's points nearest it (the first of 6, 12, 24 or 48 spacings
 //         holding 20; a point on the face nearest it), its height h above that surface and the

@@ -38,7 +38,10 @@ NodeDecl make_cloud_envelope_node() {
   //    corners (its longest edge / 2 x tan of half the turn around it), crest out, valley in, and no
   //    allowance for the gaps faces bridge (the crease's chord counts them); a vertex's face of the
   //    part is the faces reached within its points' search radius (was joined over the whole mesh)
-  d.version = 9;
+  //  10: with exact feature edges, a face whose points (over it and a spacing around) fit one
+  //    local surface gets at most that surface's bulge over the face plus 3 misfits (was the crease
+  //    its neighbours' turn allows alone)
+  d.version = 10;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "
