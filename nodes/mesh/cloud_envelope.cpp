@@ -29,6 +29,7 @@ constexpr std::size_t kSidePoints = 2 * kMinSurfacePoints;  // points that make 
 // shape bias: the part's facets or curvature the quadric misses), as cloud.height_field's model
 constexpr double kMisfits = 3;
 constexpr double kMostMisfit = 0.25;  // spacings: a face's local surface missing its points by more fits none
+constexpr double kFlat = 1e-3;       // mm: a face allowance this small is not worth a local surface
 constexpr double kNearPoint = 0.25;   // spacings: a vertex off a feature edge this near a point is bounded by that distance
 }  // namespace
 
@@ -209,6 +210,30 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
         std::vector<Eigen::Vector3d> near;
         for (std::size_t f = r.begin(); f < r.end(); ++f) {
           if (!(g.area[f] > 0) || measured(std::uint32_t(f))) continue;
+          below.assign(1, std::uint32_t(f));
+          above.assign(1, std::uint32_t(f));
+          double longest = 0;
+          for (std::size_t k = 0, m = mesh.face_size(f); k < m; ++k) {
+            const std::uint32_t v = mesh.face(f)[k];
+            longest = std::max(longest, (mesh.vertices[mesh.face(f)[(k + 1) % m]] - mesh.vertices[v]).norm());
+            for (std::size_t j = 0; j < around.count(v); ++j) {
+              const std::uint32_t h = around.faces(v)[j];
+              if (h == f || !(g.area[h] > 0) || measured(h)) continue;
+              auto& side = g.normal[f].dot(g.centroid[h] - g.centroid[f]) < 0 ? below : above;
+              if (std::find(side.begin(), side.end(), h) == side.end()) side.push_back(h);
+            }
+          }
+          const auto crease = [&](const std::vector<std::uint32_t>& faces) {
+            double c = 1;  // the least cosine between two of them
+            for (std::size_t i = 0; i < faces.size(); ++i)
+              for (std::size_t j = i + 1; j < faces.size(); ++j) c = std::min(c, g.normal[faces[i]].dot(g.normal[faces[j]]));
+            const double chord = std::min(longest, 2 * std::max(e.spacing_median, face_gap[f]));
+            c = std::clamp(c, 0.0, 1.0);  // beyond 90 degrees: as 90, half the chord
+            return bend_spacings * chord / 2 * std::sqrt((1 - c) / (1 + c));  // tan(T / 2)
+          };
+          const double crest = crease(below), valley = crease(above);
+          face_out[f] = crest, face_in[f] = valley;
+          if (std::max(crest, valley) <= kFlat) continue;  // nothing a surface could lower
           // The points over the whole face and a spacing beyond its edges (a crease along or
           // across it leaves them on two surfaces), kSidePoints at least.
           double around_face = 0;
@@ -259,29 +284,8 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
               surface_in = 1.1 * bend_spacings * below_plane + kMisfits * misfit;
             }
           }
-          below.assign(1, std::uint32_t(f));
-          above.assign(1, std::uint32_t(f));
-          double longest = 0;
-          for (std::size_t k = 0, m = mesh.face_size(f); k < m; ++k) {
-            const std::uint32_t v = mesh.face(f)[k];
-            longest = std::max(longest, (mesh.vertices[mesh.face(f)[(k + 1) % m]] - mesh.vertices[v]).norm());
-            for (std::size_t j = 0; j < around.count(v); ++j) {
-              const std::uint32_t h = around.faces(v)[j];
-              if (h == f || !(g.area[h] > 0) || measured(h)) continue;
-              auto& side = g.normal[f].dot(g.centroid[h] - g.centroid[f]) < 0 ? below : above;
-              if (std::find(side.begin(), side.end(), h) == side.end()) side.push_back(h);
-            }
-          }
-          const auto crease = [&](const std::vector<std::uint32_t>& faces) {
-            double c = 1;  // the least cosine between two of them
-            for (std::size_t i = 0; i < faces.size(); ++i)
-              for (std::size_t j = i + 1; j < faces.size(); ++j) c = std::min(c, g.normal[faces[i]].dot(g.normal[faces[j]]));
-            const double chord = std::min(longest, 2 * std::max(e.spacing_median, face_gap[f]));
-            c = std::clamp(c, 0.0, 1.0);  // beyond 90 degrees: as 90, half the chord
-            return bend_spacings * chord / 2 * std::sqrt((1 - c) / (1 + c));  // tan(T / 2)
-          };
-          face_out[f] = std::min(crease(below), surface_out);
-          face_in[f] = std::min(crease(above), surface_in);
+          face_out[f] = std::min(crest, surface_out);
+          face_in[f] = std::min(valley, surface_in);
         }
       });
       for (std::size_t f = 0; f < mesh.num_faces(); ++f)
