@@ -13,6 +13,7 @@
 #include <numbers>
 #include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include "nodes/geom/kd_tree.h"
 #include "nodes/geom/local_surface.h"
@@ -31,6 +32,35 @@ constexpr double kMisfits = 3;
 constexpr double kMostMisfit = 0.25;  // spacings: a face's local surface missing its points by more fits none
 constexpr double kFlat = 1e-3;       // mm: a face allowance this small is not worth a local surface
 constexpr double kNearPoint = 0.25;   // spacings: a vertex off a feature edge this near a point is bounded by that distance
+
+// The largest distance of the points from the surface along its normal.
+double largest_residual(const LocalSurface& surface, const std::vector<Eigen::Vector3d>& points) {
+  double misfit = 0;
+  for (const auto& p : points) misfit = std::max(misfit, std::abs(surface.value(p)));
+  return misfit;
+}
+
+// How far the surface stands above (first) and below (second) face f's plane within the face,
+// along `normal` (the face's outward normal): its largest height on a grid of sixths of each
+// triangle of the face's fan.
+std::pair<double, double> bulge_over_face(const LocalSurface& surface, const Mesh& mesh, std::size_t f,
+                                          const Eigen::Vector3d& normal) {
+  const double outward = surface.normal.dot(normal) < 0 ? -1 : 1;
+  double above = 0, below = 0;
+  const std::uint32_t* corner = mesh.face(f);
+  for (std::size_t k = 1; k + 1 < mesh.face_size(f); ++k)
+    for (int i = 0; i <= 6; ++i)
+      for (int j = 0; i + j <= 6; ++j) {
+        const Eigen::Vector3d x = mesh.vertices[corner[0]] +
+                                  (i / 6.0) * (mesh.vertices[corner[k]] - mesh.vertices[corner[0]]) +
+                                  (j / 6.0) * (mesh.vertices[corner[k + 1]] - mesh.vertices[corner[0]]);
+        // x's height over the surface: the part stands above x by -height there.
+        const double height = outward * surface.value(x);
+        above = std::max(above, -height);
+        below = std::max(below, height);
+      }
+  return {above, below};
+}
 }  // namespace
 
 CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d>& points, int k, double max_gap,
@@ -258,28 +288,11 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
           // flat facets (the fandisk's: 8 points per mm² beside a median of 37).
           const double local_spacing = covered * std::sqrt(std::numbers::pi / double(std::max<std::size_t>(near.size(), 1)));
           if (surface && face_gap[f] <= 2 * local_spacing) {
-            double misfit = 0;
-            for (const auto& p : near) misfit = std::max(misfit, std::abs(surface->value(p)));
+            const double misfit = largest_residual(*surface, near);
             if (misfit <= kMostMisfit * e.spacing_median) {
-              // The surface's height along the face's normal over its plane, on a grid of sixths of
-              // the face (each triangle of its fan), and a tenth more for where it rises between
-              // the grid's points (on a jittered cylinder a grid of thirds without it left the outer
-              // mesh 0.0004 mm inside the part).
-              const double outward = surface->normal.dot(g.normal[f]) < 0 ? -1 : 1;
-              double above_plane = 0, below_plane = 0;
-              const std::uint32_t* corner = mesh.face(f);
-              for (std::size_t k = 1; k + 1 < mesh.face_size(f); ++k)
-                for (int i = 0; i <= 6; ++i)
-                  for (int j = 0; i + j <= 6; ++j) {
-                    const Eigen::Vector3d x = mesh.vertices[corner[0]] +
-                                              (i / 6.0) * (mesh.vertices[corner[k]] - mesh.vertices[corner[0]]) +
-                                              (j / 6.0) * (mesh.vertices[corner[k + 1]] - mesh.vertices[corner[0]]);
-                    // x's height over the surface, along the surface's outward normal: the part
-                    // stands above x by -height there.
-                    const double height = outward * surface->value(x);
-                    above_plane = std::max(above_plane, -height);
-                    below_plane = std::max(below_plane, height);
-                  }
+              // A tenth more for where it rises between the grid's points (on a jittered cylinder a
+              // grid of thirds without it left the outer mesh 0.0004 mm inside the part).
+              const auto [above_plane, below_plane] = bulge_over_face(*surface, mesh, f, g.normal[f]);
               surface_out = 1.1 * bend_spacings * above_plane + kMisfits * misfit;
               surface_in = 1.1 * bend_spacings * below_plane + kMisfits * misfit;
             }
@@ -430,8 +443,7 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
               continue;
             }
             const double outward = surface->normal.dot(facing) < 0 ? -1 : 1;
-            double misfit = 0;
-            for (const auto& p : side_points) misfit = std::max(misfit, std::abs(surface->value(p)));
+            const double misfit = largest_residual(*surface, side_points);
             // Points of two faces (an edge not flagged), or a surface curved too tightly for a quadric
             // over them: three misfits of up to a spacing had moved the fandisk cloud's vertices up to
             // 1.1 mm beside neighbours moved 0.05 (259 faces of the outer mesh turned over; 47 so).
