@@ -256,6 +256,59 @@ double MeshDistance::least_along(const Eigen::Vector3d& a_placed, const Eigen::V
   return bound;
 }
 
+bool MeshDistance::clear_along(const Eigen::Vector3d& a_placed, const Eigen::Vector3d& b_placed, double step,
+                               double floor, std::size_t* evaluations) const {
+  const Eigen::Vector3d a = to_mesh(a_placed), b = to_mesh(b_placed);
+  point(a), point(b);  // refuses a point that is not finite
+  const double L = (b - a).norm();
+  // Each distance's search starts from the last nearest point: along a segment they are near.
+  Kernel::Point_3 hint;
+  bool has_hint = false;
+  std::size_t asked = 0;
+  auto distance = [&](double t) {
+    ++asked;
+    const Eigen::Vector3d p = a + (b - a) * (L > 0 ? t / L : 0.0);
+    double d = to_held_points(p);
+    if (!impl_->tris.empty()) {
+      const Kernel::Point_3 q = point(p);
+      hint = has_hint ? impl_->tree.closest_point(q, hint) : impl_->tree.closest_point(q);
+      has_hint = true;
+      d = std::min(d, std::sqrt(CGAL::squared_distance(q, hint)));
+    }
+    return d;
+  };
+  std::size_t budget = 4096 + 64 * std::size_t(std::ceil(L / step));
+  auto answer = [&](bool clear) {
+    if (evaluations) *evaluations += asked;
+    return clear;
+  };
+  double t0 = 0, d0 = distance(0);
+  if (!(d0 >= floor)) return answer(false);
+  std::vector<std::array<double, 4>> todo;  // s0, s1, d0, d1 (arc length)
+  while (t0 < L) {
+    const double t1 = std::min(L, t0 + std::max(step, d0 - floor));
+    const double d1 = distance(t1);
+    if (!(d1 >= floor)) return answer(false);
+    todo.push_back({t0, t1, d0, d1});
+    while (!todo.empty()) {
+      const auto [s0, s1, e0, e1] = todo.back();
+      todo.pop_back();
+      const double gap = s1 - s0;
+      const double lip = 0.5 * (e0 + e1 - gap);
+      const double lower = std::max(lip, lip > 0 ? std::min(e0, e1) - gap * gap / (8 * lip) : -INFINITY);
+      if (lower >= floor) continue;
+      if (gap < 1e-6 || budget == 0) return answer(false);
+      --budget;
+      const double sm = 0.5 * (s0 + s1), dm = distance(sm);
+      if (!(dm >= floor)) return answer(false);
+      todo.push_back({s0, sm, e0, dm});
+      todo.push_back({sm, s1, dm, e1});
+    }
+    t0 = t1, d0 = d1;
+  }
+  return answer(true);
+}
+
 std::vector<double> distances_to_mesh(const std::vector<Eigen::Vector3d>& points, const Mesh& m) {
   const MeshDistance distance(m);
   std::vector<double> d(points.size());

@@ -73,6 +73,14 @@ class MeshDistance {
   // ambiguous) the result is still a lower bound, only not that close.
   double least_along(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double step, double floor, double eps,
                      Eigen::Vector3d& where, std::size_t& evaluations, bool is_signed = true) const;
+  // Whether every point of the segment [a, b] is at least `floor` from the faces and points
+  // (unsigned): least_along's test, answered sooner. Marched from a by at least `step`, farther
+  // where the distance leaves room (1-Lipschitz: nothing within d - floor of a point d away comes
+  // nearer than floor), each stretch halved under least_along's bounds until they clear it, and
+  // false at the first distance under it. Conservative: past 4096 + 64 L / step halvings, or a
+  // stretch shorter than 1e-6 mm not yet cleared, false. `evaluations` counts the distances asked.
+  bool clear_along(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double step, double floor,
+                   std::size_t* evaluations = nullptr) const;
 
  private:
   struct Impl;

@@ -47,10 +47,8 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
   const double top = part_top_z + r + 1;
   // Whether the ball goes straight up clear from centre height z at (x, y) of c.
   auto goes_up_clear = [&](const Eigen::Vector3d& c, double z) {
-    Eigen::Vector3d nearest;
-    std::size_t evaluations = 0;
-    return z >= top || part.least_along(Eigen::Vector3d(c.x(), c.y(), z), Eigen::Vector3d(c.x(), c.y(), top), r / 4,
-                                        r - tolerance, 1e-4, nearest, evaluations, false) >= r - tolerance;
+    return z >= top || part.clear_along(Eigen::Vector3d(c.x(), c.y(), z), Eigen::Vector3d(c.x(), c.y(), top), r / 4,
+                                        r - tolerance);
   };
   auto clear_above = [&](Eigen::Vector3d& contact, const Eigen::Vector3d& n) {
     const Eigen::Vector3d c = contact + r * n;

@@ -182,9 +182,7 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
     const Eigen::Vector3d c = samples[i].p + r * n;
     if (std::isfinite(distance.ray_distance(c, axis[s]))) return false;  // its centre line meets the part
     const Eigen::Vector3d top = c + (highest[s] - c.dot(axis[s]) + r + 1) * axis[s];
-    Eigen::Vector3d where;
-    std::size_t evaluations = 0;
-    return distance.least_along(c, top, r / 4, r - tol_keep, 1e-4, where, evaluations, false) >= r - tol_keep;
+    return distance.clear_along(c, top, r / 4, r - tol_keep);
   };
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> roots;

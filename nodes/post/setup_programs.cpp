@@ -105,9 +105,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
       const double r = path.tool_radius;
       linking.tolerance = tolerance;
       linking.link_clear = [&distance, r, tolerance](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-        Eigen::Vector3d nearest;
-        std::size_t evaluations = 0;
-        return distance.least_along(a, b, r / 4, r - tolerance, 1e-4, nearest, evaluations, false) >= r - tolerance;
+        return distance.clear_along(a, b, r / 4, r - tolerance);
       };
     }
     const LinkedPath linked = link_passes(local, placed, linking);

@@ -195,6 +195,50 @@ TEST(MeshDistance, TheLeastAlongASegmentIsFoundBetweenItsSamples) {
   EXPECT_GE(far, 1 - 1e-12);
 }
 
+TEST(MeshDistance, ASegmentIsClearWhereItsLeastDistanceIsAtLeastTheFloor) {
+  const MeshDistance cube(test::cube_mesh(3));
+  // Parallel to the edge x = z = 1 at sqrt(0.08) = 0.2828 from it, sampled only every 1.5: the
+  // least is between the samples and still seen.
+  EXPECT_TRUE(cube.clear_along(V(1.2, -1, 1.2), V(1.2, 2, 1.2), 1.5, 0.2828));
+  EXPECT_FALSE(cube.clear_along(V(1.2, -1, 1.2), V(1.2, 2, 1.2), 1.5, 0.2829));
+  EXPECT_FALSE(cube.clear_along(V(0.5, 0.5, -1), V(0.5, 0.5, 2), 0.7, 0.01));  // through it
+  EXPECT_TRUE(cube.clear_along(V(0.5, 0.5, 1.5), V(0.5, 0.5, 1.5), 0.7, 0.5));  // a point
+  // It answers least_along's question: on 400 random segments and floors, the same answer
+  // wherever the least is not within 1e-4 of the floor.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.5, 2.5), f(0.05, 1.2);
+  int compared = 0;
+  for (int k = 0; k < 400; ++k) {
+    const V a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng));
+    const double floor = f(rng);
+    V where;
+    std::size_t n = 0;
+    const double least = cube.least_along(a, b, 0.1, 2, 1e-7, where, n, false);
+    if (std::abs(least - floor) < 1e-4) continue;
+    ++compared;
+    EXPECT_EQ(cube.clear_along(a, b, 0.25, floor), least >= floor) << k;
+  }
+  EXPECT_GT(compared, 390);
+  // Rising from a ball's centre on the top to 50 above it: where the distance leaves room the
+  // march strides, far fewer distances than least_along's samples every step.
+  std::size_t marched = 0, sampled = 0;
+  V where;
+  EXPECT_TRUE(cube.clear_along(V(0.5, 0.5, 1.5), V(0.5, 0.5, 51), 0.125, 0.499, &marched));
+  EXPECT_GE(cube.least_along(V(0.5, 0.5, 1.5), V(0.5, 0.5, 51), 0.125, 0.499, 1e-4, where, sampled, false), 0.499);
+  EXPECT_LT(marched, 40u);
+  EXPECT_GT(sampled, 396u);
+  // Points the part holds count: 0.2 under the segment's middle.
+  const MeshDistance part = cube.with_points({V(0.5, 0.5, 1.3)});
+  EXPECT_FALSE(part.clear_along(V(-1, 0.5, 1.5), V(2, 0.5, 1.5), 0.4, 0.25));
+  EXPECT_TRUE(part.clear_along(V(-1, 0.5, 1.5), V(2, 0.5, 1.5), 0.4, 0.19));
+  // Placed, asked in the placed frame.
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, V(1, 2, 3).normalized()).toRotationMatrix();
+  const V t(5, -2, 0.5);
+  EXPECT_TRUE(cube.placed(R, t).clear_along(R * V(1.2, -1, 1.2) + t, R * V(1.2, 2, 1.2) + t, 1.5, 0.2828));
+  EXPECT_FALSE(cube.placed(R, t).clear_along(R * V(1.2, -1, 1.2) + t, R * V(1.2, 2, 1.2) + t, 1.5, 0.2829));
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { cube.clear_along(V(0, std::nan(""), 0), V(0, 0, 0), 1, 1); }),
+            "a distance to the mesh was asked at a point that is not finite");
+}
 
 TEST(MeshDistance, PointsThePartHoldsBesideItsFacesCountAsPartOfIt) {
   // The unit cube and two points its faces do not hold: one 0.3 above the top's middle, one
