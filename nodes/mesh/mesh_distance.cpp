@@ -138,6 +138,16 @@ double MeshDistance::faces_unsigned(const Eigen::Vector3d& p) const {
   return std::sqrt(impl_->tree.squared_distance(point(p)));
 }
 
+double MeshDistance::unsigned_near(const Eigen::Vector3d& p, Eigen::Vector3d& near, bool& has_near) const {
+  const double to_points = to_held_points(p);
+  if (impl_->tris.empty()) return to_points;
+  const Kernel::Point_3 q = point(p);
+  const Kernel::Point_3 foot = has_near ? impl_->tree.closest_point(q, point(near)) : impl_->tree.closest_point(q);
+  near = {foot.x(), foot.y(), foot.z()};
+  has_near = true;
+  return std::min(to_points, std::sqrt(CGAL::squared_distance(q, foot)));
+}
+
 double MeshDistance::operator()(const Eigen::Vector3d& p, const Eigen::Vector3d& hint) const {
   const Eigen::Vector3d q = to_mesh(p);
   if (impl_->tris.empty()) return to_held_points(q);
@@ -214,7 +224,9 @@ double MeshDistance::least_along(const Eigen::Vector3d& a_placed, const Eigen::V
                                  bool is_signed) const {
   // In the mesh's own frame, `where` taken back at the end.
   const Eigen::Vector3d a = to_mesh(a_placed), b = to_mesh(b_placed);
-  auto distance = [&](const Eigen::Vector3d& p) { return is_signed ? signed_in_mesh(p) : unsigned_in_mesh(p); };
+  Eigen::Vector3d near;
+  bool has_near = false;
+  auto distance = [&](const Eigen::Vector3d& p) { return is_signed ? signed_in_mesh(p) : unsigned_near(p, near, has_near); };
   const double L = (b - a).norm();
   const int k = std::max(1, static_cast<int>(std::ceil(L / step)));
   std::vector<double> d(k + 1);
@@ -261,21 +273,12 @@ bool MeshDistance::clear_along(const Eigen::Vector3d& a_placed, const Eigen::Vec
   const Eigen::Vector3d a = to_mesh(a_placed), b = to_mesh(b_placed);
   point(a), point(b);  // refuses a point that is not finite
   const double L = (b - a).norm();
-  // Each distance's search starts from the last nearest point: along a segment they are near.
-  Kernel::Point_3 hint;
-  bool has_hint = false;
+  Eigen::Vector3d near;
+  bool has_near = false;
   std::size_t asked = 0;
   auto distance = [&](double t) {
     ++asked;
-    const Eigen::Vector3d p = a + (b - a) * (L > 0 ? t / L : 0.0);
-    double d = to_held_points(p);
-    if (!impl_->tris.empty()) {
-      const Kernel::Point_3 q = point(p);
-      hint = has_hint ? impl_->tree.closest_point(q, hint) : impl_->tree.closest_point(q);
-      has_hint = true;
-      d = std::min(d, std::sqrt(CGAL::squared_distance(q, hint)));
-    }
-    return d;
+    return unsigned_near(a + (b - a) * (L > 0 ? t / L : 0.0), near, has_near);
   };
   std::size_t budget = 4096 + 64 * std::size_t(std::ceil(L / step));
   auto answer = [&](bool clear) {

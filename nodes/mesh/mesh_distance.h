@@ -91,6 +91,9 @@ class MeshDistance {
   double unsigned_in_mesh(const Eigen::Vector3d& p) const;  // p in the mesh's own frame
   double signed_in_mesh(const Eigen::Vector3d& p) const;
   double faces_unsigned(const Eigen::Vector3d& p) const;  // the faces alone, the mesh's frame
+  // unsigned_in_mesh, the faces' search started from `near` (a point on them near p, when
+  // has_near), which then gets p's nearest point on them: along a segment the searches are near.
+  double unsigned_near(const Eigen::Vector3d& p, Eigen::Vector3d& near, bool& has_near) const;
   double faces_signed(const Eigen::Vector3d& p) const;
   double to_held_points(const Eigen::Vector3d& p) const;  // +infinity without them
   std::shared_ptr<Impl> impl_;

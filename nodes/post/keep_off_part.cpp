@@ -88,11 +88,6 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
   ToolpathPass out;
   constexpr std::size_t kMiddle = SIZE_MAX;
   std::vector<std::size_t> origin;  // per ball of out: the pass's ball it is, or kMiddle (a move middle)
-  // A ball centre the tool cannot be at: too near the part, or under it (inside the solid or
-  // under an overhang: the unsigned distance alone misses a centre deep inside).
-  auto blocked = [&](const Eigen::Vector3d& c) {
-    return part(c) < r - tolerance || std::isfinite(part.ray_distance(c, Eigen::Vector3d::UnitZ()));
-  };
   // How far the move between ball centres ca and cb must go up: what it lacks in distance, or,
   // where a point of it lies under the part, what that point needs to clear it; 0 when clear.
   auto lacks = [&](const Eigen::Vector3d& ca, const Eigen::Vector3d& cb) {
@@ -100,17 +95,21 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
     std::size_t evaluations = 0;
     const double least = part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false);
     double need = least < r - tolerance ? r - tolerance - least : 0;
+    // Its points are r - tolerance off the part here; one under it (inside the solid or under an
+    // overhang: the unsigned distance alone misses a centre deep inside) is not clear either.
     for (int q = 1; q < 8 && need == 0; ++q) {
       Eigen::Vector3d c = ca + (cb - ca) * (q / 8.0);
-      if (blocked(c)) need = lift_clear(c, part, r, tolerance);
+      if (std::isfinite(part.ray_distance(c, Eigen::Vector3d::UnitZ()))) need = lift_clear(c, part, r, tolerance);
     }
     return need;
   };
-  std::function<void(const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&,
+  // Balls put in the middle of a move that comes too near the part, or passes under it; true when
+  // the move was found clear as it is (lacks() would say 0: the same test).
+  std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&,
                      int)>
       middle = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& na, const Eigen::Vector3d& b,
                    const Eigen::Vector3d& nb, int depth) {
-        if (depth == 0) return;
+        if (depth == 0) return false;
         const Eigen::Vector3d ca = a + r * na, cb = b + r * nb;
         // Where the move comes nearest the part, if nearer than r - tolerance (found exactly,
         // MeshDistance::least_along, unsigned: the part may be open); else where a point of it
@@ -128,25 +127,32 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
               break;
             }
         }
-        if (q < 0) return;
+        if (q < 0) return true;
         const Eigen::Vector3d n = ((1 - q) * na + q * nb).normalized();
-        if (!n.allFinite()) return;
+        if (!n.allFinite()) return false;
         Eigen::Vector3d m = (1 - q) * ca + q * cb - r * n;
         lift_point(m, n);
         middle(a, na, m, n, depth - 1);
         out.contact.push_back(m), out.normal.push_back(n), origin.push_back(kMiddle);
         if (!pass.uv.empty()) out.uv.push_back(out.uv.back());
         middle(m, n, b, nb, depth - 1);
+        return false;
       };
+  std::vector<char> clear(1, 0);  // move k-1 -> k found clear, its ends not moved since
   for (std::size_t k = 0; k < pass.contact.size(); ++k) {
-    if (k > 0) middle(pass.contact[k - 1], pass.normal[k - 1], pass.contact[k], pass.normal[k], 6);
+    const bool as_is = k > 0 && middle(pass.contact[k - 1], pass.normal[k - 1], pass.contact[k], pass.normal[k], 6);
+    clear.resize(out.contact.size() + 1, 0);
+    clear.back() = as_is;
     out.contact.push_back(pass.contact[k]), out.normal.push_back(pass.normal[k]), origin.push_back(k);
     if (!pass.uv.empty()) out.uv.push_back(pass.uv[k]);
   }
   // Where a move still reaches in (a narrow neck above a free pocket: its ends clear, its
   // middle not), its lower end is raised to its upper end's height, until no move does.
-  // A sweep checks the moves next to a point the previous one raised (the first, all of them).
-  std::vector<char> check(out.contact.size(), 1), next(out.contact.size(), 0);  // move k-1 -> k
+  // A sweep checks the moves next to a point the previous one raised (the first, all that the
+  // middles did not find clear).
+  clear.resize(out.contact.size(), 0);
+  std::vector<char> check(out.contact.size()), next(out.contact.size(), 0);  // move k-1 -> k
+  for (std::size_t k = 0; k < check.size(); ++k) check[k] = !clear[k];
   for (int sweep = 0; sweep < 50; ++sweep) {
     bool raised = false;
     std::fill(next.begin(), next.end(), 0);
@@ -154,7 +160,10 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
       if (!check[k]) continue;
       const Eigen::Vector3d ca = out.contact[k - 1] + r * out.normal[k - 1], cb = out.contact[k] + r * out.normal[k];
       const double need = lacks(ca, cb);
-      if (!(need > 0)) continue;
+      if (!(need > 0)) {
+        clear[k] = 1;
+        continue;
+      }
       // The lower end goes up to the upper end's height; ends already level (raised so before)
       // both go up by what the move lacks: raising one end to the other's height no longer
       // moves it (a move beside a slope kept 0.01 mm of a fandisk's side that way). So do the ends
@@ -175,8 +184,8 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
         lift_point(out.contact[e], out.normal[e]);
         ++stats.lifted;
         stats.lift_max = std::max(stats.lift_max, rise);
-        next[e] = 1;
-        if (e + 1 < next.size()) next[e + 1] = 1;
+        next[e] = 1, clear[e] = 0;
+        if (e + 1 < next.size()) next[e + 1] = 1, clear[e + 1] = 0;
       }
       raised = true;
     }
@@ -217,7 +226,7 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
   };
   std::size_t start = 0;
   for (std::size_t k = 1; k < out.contact.size(); ++k)
-    if (lacks(centre(k - 1), centre(k)) > 0) {
+    if (!clear[k] && lacks(centre(k - 1), centre(k)) > 0) {
       ++stats.splits;
       add_piece(start, k);
       start = k;
