@@ -1,11 +1,13 @@
 // What a distance query to a part's mesh costs (MeshDistance: the certificate's gouge check, the
 // programs' clearance, the setups' reach all ask it): ball centres r off the faces, asked signed
-// and unsigned, and along short moves as post.simulate_part asks them.
+// and unsigned, along short moves as post.simulate_part asks them, and whether each goes straight
+// up clear (a pass end, a rest setup): least_along against clear_along.
 //
 //   mesh_distance_bench MESH [SCALE] [R]     (default scale 1, r = 2 mm)
 //
 // Prints the mesh's triangles, microseconds per query and per move.
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -67,5 +69,45 @@ int main(int argc, char** argv) {
     sum += distance.least_along(centres[k], centres[k] + 0.5 * d, 0.07, r - 0.005, 1e-5, where, evaluations);
   }
   std::printf("moves:    %.2f us per move, %.1f distances each\n", 1e6 * seconds(t) / 5000, double(evaluations) / 5000);
+  // Verticals from each centre to 1 mm over the mesh's top, floor r - 0.00125 (e = 0.005):
+  // sampled every r / 4 and bounded (least_along), or marched (clear_along).
+  double top = -1e300;
+  for (const auto& v : mesh.vertices) top = std::max(top, v.z());
+  const double floor = r - 0.00125;
+  std::vector<char> sampled_clear(5000), marched_clear(5000);
+  evaluations = 0;
+  t = Clock::now();
+  for (std::size_t k = 0; k < 5000; ++k) {
+    Eigen::Vector3d where;
+    const Eigen::Vector3d up(centres[k].x(), centres[k].y(), std::max(top + r + 1, centres[k].z()));
+    sampled_clear[k] = distance.least_along(centres[k], up, r / 4, floor, 1e-4, where, evaluations, false) >= floor;
+  }
+  std::printf("verticals, least_along: %.2f us each, %.1f distances each\n", 1e6 * seconds(t) / 5000,
+              double(evaluations) / 5000);
+  evaluations = 0;
+  t = Clock::now();
+  for (std::size_t k = 0; k < 5000; ++k) {
+    const Eigen::Vector3d up(centres[k].x(), centres[k].y(), std::max(top + r + 1, centres[k].z()));
+    marched_clear[k] = distance.clear_along(centres[k], up, r / 4, floor, &evaluations);
+  }
+  // Where they differ, the least is within least_along's precision (1e-4) of the floor: its
+  // bound may fall under the floor there, or clear_along may stop short of proving it.
+  std::size_t only_marched = 0, only_sampled = 0, clear = 0;
+  for (std::size_t k = 0; k < 5000; ++k)
+    only_marched += marched_clear[k] && !sampled_clear[k], only_sampled += sampled_clear[k] && !marched_clear[k],
+        clear += marched_clear[k];
+  double least_where_differ = 1e300;  // their least, to 1e-9
+  for (std::size_t k = 0; k < 5000; ++k)
+    if (marched_clear[k] != sampled_clear[k]) {
+      Eigen::Vector3d where;
+      std::size_t n = 0;
+      const Eigen::Vector3d up(centres[k].x(), centres[k].y(), std::max(top + r + 1, centres[k].z()));
+      least_where_differ = std::min(least_where_differ, distance.least_along(centres[k], up, r / 4, r, 1e-9, where, n, false));
+    }
+  if (only_marched + only_sampled > 0)
+    std::printf("where they differ the least is %.9f, the floor %.9f\n", least_where_differ, floor);
+  std::printf("verticals, clear_along: %.2f us each, %.1f distances each; %zu of 5000 clear; clear by it alone %zu, "
+              "by least_along alone %zu\n",
+              1e6 * seconds(t) / 5000, double(evaluations) / 5000, clear, only_marched, only_sampled);
   return sum == 42 ? 1 : 0;  // keeps the sums alive
 }
