@@ -32,6 +32,14 @@ Kernel::Point_3 point(const Eigen::Vector3d& p) {
   return Kernel::Point_3(p.x(), p.y(), p.z());
 }
 
+// The least a distance to a set of points and faces can be between two points `gap` apart where
+// it is d0 and d1: (d0 + d1 - gap) / 2 (1-Lipschitz), and, where that is positive, min(d0, d1) -
+// gap^2 / (8 that) (a minimum of convex functions of curvature at most 1 / that).
+double least_between(double d0, double d1, double gap) {
+  const double lip = 0.5 * (d0 + d1 - gap);
+  return std::max(lip, lip > 0 ? std::min(d0, d1) - gap * gap / (8 * lip) : -INFINITY);
+}
+
 // Each polygon fanned from its first corner.
 Triangles triangles(const Mesh& m) {
   Triangles tris;
@@ -249,8 +257,7 @@ double MeshDistance::least_along(const Eigen::Vector3d& a_placed, const Eigen::V
     const auto [t0, t1, d0, d1] = todo.back();
     todo.pop_back();
     const double gap = (t1 - t0) * L;
-    const double lip = 0.5 * (d0 + d1 - gap);
-    const double lower = std::max(lip, lip > 0 ? std::min(d0, d1) - gap * gap / (8 * lip) : -INFINITY);
+    const double lower = least_between(d0, d1, gap);
     const double precision = std::max(eps, 1e-3 * (floor - least));
     if (lower >= std::min(floor, least - precision) || gap < 1e-6 || budget == 0) {
       if (lower < floor) bound = std::min(bound, lower);
@@ -297,8 +304,7 @@ bool MeshDistance::clear_along(const Eigen::Vector3d& a_placed, const Eigen::Vec
       const auto [s0, s1, e0, e1] = todo.back();
       todo.pop_back();
       const double gap = s1 - s0;
-      const double lip = 0.5 * (e0 + e1 - gap);
-      const double lower = std::max(lip, lip > 0 ? std::min(e0, e1) - gap * gap / (8 * lip) : -INFINITY);
+      const double lower = least_between(e0, e1, gap);
       if (lower >= floor) continue;
       if (gap < 1e-6 || budget == 0) return answer(false);
       --budget;
