@@ -7,6 +7,8 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -51,10 +53,34 @@ BasisAt bspline_basis(const std::vector<double>& knots, int degree, double t, in
   return b;
 }
 
-SurfaceJet evaluate(const BSplineSurface& s, double u, double v) {
-  const int du = std::min(2, s.degree_u), dv = std::min(2, s.degree_v);
-  const BasisAt bu = bspline_basis(s.knots_u, s.degree_u, u, du);
-  const BasisAt bv = bspline_basis(s.knots_v, s.degree_v, v, dv);
+namespace {
+
+// The last basis each thread evaluated in u and in v for a patch (BSplinePatch::id_, never reused):
+// the planners sample along lines of constant u or v, and the other parameter's basis repeats.
+struct BasisMemo {
+  std::uint64_t owner = 0;  // 0: empty
+  double t = 0;
+  BasisAt basis;
+};
+thread_local std::array<BasisMemo, 2> basis_memo;
+std::atomic<std::uint64_t> next_patch_id{1};
+
+// bspline_basis with second derivatives (fewer if the degree is lower), remembered per thread
+// for owner != 0 in direction dir (0: u, 1: v).
+const BasisAt& basis_with_second(const std::vector<double>& knots, int degree, double t, std::uint64_t owner, int dir,
+                                 BasisAt& scratch) {
+  if (owner == 0) return scratch = bspline_basis(knots, degree, t, std::min(2, degree));
+  BasisMemo& m = basis_memo[dir];
+  if (m.owner != owner || m.t != t) m.basis = bspline_basis(knots, degree, t, std::min(2, degree)), m.owner = owner, m.t = t;
+  return m.basis;
+}
+
+SurfaceJet evaluate_jet(const BSplineSurface& s, double u, double v, int order, std::uint64_t owner) {
+  if (order != 1 && order != 2) throw std::invalid_argument("evaluate: order " + std::to_string(order) + " (1 or 2)");
+  // The basis always with second derivatives: its lower rows then come out the same either way.
+  BasisAt su, sv;
+  const BasisAt& bu = basis_with_second(s.knots_u, s.degree_u, u, owner, 0, su);
+  const BasisAt& bv = basis_with_second(s.knots_v, s.degree_v, v, owner, 1, sv);
   auto at = [](const BasisAt& b, int d, int k) { return d < b.values.rows() ? b.values(d, k) : 0.0; };
   SurfaceJet j;
   j.point = j.du = j.dv = j.duu = j.duv = j.dvv = Eigen::Vector3d::Zero();
@@ -64,12 +90,17 @@ SurfaceJet evaluate(const BSplineSurface& s, double u, double v) {
       j.point += at(bu, 0, a) * at(bv, 0, b) * p;
       j.du += at(bu, 1, a) * at(bv, 0, b) * p;
       j.dv += at(bu, 0, a) * at(bv, 1, b) * p;
+      if (order < 2) continue;
       j.duu += at(bu, 2, a) * at(bv, 0, b) * p;
       j.duv += at(bu, 1, a) * at(bv, 1, b) * p;
       j.dvv += at(bu, 0, a) * at(bv, 2, b) * p;
     }
   return j;
 }
+
+}  // namespace
+
+SurfaceJet evaluate(const BSplineSurface& s, double u, double v, int order) { return evaluate_jet(s, u, v, order, 0); }
 
 Eigen::Vector3d surface_point(const BSplineSurface& s, double u, double v) {
   const BasisAt bu = bspline_basis(s.knots_u, s.degree_u, u, 0);
@@ -115,7 +146,8 @@ std::string bspline_problem(const BSplineSurface& s) {
 }
 
 BSplinePatch::BSplinePatch(BSplineSurface surface, const Eigen::Vector3d& up, double uncertainty, double min_up_dot)
-    : surface_(std::move(surface)), up_(up.normalized()), uncertainty_(uncertainty), min_up_dot_(min_up_dot) {
+    : surface_(std::move(surface)), up_(up.normalized()), uncertainty_(uncertainty), min_up_dot_(min_up_dot),
+      id_(next_patch_id++) {
   if (const std::string problem = bspline_problem(surface_); !problem.empty())
     throw std::invalid_argument("BSplinePatch: " + problem);
   if (!up_.allFinite()) throw std::invalid_argument("BSplinePatch: the up direction is zero or not finite");
@@ -138,29 +170,38 @@ Eigen::Vector3d jet_normal(const SurfaceJet& j, const Eigen::Vector3d& up) {
 }
 }  // namespace
 
-SurfaceDerivatives BSplinePatch::derivatives(const Eigen::Vector2d& uv) const {
-  const Eigen::Vector2d c = domain_.clamp(uv);
-  const SurfaceJet j = evaluate(surface_, c.x(), c.y());
-  SurfaceDerivatives d;
-  d.sample.position = j.point;
-  d.sample.normal = jet_normal(j, up_);
-  if (d.sample.normal.dot(up_) < min_up_dot_) {
+SurfaceSample BSplinePatch::sample(const SurfaceJet& j, const Eigen::Vector2d& uv) const {
+  SurfaceSample x;
+  x.position = j.point;
+  x.normal = jet_normal(j, up_);
+  if (x.normal.dot(up_) < min_up_dot_) {
     constexpr int kSteps = 64;  // on the way to the centre
     const Eigen::Vector2d centre(0.5, 0.5);
-    d.sample.normal = up_;
+    x.normal = up_;
     for (int k = 1; k <= kSteps; ++k) {
-      const Eigen::Vector2d x = c + (centre - c) * (double(k) / kSteps);
-      if (const Eigen::Vector3d n = jet_normal(evaluate(surface_, x.x(), x.y()), up_); n.dot(up_) >= min_up_dot_) {
-        d.sample.normal = n;
+      const Eigen::Vector2d y = uv + (centre - uv) * (double(k) / kSteps);
+      if (const Eigen::Vector3d n = jet_normal(evaluate_jet(surface_, y.x(), y.y(), 1, id_), up_); n.dot(up_) >= min_up_dot_) {
+        x.normal = n;
         break;
       }
     }
   }
-  d.sample.uncertainty = uncertainty_;
+  x.uncertainty = uncertainty_;
+  return x;
+}
+
+SurfaceDerivatives BSplinePatch::derivatives(const Eigen::Vector2d& uv) const {
+  const Eigen::Vector2d c = domain_.clamp(uv);
+  const SurfaceJet j = evaluate_jet(surface_, c.x(), c.y(), 2, id_);
+  SurfaceDerivatives d;
+  d.sample = sample(j, c);
   d.ru = j.du, d.rv = j.dv, d.ruu = j.duu, d.ruv = j.duv, d.rvv = j.dvv;
   return d;
 }
 
-SurfaceSample BSplinePatch::operator()(const Eigen::Vector2d& uv) const { return derivatives(uv).sample; }
+SurfaceSample BSplinePatch::operator()(const Eigen::Vector2d& uv) const {
+  const Eigen::Vector2d c = domain_.clamp(uv);
+  return sample(evaluate_jet(surface_, c.x(), c.y(), 1, id_), c);
+}
 
 }  // namespace scallop

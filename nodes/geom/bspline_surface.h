@@ -49,11 +49,13 @@ struct BasisAt {
 };
 BasisAt bspline_basis(const std::vector<double>& knots, int degree, double t, int derivatives);
 
-// The surface and its partial derivatives at (u, v).
+// The surface and its partial derivatives at (u, v), up to the second (order 2) or the first
+// (order 1: duu, duv and dvv left zero; a sample's point and normal need no more, and the planners
+// ask for samples far more often than for curvatures).
 struct SurfaceJet {
   Eigen::Vector3d point, du, dv, duu, duv, dvv;
 };
-SurfaceJet evaluate(const BSplineSurface& s, double u, double v);
+SurfaceJet evaluate(const BSplineSurface& s, double u, double v, int order = 2);
 Eigen::Vector3d surface_point(const BSplineSurface& s, double u, double v);
 
 // A B-spline surface as the planners see it (ParametricSurface): the unit square, exact
@@ -80,11 +82,15 @@ class BSplinePatch final : public ParametricSurface {
   const BSplineSurface& surface() const { return surface_; }
 
  private:
+  // The point and normal of the jet j at uv (clamped to the square).
+  SurfaceSample sample(const SurfaceJet& j, const Eigen::Vector2d& uv) const;
+
   BSplineSurface surface_;
   Eigen::Vector3d up_;
   double uncertainty_, min_up_dot_;
   UVDomain domain_;
   double spacing_;
+  std::uint64_t id_;  // a number no other patch gets: the key of each thread's last basis evaluated
 };
 
 // Empty when s is well formed (degrees, knot counts and order, pole count, finite poles),

@@ -63,6 +63,7 @@ struct Near {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   double radius = -kInf;  // nothing collected yet
   std::vector<std::uint32_t> segments;
+  std::vector<double> d2;  // scratch: each segment's midpoint's squared distance from the sample
 };
 
 // Side s of a rectangle, walked counter-clockwise in (u, v): 0 bottom (v = v0), 1 right (u = u1),
@@ -158,7 +159,7 @@ class ContourPlanner {
     near_a.margin = near_b.margin = width > 0.05 ? std::min(width, 2.0) : 0.05;  // NaN too
     auto scallop = [&](double t, double f) {
       const SurfaceSample x = f_(at(t, f));
-      return std::min(scallop_at(x, ca, near_a), scallop_at(x, cb, near_b));
+      return scallop_at(x, cb, near_b, scallop_at(x, ca, near_a, kInf));
     };
     // The worst sample overall and within a strip's width of either end (where the inner contour
     // turns a corner, the scallop peaks at a point where three distance fields meet, and falls
@@ -178,8 +179,10 @@ class ContourPlanner {
       }
     }
     double worst = 0;
-    for (Best x : best) {
-      if (x.h < 0) continue;
+    for (int z = 0; z < 3; ++z) {
+      Best x = best[z];
+      // A corner's best that is the overall one climbs the same way.
+      if (x.h < 0 || (z > 0 && x.t == best[0].t && x.f == best[0].f)) continue;
       // Pattern search on a 3 x 3 stencil, halving it 12 times.
       double dt = 1.0 / (along - 1), df = 1.0 / (across + 1);
       for (int it = 0; it < 12; ++it, dt /= 2, df /= 2)
@@ -187,6 +190,7 @@ class ContourPlanner {
           moved = false;
           for (int i = -1; i <= 1; ++i)
             for (int j = -1; j <= 1; ++j) {
+              if (i == 0 && j == 0) continue;  // where it stands
               const double t = std::clamp(x.t + i * dt, 0.0, 1.0), f = std::clamp(x.f + j * df, 0.0, 1.0);
               const double h = scallop(t, f);
               if (h > x.h + 1e-12) x = {h, t, f}, moved = true;
@@ -258,16 +262,17 @@ class ContourPlanner {
     }
   }
 
-  // Scallop at x left by the balls swept along contour c (+infinity when they miss its normal).
-  // The ray cannot enter a capsule sooner than its distance from the segment, less r, which is
-  // at least (distance to the midpoint) - (half length) - r: the segments with midpoints within
-  // rho + r + the longest half length are looked at, rho growing until the entry found is below
-  // it (then no farther segment can come first) or every segment was looked at. The segments
-  // found within a wider ball around an earlier x (`near`, for x within its margin) serve the
-  // samples nearby: a superset of those within reach, so the least entry is the same.
-  double scallop_at(const SurfaceSample& x, const Contour& c, Near& near) const {
+  // The least of `below` and the scallop at x left by the balls swept along contour c (+infinity
+  // when they miss its normal). The ray cannot enter a capsule sooner than its distance from the
+  // segment, less r, which is at least (distance to the midpoint) - (half length) - r: the segments
+  // with midpoints within rho + r + the longest half length are looked at, rho growing until the
+  // entry found is below it (then no farther segment can come first) or every segment was looked
+  // at. The segments found within a wider ball around an earlier x (`near`, for x within its
+  // margin) serve the samples nearby: a superset of those within reach, so the least entry is the
+  // same. Segments that cannot come below `below` are not looked at.
+  double scallop_at(const SurfaceSample& x, const Contour& c, Near& near, double below) const {
     const SegmentIndex& index = *c.index;
-    double best = kInf;
+    double best = below;
     if (index.mid.empty()) return best;
     const double everything = (x.position - index.centre).norm() + index.extent;
     for (double rho = 2 * o_.scallop_height;; rho *= 4) {
@@ -282,14 +287,19 @@ class ContourPlanner {
       // The segment with the nearest midpoint first (its entry is nearly always the least), then
       // only segments that could beat it: the entry into a capsule is at least the distance to its
       // segment less r, and that at least the distance to its midpoint less its half length.
+      near.d2.resize(near.segments.size());
       std::uint32_t first = 0;
       double first_d2 = kInf;
-      for (std::uint32_t k : near.segments)
-        if (const double d2 = (index.mid[k] - x.position).squaredNorm(); d2 < first_d2) first_d2 = d2, first = k;
+      for (std::size_t i = 0; i < near.segments.size(); ++i) {
+        const std::uint32_t k = near.segments[i];
+        const double d2 = near.d2[i] = (index.mid[k] - x.position).squaredNorm();
+        if (d2 < first_d2) first_d2 = d2, first = k;
+      }
       if (first_d2 < kInf) best = std::min(best, ray_capsule_entry(x.position, x.normal, c.c[first], c.c[first + 1], r_));
-      for (std::uint32_t k : near.segments) {
-        if (k == first || (index.mid[k] - x.position).norm() - index.half[k] - r_ >= best ||
-            segment_distance(x.position, c.c[k], c.c[k + 1]) - r_ >= best)
+      for (std::size_t i = 0; i < near.segments.size(); ++i) {
+        const std::uint32_t k = near.segments[i];
+        const double reach = best + index.half[k] + r_;  // +infinity while nothing was entered
+        if (k == first || near.d2[i] >= reach * reach || segment_distance(x.position, c.c[k], c.c[k + 1]) - r_ >= best)
           continue;
         best = std::min(best, ray_capsule_entry(x.position, x.normal, c.c[k], c.c[k + 1], r_));
       }

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tbb/parallel_for.h>
+#include <vector>
 
 #include "nodes/path/step_size.h"
 
@@ -164,6 +166,31 @@ TEST(BSplinePatch, WhereTheMapIsDegenerateTheNormalComesFromInsideTheCap) {
   // Inside, where ru x rv lies within the cap, both agree.
   EXPECT_EQ(plain({0.5, 0.5}).normal, capped({0.5, 0.5}).normal);
   EXPECT_GT(capped({0.5, 0.5}).normal.dot(z), 0.999);
+}
+
+TEST(BSplinePatch, EachPatchAnswersForItselfWhateverWasAskedBeforeOnAnyThread) {
+  // Each thread keeps the last basis it evaluated for a patch: two patches with the same knots but
+  // other poles, asked in turn at the same (u, v), and from many threads at once, answer as the
+  // surface alone does (evaluate, which keeps nothing), to the last bit.
+  BSplineSurface raised = parabolic_cylinder();
+  for (auto& p : raised.poles) p.z() += 3 + p.x() / 7;
+  const BSplinePatch a(parabolic_cylinder(), {0, 0, 1}), b(raised, {0, 0, 1});
+  const BSplinePatch a_copy = a;  // the same surface: the same answers
+  const auto exact = [](const BSplinePatch& p, double u, double v) { return evaluate(p.surface(), u, v, 1).point; };
+  for (double u : {0.0, 0.25, 0.25, 0.7})
+    for (double v : {0.5, 0.5, 0.1})
+      for (const BSplinePatch* p : {&a, &b, &a_copy, &a}) {
+        EXPECT_EQ((*p)({u, v}).position, exact(*p, u, v));
+        EXPECT_EQ(p->derivatives({u, v}).ruu, evaluate(p->surface(), u, v).duu);
+      }
+  std::vector<Eigen::Vector3d> got(4000);
+  tbb::parallel_for(std::size_t(0), got.size(), [&](std::size_t i) {
+    const BSplinePatch& p = i % 3 == 0 ? b : a;
+    got[i] = p({double(i % 17) / 16, double(i % 5) / 4}).position;
+  });
+  for (std::size_t i = 0; i < got.size(); ++i)
+    ASSERT_EQ(got[i], exact(i % 3 == 0 ? b : a, double(i % 17) / 16, double(i % 5) / 4)) << i;
+  EXPECT_THROW(evaluate(a.surface(), 0.5, 0.5, 3), std::invalid_argument);
 }
 
 TEST(BSplinePatch, RefusesABadSurface) {
