@@ -338,14 +338,18 @@ ContourGridResult plan_contour_grid(const ParametricSurface& surface, const Cont
   double scallop_max = 0;
   std::array<double, 2> step_min{kInf, kInf}, step_max{0, 0};  // across u (sides 1, 3), across v (0, 2)
   std::size_t shrinks = 0, points = ca.uv.size();
+  std::array<double, 4> share{1, 1, 1, 1};  // of each side's formula step to try first
   std::string warning;
   while (a.u1 > a.u0 && a.v1 > a.v0) {
     if (result.passes.size() >= o.max_contours)
       throw std::invalid_argument("more than max_contours (" + std::to_string(o.max_contours) +
                                   ") contours: the steps vanish near (u, v) = (" + std::to_string(a.u0) + ", " +
                                   std::to_string(a.v0) + ")");
-    std::array<double, 4> step;
-    for (int s = 0; s < 4; ++s) step[s] = planner.side_step(a, s);
+    // Each side starts from its formula's step times the share the last contour's side kept, grown
+    // by how far its scallop stayed under h: the corners, where three balls' fields meet, hold the
+    // steps below the formula's (on a plane to about 0.85 of it) contour after contour.
+    std::array<double, 4> step, formula;
+    for (int s = 0; s < 4; ++s) formula[s] = planner.side_step(a, s), step[s] = formula[s] * share[s];
     Rect b{};
     Contour cb;
     std::array<double, 4> worst{};
@@ -371,7 +375,13 @@ ContourGridResult plan_contour_grid(const ParametricSurface& surface, const Cont
         break;
       }
     }
-    for (int s = 0; s < 4; ++s) scallop_max = std::max(scallop_max, worst[s]);
+    for (int s = 0; s < 4; ++s) {
+      scallop_max = std::max(scallop_max, worst[s]);
+      // As a shrink does (scallop ~ step^2), at most doubling.
+      const double grow = 0.995 * std::sqrt(o.scallop_height / std::max(worst[s], o.scallop_height / 4));
+      share[s] = std::clamp(step[s] / formula[s] * grow, 0.01, 1.0);
+      if (!std::isfinite(share[s])) share[s] = 1;
+    }
     const std::array<double, 4> taken{b.v0 - a.v0, a.u1 - b.u1, a.v1 - b.v1, b.u0 - a.u0};
     for (int s = 0; s < 4; ++s)
       if (taken[s] > 0) {

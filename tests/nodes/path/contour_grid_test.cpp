@@ -133,6 +133,16 @@ TEST(ContourGrid, APlaneGetsNestedRectanglesSpacedForTheirCorners) {
     EXPECT_LE(first, w + 1e-9) << key;
     EXPECT_GE(first, 0.98 * w) << key;
   }
+  // Every contour's steps are the corner's, and after the first contour each side starts from the
+  // share of the formula's step the last one kept: the checks shrink the first contour's sides
+  // alone (the formula's 0.6917 is 1.17 w), not every contour's.
+  const auto& u0 = lines["u_from_0"];
+  for (std::size_t k = 1; k + 2 < u0.size(); ++k) {  // the last stops at the middle
+    const double step = u0[k + 1].get<double>() - u0[k].get<double>();
+    EXPECT_LE(step, w + 1e-9) << k;
+    EXPECT_GE(step, 0.98 * w) << k;
+  }
+  EXPECT_LE(g.report["side_steps_shrunk"].get<int>(), 12);
   // 15 mm from the long sides to the middle.
   EXPECT_LE(g.passes.size(), std::size_t(std::ceil(15 / (0.98 * w))) + 1);
   EXPECT_GE(g.passes.size(), std::size_t(15 / w));
