@@ -1,5 +1,6 @@
 #include "nodes/post/keep_off_part.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
@@ -60,26 +61,34 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
     ++stats.lifted;
     stats.lift_max = std::max(stats.lift_max, high - c.z());
   };
+  // The ball at contact lifted clear; returns the lift.
   auto lift_point = [&](Eigen::Vector3d& contact, const Eigen::Vector3d& n) {
     Eigen::Vector3d c = contact + r * n;
     const double lift = lift_clear(c, part, r, tolerance);
-    if (lift > 0) {
-      contact = c - r * n;
-      ++stats.lifted;
-      stats.lift_max = std::max(stats.lift_max, lift);
-    }
+    if (lift > 0) contact = c - r * n;
+    return lift;
   };
+  auto count_lift = [&](double lift) {
+    if (!(lift > 0)) return;
+    ++stats.lifted;
+    stats.lift_max = std::max(stats.lift_max, lift);
+  };
+  // Each ball lowered and lifted on its own: side by side (a rest raster joined into one pass
+  // holds thousands), counted after.
   const std::vector<Eigen::Vector3d> planned = pass.contact;  // before any lift, for the report
-  for (std::size_t k = 0; k < pass.contact.size(); ++k) {
-    if (max_drop > 0) {
-      Eigen::Vector3d c = pass.contact[k] + r * pass.normal[k];
-      if (const double drop = drop_onto(c, part, r, max_drop); drop > 0) {
-        pass.contact[k] = c - r * pass.normal[k];
-        ++stats.lowered;
-        stats.lower_max = std::max(stats.lower_max, drop);
+  std::vector<double> drops(pass.contact.size(), 0), lifts(pass.contact.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pass.contact.size(), 32), [&](const auto& range) {
+    for (std::size_t k = range.begin(); k < range.end(); ++k) {
+      if (max_drop > 0) {
+        Eigen::Vector3d c = pass.contact[k] + r * pass.normal[k];
+        if (const double drop = drop_onto(c, part, r, max_drop); drop > 0) pass.contact[k] = c - r * pass.normal[k], drops[k] = drop;
       }
+      lifts[k] = lift_point(pass.contact[k], pass.normal[k]);
     }
-    lift_point(pass.contact[k], pass.normal[k]);
+  });
+  for (std::size_t k = 0; k < pass.contact.size(); ++k) {
+    if (drops[k] > 0) ++stats.lowered, stats.lower_max = std::max(stats.lower_max, drops[k]);
+    count_lift(lifts[k]);
   }
   if (!pass.contact.empty()) {
     clear_above(pass.contact.front(), pass.normal.front());
@@ -103,12 +112,17 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
     }
     return need;
   };
-  // Balls put in the middle of a move that comes too near the part, or passes under it; true when
-  // the move was found clear as it is (lacks() would say 0: the same test).
+  // Balls put in the middle of a move that comes too near the part, or passes under it, in order
+  // into `m`; true when the move was found clear as it is (lacks() would say 0: the same test).
+  struct Middles {
+    bool as_is = false;
+    std::vector<Eigen::Vector3d> contact, normal;
+    std::vector<double> lifts;
+  };
   std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&, const Eigen::Vector3d&,
-                     int)>
+                     int, Middles&)>
       middle = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& na, const Eigen::Vector3d& b,
-                   const Eigen::Vector3d& nb, int depth) {
+                   const Eigen::Vector3d& nb, int depth, Middles& into) {
         if (depth == 0) return false;
         const Eigen::Vector3d ca = a + r * na, cb = b + r * nb;
         // Where the move comes nearest the part, if nearer than r - tolerance (found exactly,
@@ -131,18 +145,30 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
         const Eigen::Vector3d n = ((1 - q) * na + q * nb).normalized();
         if (!n.allFinite()) return false;
         Eigen::Vector3d m = (1 - q) * ca + q * cb - r * n;
-        lift_point(m, n);
-        middle(a, na, m, n, depth - 1);
-        out.contact.push_back(m), out.normal.push_back(n), origin.push_back(kMiddle);
-        if (!pass.uv.empty()) out.uv.push_back(out.uv.back());
-        middle(m, n, b, nb, depth - 1);
+        const double lift = lift_point(m, n);
+        middle(a, na, m, n, depth - 1, into);
+        into.contact.push_back(m), into.normal.push_back(n), into.lifts.push_back(lift);
+        middle(m, n, b, nb, depth - 1, into);
         return false;
       };
+  // Each move's middles on its own, side by side; then the balls and middles in order.
+  std::vector<Middles> middles(pass.contact.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(1, std::max<std::size_t>(pass.contact.size(), 1), 16),
+                    [&](const auto& range) {
+                      for (std::size_t k = range.begin(); k < range.end(); ++k)
+                        middles[k].as_is = middle(pass.contact[k - 1], pass.normal[k - 1], pass.contact[k],
+                                                  pass.normal[k], 6, middles[k]);
+                    });
   std::vector<char> clear(1, 0);  // move k-1 -> k found clear, its ends not moved since
   for (std::size_t k = 0; k < pass.contact.size(); ++k) {
-    const bool as_is = k > 0 && middle(pass.contact[k - 1], pass.normal[k - 1], pass.contact[k], pass.normal[k], 6);
+    const Middles& m = middles[k];
+    for (std::size_t i = 0; i < m.contact.size(); ++i) {
+      count_lift(m.lifts[i]);
+      out.contact.push_back(m.contact[i]), out.normal.push_back(m.normal[i]), origin.push_back(kMiddle);
+      if (!pass.uv.empty()) out.uv.push_back(out.uv.back());
+    }
     clear.resize(out.contact.size() + 1, 0);
-    clear.back() = as_is;
+    clear.back() = k > 0 && m.as_is;
     out.contact.push_back(pass.contact[k]), out.normal.push_back(pass.normal[k]), origin.push_back(k);
     if (!pass.uv.empty()) out.uv.push_back(pass.uv[k]);
   }
@@ -181,7 +207,7 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
       }
       for (std::size_t e : ends) {
         out.contact[e].z() += rise;
-        lift_point(out.contact[e], out.normal[e]);
+        count_lift(lift_point(out.contact[e], out.normal[e]));
         ++stats.lifted;
         stats.lift_max = std::max(stats.lift_max, rise);
         next[e] = 1, clear[e] = 0;

@@ -76,6 +76,10 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
   res.spacing = part_sample_spacing(tris, nominal / 6, o.max_samples);
   std::vector<PartSample> samples = sample_part(tris, res.spacing);
   const MeshDistance distance = MeshDistance(part).with_points(held_points);
+  const auto progress = [&](double f, const std::string& what) {
+    if (o.progress) o.progress(f, what);
+  };
+  progress(0, "what the passes leave");
 
   // Samples measured (not base, reachable) and what the setups' own passes leave there.
   const bool has_base = o.base_normal.norm() > 0;
@@ -256,6 +260,9 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
   for (int round = 0; round < o.rounds && !left.empty(); ++round) {
     std::vector<CentreSegment> added;
     for (std::size_t s = 0; s < setups.size(); ++s) {
+      progress(0.2 + 0.8 * (round + double(s) / setups.size()) / o.rounds,
+               "rest round " + std::to_string(round + 1) + ", setup " + std::to_string(s + 1) + " of " +
+                   std::to_string(setups.size()));
       const Setup& setup = setups[s];
       std::vector<Eigen::Vector3d> targets;  // ball centres, machine frame
       double least_nz = 1;

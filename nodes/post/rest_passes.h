@@ -30,6 +30,8 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "nodes/surface/setups.h"
@@ -48,6 +50,7 @@ struct RestOptions {
   double min_normal_dot = 0.05;    // the steepest place a setup is asked to reach
   std::size_t max_samples = 1500000;  // as the certificate's
   int max_new_setups = 2;          // clampings added for places no setup comes down to
+  std::function<void(double, const std::string&)> progress;  // optional: the fraction done, what
 };
 
 struct RestResult {

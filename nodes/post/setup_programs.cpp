@@ -8,6 +8,7 @@
 #include <functional>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include "nodes/mesh/mesh_distance.h"
@@ -21,7 +22,11 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
                                          const std::vector<Setup>& setups, const Mesh& part,
                                          const LinkOptions& link, const GCodeOptions& gcode,
                                          const std::vector<double>& patch_off_part, const RestOptions* rest,
-                                         RestResult* rest_result, const std::vector<Eigen::Vector3d>& held_points) {
+                                         RestResult* rest_result, const std::vector<Eigen::Vector3d>& held_points,
+                                         const std::function<void(double, const std::string&)>& progress) {
+  const auto report = [&](double f, const std::string& what) {
+    if (progress) progress(f, what);
+  };
   if (std::accumulate(passes_per_patch.begin(), passes_per_patch.end(), std::size_t(0)) != path.passes.size())
     throw std::invalid_argument("the patches' pass counts do not add up to the toolpath's " +
                                 std::to_string(path.passes.size()) + " passes");
@@ -37,8 +42,14 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
   // The part's vertices and the points it holds, for the highest point in each setup.
   std::vector<Eigen::Vector3d> part_points = part.vertices;
   part_points.insert(part_points.end(), held_points.begin(), held_points.end());
+  // Progress: keeping the passes off the part up to 0.3 (by passes), rest passes to 0.85, links.
+  const bool resting = rest && rest->rounds > 0 && part.num_faces() > 0;
+  const double kept_share = resting ? 0.3 : 0.8;
+  std::size_t passes_done = 0;
   for (std::size_t index = 0; index < setups.size(); ++index) {
     const Setup& s = setups[index];
+    report(kept_share * double(passes_done) / std::max<std::size_t>(path.passes.size(), 1),
+           "keeping setup " + std::to_string(index + 1) + " of " + std::to_string(setups.size()) + " off the part");
     Toolpath& local = cuts[index];
     local.tool_radius = path.tool_radius;
     local.scallop_height = path.scallop_height;
@@ -57,6 +68,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
         // above the part as it is off it.
         max_drop.push_back(p < patch_off_part.size() ? 5 * patch_off_part[p] : 0.0);
       }
+      passes_done += first[p + 1] - first[p];
     }
     if (local.passes.empty() || part.num_faces() == 0) continue;
     double top_z = -std::numeric_limits<double>::infinity();
@@ -72,9 +84,10 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
 
   // What they leave, cut again from the setups that reach it (and from new ones).
   std::vector<Setup> all;
-  if (rest && rest->rounds > 0 && part.num_faces() > 0) {
+  if (resting) {
     RestOptions o = *rest;
     o.tool_radius = path.tool_radius, o.scallop = path.scallop_height, o.chord = path.chord_error;
+    o.progress = [&](double f, const std::string& what) { report(0.3 + 0.55 * f, what); };
     all.assign(setups.begin(), setups.end());
     RestResult result = add_rest_passes(part, all, cuts, o, held_points);
     progs.resize(all.size());
@@ -84,18 +97,19 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     if (rest_result) *rest_result = std::move(result);
   }
 
-  // Linked and written.
+  // Linked and written, the setups side by side; numbered in order after.
   if (all.empty()) all = setups;
-  std::vector<SetupProgram> out;
-  for (std::size_t index = 0; index < all.size(); ++index) {
+  report(resting ? 0.85 : 0.8, "linking the passes of " + std::to_string(all.size()) + " setups");
+  std::vector<std::optional<SetupProgram>> linked_setups(all.size());
+  tbb::parallel_for(std::size_t(0), all.size(), [&](std::size_t index) {
     const Setup& s = all[index];
     Toolpath& local = cuts[index];
     // Every ball left out (no clear way to any of them; an ABC plate's noisy cloud had such a
     // clamping, and linking nothing stopped the whole part): no program for this setup.
-    if (local.passes.empty()) continue;
+    if (local.passes.empty()) return;
     std::vector<Eigen::Vector3d> placed(part_points.size());
     for (std::size_t v = 0; v < placed.size(); ++v) placed[v] = s.rotation * part_points[v] + s.translation;
-    SetupProgram& prog = progs[index];
+    SetupProgram prog = progs[index];
     prog.setup = index;
     const MeshDistance distance = part_distance.placed(s.rotation, s.translation);
     LinkOptions linking = link;
@@ -110,7 +124,6 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     }
     const LinkedPath linked = link_passes(local, placed, linking);
     prog.name = s.name;
-    prog.file = "setup_" + std::to_string(out.size() + 1) + ".ngc";
     GCodeOptions g = gcode;
     g.graph_name = gcode.graph_name.empty() ? "setup " + s.name : gcode.graph_name + ", setup " + s.name;
     prog.gcode = write_gcode(linked, g);
@@ -119,8 +132,15 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     prog.clearance_z = linked.clearance_z;
     prog.linked = linked;
     for (Move& m : prog.linked.moves) m.tip = as_written(m.tip);  // as the program has them
-    out.push_back(std::move(prog));
-  }
+    linked_setups[index] = std::move(prog);
+  });
+  std::vector<SetupProgram> out;
+  for (auto& prog : linked_setups)
+    if (prog) {
+      prog->file = "setup_" + std::to_string(out.size() + 1) + ".ngc";
+      out.push_back(std::move(*prog));
+    }
+  report(1, "programs written");
   return out;
 }
 

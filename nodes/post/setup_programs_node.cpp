@@ -111,7 +111,8 @@ NodeDecl make_setup_programs_node() {
       setups = setups_from_report(setups_report, counts.size());
       const auto cloud = ctx.has_input("cloud") ? ctx.input<PointCloud>("cloud") : nullptr;
       programs = setup_programs(*path, counts, setups, *mesh, link, g, off_part, &rest, &rest_result,
-                                cloud ? cloud->points : std::vector<Eigen::Vector3d>{});
+                                cloud ? cloud->points : std::vector<Eigen::Vector3d>{},
+                                [&](double f, const std::string& what) { ctx.progress(f, what); });
     } catch (const std::exception& e) {
       throw NodeError(std::string("post.setup_programs: ") + e.what());
     }

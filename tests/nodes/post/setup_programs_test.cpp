@@ -314,8 +314,17 @@ TEST(SetupPrograms, FacesThePassesMissAreCutByRestPasses) {
   RestOptions rest;
   rest.base_normal = {0, 0, -1};
   RestResult found;
-  const auto programs = setup_programs(path, counts, setups, part, {}, {}, {}, &rest, &found);
+  // Progress from 0 to 1, never back, through each phase.
+  std::vector<std::pair<double, std::string>> told;
+  const auto programs = setup_programs(path, counts, setups, part, {}, {}, {}, &rest, &found, {},
+                                       [&](double f, const std::string& what) { told.emplace_back(f, what); });
   ASSERT_EQ(programs.size(), 5u);
+  ASSERT_FALSE(told.empty());
+  EXPECT_EQ(told.front(), std::make_pair(0.0, std::string("keeping setup 1 of 5 off the part")));
+  EXPECT_EQ(told.back(), std::make_pair(1.0, std::string("programs written")));
+  for (std::size_t i = 1; i < told.size(); ++i) EXPECT_GE(told[i].first, told[i - 1].first) << told[i].second;
+  for (const char* phase : {"rest round 1, setup 1 of 5", "linking the passes of 5 setups"})
+    EXPECT_TRUE(std::any_of(told.begin(), told.end(), [&](const auto& t) { return t.second == phase; })) << phase;
   EXPECT_EQ(found.new_setups, 0u);
   EXPECT_NEAR(found.measured_area, X * Y + 2 * (X + Y) * Z, 1e-6);
   EXPECT_GT(found.left_area_before, 2 * X * Z * 0.9);  // the two sides at least
