@@ -1,4 +1,5 @@
 #include "nodes/post/setup_programs.h"
+#include "nodes/post/keep_off_part.h"
 
 #include <gtest/gtest.h>
 
@@ -474,6 +475,52 @@ TEST(SetupPrograms, ASetupWithNothingLeftToCutGetsNoProgramTheOthersTheirs) {
   EXPECT_EQ(programs[0].setup, 1u);
   EXPECT_EQ(programs[0].file, "setup_1.ngc");
   EXPECT_GE(tips(programs[0].gcode).size(), 11u);
+}
+
+TEST(SetupPrograms, ABallDroppedOntoASlopeLandsWhereItTouchesInTwoSteps) {
+  // A plane tilted theta about y through the origin, n = (sin theta, 0, cos theta): a ball of
+  // radius r dropped from above (x0, 0) touches it at centre height (r - x0 sin theta) / cos theta.
+  // Stepping by the distance less r alone closes 1 - cos theta of the gap a step (at 80 degrees,
+  // 3 steps from 40 mm above still 23 mm short); the plane's step lands at once.
+  const double r = 2, x0 = 1.5;
+  for (double degrees : {0.0, 30.0, 60.0, 80.0, 85.0}) {
+    const double t = degrees * std::numbers::pi / 180;
+    const V n(std::sin(t), 0, std::cos(t)), u(std::cos(t), 0, -std::sin(t)), w(0, 1, 0);
+    Mesh plane;
+    for (double a : {-100.0, 100.0})
+      for (double b : {-100.0, 100.0}) plane.vertices.push_back(a * u + b * w);
+    plane.add_face({0, 2, 3, 1});
+    const MeshDistance part(plane);
+    const double touch = (r - x0 * std::sin(t)) / std::cos(t);
+    V c(x0, 0, touch + 40);
+    const double drop = drop_onto(c, part, r, 1000, 3);
+    EXPECT_NEAR(c.z(), touch, 1e-6) << degrees;
+    EXPECT_NEAR(drop, 40, 1e-6) << degrees;
+    EXPECT_GE(part(c), r - 1e-7) << degrees;
+  }
+  // Into a V groove of half-angle 45 degrees (faces z = |x|): the ball comes to rest on the face
+  // under it, at z = |x| + r sqrt(2), never nearer than r to the other; over the middle on both.
+  Mesh groove;
+  for (double x : {-50.0, 0.0, 50.0})
+    for (double y : {-50.0, 50.0}) groove.vertices.push_back(V(x, y, std::abs(x)));
+  groove.add_face({0, 2, 3, 1});
+  groove.add_face({2, 4, 5, 3});
+  const MeshDistance part(groove);
+  V c(0.7, 0, 30);
+  drop_onto(c, part, r, 1000, 400);
+  EXPECT_NEAR(c.z(), r * std::sqrt(2.0) + 0.7, 1e-6);
+  EXPECT_GE(part(c), r - 1e-7);
+  V middle(0, 0, 30);
+  drop_onto(middle, part, r, 1000, 400);
+  EXPECT_NEAR(middle.z(), r * std::sqrt(2.0), 1e-6);
+  // A ridge (z = -|x|): over x = -0.3 the ball rests on its apex, sqrt(r^2 - 0.09) above it.
+  Mesh ridge = groove;
+  for (auto& v : ridge.vertices) v.z() = -v.z();
+  const MeshDistance roof(ridge);
+  V top(-0.3, 0, 30);
+  drop_onto(top, roof, r, 1000, 400);
+  EXPECT_NEAR(top.z(), std::sqrt(r * r - 0.09), 1e-6);
+  EXPECT_GE(roof(top), r - 1e-7);
 }
 
 TEST(SetupPrograms, ABallAboveThePartIsLoweredOntoItByAtMostFiveTimesItsSurfacesDistance) {
