@@ -30,18 +30,8 @@ double lift_clear(Eigen::Vector3d& c, const MeshDistance& part, double r, double
 double drop_onto(Eigen::Vector3d& c, const MeshDistance& part, double r, double max_drop, int max_steps) {
   double drop = 0;
   for (int it = 0; it < max_steps && drop < max_drop; ++it) {
-    const double d = part(c);
-    double step = std::min(d - r, max_drop - drop);
+    const double step = std::min(part(c) - r, max_drop - drop);
     if (!(step > 1e-6)) break;
-    // The distance less r is a step that never comes nearer (1-Lipschitz), but on a slope of
-    // angle theta it closes only cos(theta) of the gap each time (85 steps to a micrometre at
-    // 80 degrees). The nearest face's plane would be touched after (d - r) / cos(theta): taken
-    // where the vertical down to there keeps r from the part.
-    const Eigen::Vector3d foot = part.closest_point(c);
-    if (const double cos_theta = (c - foot).z() / d; cos_theta > 0.05 && cos_theta < 1 - 1e-9) {
-      const double plane = std::min((d - r) / cos_theta, max_drop - drop);
-      if (plane > step && part.clear_along(c, c - Eigen::Vector3d(0, 0, plane), r / 4, r - 1e-7)) step = plane;
-    }
     c.z() -= step;
     drop += step;
   }

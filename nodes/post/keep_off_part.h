@@ -44,9 +44,7 @@ double lift_clear(Eigen::Vector3d& c, const MeshDistance& part, double r, double
 // from it: where the surface a pass was planned on lies above the part (a smooth B-spline over a
 // faceted STL's flat facets, or one that bulges between its quads), the ball comes down onto the
 // part instead of leaving that much stock. Each step is the distance beyond r, so the ball never
-// comes nearer than r (the distance is 1-Lipschitz), or, where the vertical down to where the
-// nearest face's plane would be touched keeps r - 1e-7 from the part (MeshDistance::clear_along),
-// that far at once (on a plane in one step, at any slope). Returns the drop.
+// comes nearer than r (the distance is 1-Lipschitz). Returns the drop.
 double drop_onto(Eigen::Vector3d& c, const MeshDistance& part, double r, double max_drop, int max_steps = 64);
 
 // One pass kept off the part (see above), each ball first lowered onto the part by at most
