@@ -7,6 +7,7 @@ packages=(build-essential cmake ninja-build ccache pkg-config
   libnanoflann-dev libspectra-dev libcli11-dev libgtest-dev libbenchmark-dev liblzf-dev libxxhash-dev libpng-dev
   linuxcnc-uspace
   libboost-graph-dev  # mesh.segment: Kruskal's minimum spanning tree
+  libembree-dev  # MeshDistance: the nearest point of a mesh (the programs' and the certificate's distances)
   libocct-data-exchange-dev libocct-visualization-dev libocct-modeling-algorithms-dev  # B-spline fit, STEP
   blender  # mesh.quad_remesh runs QuadriFlow inside Blender, headless
   slurm-wlm munge  # batch --executor slurm; tests/cli/slurm_test.cpp starts a one-node cluster

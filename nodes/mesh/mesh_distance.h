@@ -1,6 +1,7 @@
-// Distances from points to a mesh's surface, and rays against it (CGAL's AABB tree): for reports
-// that measure a reconstruction or a fitted surface against a mesh, and for what a tool axis can
-// reach (surface.setups), and a ball centre inside the part (post.simulate_part).
+// Distances from points to a mesh's surface (Embree's point query), and rays against it (CGAL's
+// AABB tree): for reports that measure a reconstruction or a fitted surface against a mesh, and
+// for what a tool axis can reach (surface.setups), and a ball centre inside the part
+// (post.simulate_part).
 #pragma once
 
 #include <Eigen/Core>
@@ -91,6 +92,9 @@ class MeshDistance {
   double unsigned_in_mesh(const Eigen::Vector3d& p) const;  // p in the mesh's own frame
   double signed_in_mesh(const Eigen::Vector3d& p) const;
   double faces_unsigned(const Eigen::Vector3d& p) const;  // the faces alone, the mesh's frame
+  // The faces' nearest point to p and its triangle (the mesh's frame), looked for within
+  // `radius` first (the distance to a point known on them), then everywhere. Needs faces.
+  Eigen::Vector3d foot_in_mesh(const Eigen::Vector3d& p, double radius, std::size_t& tri) const;
   // unsigned_in_mesh, the faces' search started from `near` (a point on them near p, when
   // has_near), which then gets p's nearest point on them: along a segment the searches are near.
   double unsigned_near(const Eigen::Vector3d& p, Eigen::Vector3d& near, bool& has_near) const;
