@@ -20,6 +20,7 @@
 
 #include "nodes/mesh/mesh_distance.h"
 #include "nodes/mesh/mesh_topology.h"
+#include "nodes/mesh/self_crossings.h"
 #include "nodes/post/part_samples.h"
 
 namespace scallop {
@@ -353,6 +354,25 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   const Deepest& unbounded = cloud_tally.unbounded_farthest;
   const std::size_t cloud_cut = cloud_tally.cut, unbounded_points = cloud_tally.unbounded;
 
+  // Where the part's mesh crosses itself (a reconstruction tangled at a gap finer than its
+  // points), the faces there say nothing of the part: a ball that comes within the tolerance of
+  // one (of a circle about its centre through its farthest corner) may cut what no mesh shows.
+  const SelfCrossings crossings = self_crossings(part);
+  std::size_t tangled_reached = 0;
+  Deepest tangled_nearest{-INFINITY, Eigen::Vector3d::Zero()};  // minus the clearance, and where
+  for (std::size_t f : crossings.tangled) {
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (std::size_t k = 0; k < part.face_size(f); ++k) centre += part.vertices[part.face(f)[k]];
+    centre /= double(part.face_size(f));
+    double size = 0;
+    for (std::size_t k = 0; k < part.face_size(f); ++k) size = std::max(size, (part.vertices[part.face(f)[k]] - centre).norm());
+    std::vector<std::uint32_t> scratch;
+    const double d = centres.distance(centre, r + tol + size, scratch);
+    if (!(d < r + tol + size)) continue;
+    ++tangled_reached;
+    tangled_nearest = deeper(tangled_nearest, {r + size - d, centre});
+  }
+
   // Statistics: area-weighted over the grid; maxima include the refinement samples.
   Simulation res;
   res.spacing = spacing;
@@ -414,6 +434,11 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     rep["gouge_unbounded_max"] = unbounded.first;
     rep["gouge_unbounded_at"] = unbounded_points > 0 ? xyz(unbounded.second) : nlohmann::json();
   }
+  rep["crossing_pairs"] = crossings.pairs.size();
+  rep["tangled_faces"] = crossings.tangled.size();
+  rep["tangled_faces_reached"] = tangled_reached;
+  rep["tangled_reached_at"] = tangled_reached > 0 ? xyz(tangled_nearest.second) : nlohmann::json();
+  rep["faces_not_checked_for_crossings"] = crossings.faces_left_out;
   rep["rapids_through_part"] = through_total;
   rep["rapid_min_clearance"] = finite_or_null(rapid_min);
   rep["cut_length"] = cut_total;
@@ -503,7 +528,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
     rep["scallop_max_interior_at"] = xyz(Eigen::Vector3d(res.samples[highest].x, res.samples[highest].y, res.samples[highest].z));
 
   nlohmann::json reasons = nlohmann::json::array();
-  char buf[256];
+  char buf[400];
   if (!std::isfinite(max_inner)) {
     reasons.push_back("no interior sample was cut");
   } else if (max_inner > 1.01 * H) {
@@ -525,6 +550,14 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
                   "%zu point(s) of the cloud outside the outer mesh, up to %.4g mm at (%.3f, %.3f, %.3f), with a ball "
                   "passing within r + that: the gouge there is not bounded",
                   unbounded_points, unbounded.first, unbounded.second.x(), unbounded.second.y(), unbounded.second.z());
+    reasons.push_back(buf);
+  }
+  if (tangled_reached > 0) {
+    std::snprintf(buf, sizeof buf,
+                  "the part's mesh crosses itself (%zu face pairs, %zu faces tangled) and balls pass by %zu of those "
+                  "faces, nearest at (%.3f, %.3f, %.3f): the part there is not known, the gouge there is not bounded",
+                  crossings.pairs.size(), crossings.tangled.size(), tangled_reached, tangled_nearest.second.x(),
+                  tangled_nearest.second.y(), tangled_nearest.second.z());
     reasons.push_back(buf);
   }
   if (measured <= 0) {

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <map>
 #include <random>
+#include <set>
 #include <vector>
 
 #include "nodes/mesh/face_geometry.h"
@@ -92,6 +93,18 @@ inline Mesh cube_mesh(int n, double edge = 1.0) {
         m.face_label.push_back(s);
       }
   }
+  return m;
+}
+
+// The cube [0, 4]^3 (cube_mesh(4, 4)) with the middle vertex of its top pulled down to
+// (2, 2, -1): its 8 faces (into `spike`) run through the cube and out of its bottom, a closed,
+// consistently oriented mesh that crosses itself.
+inline Mesh spiked_cube(std::set<std::size_t>& spike) {
+  Mesh m = cube_mesh(4, 4.0);
+  const auto top = std::find(m.vertices.begin(), m.vertices.end(), Eigen::Vector3d(2, 2, 4)) - m.vertices.begin();
+  m.vertices[top] = Eigen::Vector3d(2, 2, -1);
+  for (std::size_t f = 0; f < m.num_faces(); ++f)
+    if (std::count(m.face(f), m.face(f) + m.face_size(f), std::uint32_t(top))) spike.insert(f);
   return m;
 }
 

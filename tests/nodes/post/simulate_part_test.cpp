@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 
 #include "engine/node.h"
 #include "nodes/types/document.h"
@@ -176,6 +177,47 @@ TEST(SimulatePart, ACloudPointOutsideTheOuterMeshNearABallLeavesTheGougeUnbounde
   for (const auto& reason : bounded["fail_reasons"])
     EXPECT_EQ(reason.get<std::string>().find("not bounded"), std::string::npos) << reason;
   EXPECT_FALSE(simulate_part(box, cuts, o, {}, nullptr, nullptr, &cloud).report.contains("gouge_unbounded_points"));
+}
+
+TEST(SimulatePart, ABallPassingByWhereTheMeshCrossesItselfLeavesTheGougeUnbounded) {
+  // The cube [0, 4]^3 with the middle of its top pulled through its bottom (a reconstruction
+  // tangled at a gap finer than its points): a pass over the top at y = 2 comes by the spike's
+  // faces, whatever the meshes say of the gouge there; a pass 20 away comes by none.
+  const double r = 1;
+  std::set<std::size_t> spike;
+  const Mesh part = test::spiked_cube(spike);
+  std::vector<PartSetupCut> near(1), far(1);
+  near[0].name = "near", near[0].feed = {{V(-1, 2, 4 + r), V(5, 2, 4 + r)}};
+  far[0].name = "far", far[0].feed = {{V(-1, 22, 4 + r), V(5, 22, 4 + r)}};
+  const PartSimulateOptions o = options(r, 0.05);
+  const nlohmann::json rep = simulate_part(part, near, o, {}).report;
+  EXPECT_GT(rep["crossing_pairs"].get<int>(), 0);
+  EXPECT_GE(rep["tangled_faces"].get<std::size_t>(), spike.size());
+  EXPECT_GE(rep["tangled_faces_reached"].get<std::size_t>(), 1u);
+  EXPECT_FALSE(rep["tangled_reached_at"].is_null());
+  EXPECT_EQ(rep["faces_not_checked_for_crossings"], 0);
+  EXPECT_FALSE(rep["pass"].get<bool>());
+  const std::string prefix = "the part's mesh crosses itself (" + std::to_string(rep["crossing_pairs"].get<int>()) +
+                             " face pairs, " + std::to_string(rep["tangled_faces"].get<int>()) + " faces tangled)";
+  const auto& reasons = rep["fail_reasons"];
+  EXPECT_NE(std::find_if(reasons.begin(), reasons.end(),
+                         [&](const nlohmann::json& x) {
+                           const std::string t = x.get<std::string>();
+                           return t.rfind(prefix, 0) == 0 &&
+                                  t.find(": the part there is not known, the gouge there is not bounded") != std::string::npos;
+                         }),
+            reasons.end())
+      << reasons;
+  const nlohmann::json away = simulate_part(part, far, o, {}).report;
+  EXPECT_EQ(away["crossing_pairs"], rep["crossing_pairs"]);
+  EXPECT_EQ(away["tangled_faces_reached"], 0);
+  EXPECT_TRUE(away["tangled_reached_at"].is_null());
+  for (const auto& reason : away["fail_reasons"])
+    EXPECT_EQ(reason.get<std::string>().find("crosses itself"), std::string::npos) << reason;
+  // A mesh that does not cross itself: none of it.
+  const nlohmann::json box = simulate_part(test::cube_mesh(4, 4.0), near, o, {}).report;
+  EXPECT_EQ(box["crossing_pairs"], 0);
+  EXPECT_EQ(box["tangled_faces"], 0);
 }
 
 TEST(SimulatePart, GougesInsideAndNearAreMeasuredAndARapidThroughThePartIsCounted) {

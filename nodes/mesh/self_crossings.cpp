@@ -1,0 +1,101 @@
+#include "nodes/mesh/self_crossings.h"
+
+#include <CGAL/AABB_face_graph_triangle_primitive.h>
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+
+namespace scallop {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Surface = CGAL::Surface_mesh<Kernel::Point_3>;
+using Face = Surface::Face_index;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, CGAL::AABB_face_graph_triangle_primitive<Surface>>>;
+
+// Whether the point just off triangle f's centre along its normal lies inside the surface: the
+// parity of the faces three skew rays from it cross, the majority of the three.
+bool faces_inward(const Surface& s, const Tree& tree, Face f) {
+  const auto h = s.halfedge(f);
+  const Kernel::Point_3 &a = s.point(s.source(h)), &b = s.point(s.target(h)), &c = s.point(s.target(s.next(h)));
+  const Kernel::Vector_3 n = CGAL::cross_product(b - a, c - a);
+  const double length = std::sqrt(n.squared_length());
+  if (!(length > 0)) return false;
+  const double shortest = std::sqrt(std::min({(b - a).squared_length(), (c - b).squared_length(), (a - c).squared_length()}));
+  const Kernel::Point_3 q = CGAL::centroid(a, b, c) + n * (1e-3 * shortest / length);
+  int odd = 0;
+  for (const Kernel::Vector_3& d : {Kernel::Vector_3(0.5773, 0.3131, 0.7544), Kernel::Vector_3(-0.6421, 0.5172, -0.2913),
+                                    Kernel::Vector_3(0.1173, -0.8839, 0.3253)})
+    odd += tree.number_of_intersected_primitives(Kernel::Ray_3(q, d)) % 2;
+  return odd >= 2;
+}
+
+}  // namespace
+
+SelfCrossings self_crossings(const Mesh& mesh) {
+  SelfCrossings out;
+  Surface s;
+  for (const Eigen::Vector3d& v : mesh.vertices) s.add_vertex(Kernel::Point_3(v.x(), v.y(), v.z()));
+  std::vector<std::size_t> polygon_of;  // the triangle's polygon
+  for (std::size_t f = 0; f < mesh.num_faces(); ++f) {
+    const std::uint32_t* c = mesh.face(f);
+    bool fits = true;
+    for (std::size_t i = 1; i + 1 < mesh.face_size(f); ++i) {
+      const Face t = s.add_face(Surface::Vertex_index(c[0]), Surface::Vertex_index(c[i]), Surface::Vertex_index(c[i + 1]));
+      if (t == Surface::null_face()) {
+        fits = false;
+        continue;
+      }
+      polygon_of.push_back(f);
+    }
+    out.faces_left_out += !fits;
+  }
+  if (s.number_of_faces() == 0) return out;
+
+  std::vector<std::pair<Face, Face>> crossing;
+  CGAL::Polygon_mesh_processing::self_intersections<CGAL::Parallel_if_available_tag>(s, std::back_inserter(crossing));
+  std::vector<char> tangled(s.number_of_faces(), 0);
+  std::deque<Face> grow;
+  for (const auto& [f, g] : crossing) {
+    if (f == g) continue;  // a face without area
+    const std::size_t a = polygon_of[f], b = polygon_of[g];
+    if (a == b) continue;  // a polygon's own fan folded over itself
+    out.pairs.push_back({std::min(a, b), std::max(a, b)});
+    for (Face t : {f, g})
+      if (!tangled[t]) tangled[t] = 1, grow.push_back(t);
+  }
+  if (out.pairs.empty()) return out;
+  std::sort(out.pairs.begin(), out.pairs.end());
+  out.pairs.erase(std::unique(out.pairs.begin(), out.pairs.end()), out.pairs.end());
+
+  // Grown across edges while the faces reached face inward.
+  const Tree tree(faces(s).first, faces(s).second, s);
+  std::vector<char> tested(s.number_of_faces(), 0);
+  while (!grow.empty()) {
+    const Face f = grow.front();
+    grow.pop_front();
+    for (const auto h : CGAL::halfedges_around_face(s.halfedge(f), s)) {
+      const Face g = s.face(s.opposite(h));
+      if (g == Surface::null_face() || tangled[g] || tested[g]) continue;
+      tested[g] = 1;
+      if (faces_inward(s, tree, g)) tangled[g] = 2, grow.push_back(g);
+    }
+  }
+  std::vector<char> polygon(mesh.num_faces(), 0);
+  for (Face t : s.faces())
+    if (tangled[t]) polygon[polygon_of[t]] = std::max(polygon[polygon_of[t]], tangled[t]);
+  for (std::size_t f = 0; f < polygon.size(); ++f) {
+    if (!polygon[f]) continue;
+    out.tangled.push_back(f);
+    out.inward += polygon[f] == 2;
+  }
+  return out;
+}
+
+}  // namespace scallop

@@ -1,0 +1,32 @@
+// Where a closed mesh crosses itself, and the faces beside those crossings that face into it.
+// A reconstruction from a cloud tangles where the part has a gap narrower than its points resolve:
+// the ABC plate's pin of radius 0.635 mm in a bore 0.245 mm wider, at 0.1 mm spacing, came out a
+// closed, consistently oriented mesh that crosses itself, the pin's faces turned into the part
+// (docs/workpiece.md, stop 59). A ball kept off such faces, or a gouge measured against them, says
+// nothing about the part there.
+//
+// A face is tangled when it crosses another face (more than a shared corner or edge), or when it
+// shares an edge with a tangled face and the point just off its centre along its normal lies inside
+// the mesh by the parity of three rays (majority): it faces inward.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+#include "nodes/types/mesh.h"
+
+namespace scallop {
+
+struct SelfCrossings {
+  std::vector<std::array<std::size_t, 2>> pairs;  // crossing faces (polygon indices), smaller first, sorted
+  std::vector<std::size_t> tangled;               // the faces that cross and those grown from them facing inward, sorted
+  std::size_t inward = 0;                         // of `tangled`, those added for facing inward (the others cross)
+  std::size_t faces_left_out = 0;  // polygons that do not fit a manifold surface with the ones before them: not checked
+};
+
+// mesh  any polygons (each fanned from its first corner), closed for the inward test to mean
+//       anything; faces without area are left out of both tests.
+SelfCrossings self_crossings(const Mesh& mesh);
+
+}  // namespace scallop
