@@ -199,27 +199,33 @@ MeshDistance::MeshDistance(const Mesh& mesh, const Mesh* unmoved) : impl_(std::m
 
 struct MeshDistance::HeldPoints {
   std::vector<Eigen::Vector3d> points;
+  double margin;
   PointsAdaptor<Eigen::Vector3d> adaptor{points};
   KdTree<Eigen::Vector3d, 3> tree{3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
-  explicit HeldPoints(std::vector<Eigen::Vector3d> p) : points(std::move(p)) { tree.buildIndex(); }
+  HeldPoints(std::vector<Eigen::Vector3d> p, double m) : points(std::move(p)), margin(m) { tree.buildIndex(); }
 };
 
-MeshDistance MeshDistance::with_points(const std::vector<Eigen::Vector3d>& points) const {
+MeshDistance MeshDistance::with_points(const std::vector<Eigen::Vector3d>& points, double margin) const {
   for (const auto& p : points)
     if (!p.allFinite()) throw std::invalid_argument("a point the part holds is not finite");
+  if (!(margin >= 0) || !std::isfinite(margin)) throw std::invalid_argument("the margin about held points must be >= 0");
   MeshDistance d;
   d.impl_ = impl_;
+  d.held_ = held_;
   d.placed_ = placed_, d.rotation_ = rotation_, d.translation_ = translation_;
-  if (!points.empty()) d.held_ = std::make_shared<const HeldPoints>(points);
+  if (!points.empty()) d.held_.push_back(std::make_shared<const HeldPoints>(points, margin));
   return d;
 }
 
 double MeshDistance::to_held_points(const Eigen::Vector3d& p) const {
-  if (!held_) return std::numeric_limits<double>::infinity();
-  std::uint32_t i = 0;
-  double d2 = 0;
-  held_->tree.knnSearch(p.data(), 1, &i, &d2);
-  return std::sqrt(d2);
+  double least = std::numeric_limits<double>::infinity();
+  for (const auto& set : held_) {
+    std::uint32_t i = 0;
+    double d2 = 0;
+    set->tree.knnSearch(p.data(), 1, &i, &d2);
+    least = std::min(least, std::sqrt(d2) - set->margin);
+  }
+  return least;
 }
 
 MeshDistance::~MeshDistance() = default;

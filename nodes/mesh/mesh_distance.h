@@ -27,9 +27,11 @@ class MeshDistance {
   // solid and the points, the nearer of the faces and the nearest point. Where a mesh made from a
   // cloud does not hold all of it (a fold, a filled hole: 165 of the ABC plate's 200 000 points
   // stood up to 0.36 mm outside its outer mesh), a ball kept off the part is kept off them too.
-  // Rays, closest_point and closest_face see the faces only. A point that is not finite:
-  // std::invalid_argument.
-  MeshDistance with_points(const std::vector<Eigen::Vector3d>& points) const;
+  // With margin > 0, the part may reach anywhere within `margin` of the points (samples of faces
+  // that are no bound on the part, where the mesh crosses itself): the distance to them is less
+  // that. Points held before stay held. Rays, closest_point and closest_face see the faces only. A
+  // point that is not finite, or a margin that is negative or not finite: std::invalid_argument.
+  MeshDistance with_points(const std::vector<Eigen::Vector3d>& points, double margin = 0) const;
   ~MeshDistance();
   MeshDistance(const MeshDistance&) = delete;
   MeshDistance& operator=(const MeshDistance&) = delete;
@@ -99,9 +101,9 @@ class MeshDistance {
   // has_near), which then gets p's nearest point on them: along a segment the searches are near.
   double unsigned_near(const Eigen::Vector3d& p, Eigen::Vector3d& near, bool& has_near) const;
   double faces_signed(const Eigen::Vector3d& p) const;
-  double to_held_points(const Eigen::Vector3d& p) const;  // +infinity without them
+  double to_held_points(const Eigen::Vector3d& p) const;  // the least over the held sets; +infinity without them
   std::shared_ptr<Impl> impl_;
-  std::shared_ptr<const HeldPoints> held_;
+  std::vector<std::shared_ptr<const HeldPoints>> held_;  // each set with its margin
   bool placed_ = false;
   Eigen::Matrix3d rotation_ = Eigen::Matrix3d::Identity();
   Eigen::Vector3d translation_ = Eigen::Vector3d::Zero();

@@ -98,4 +98,27 @@ SelfCrossings self_crossings(const Mesh& mesh) {
   return out;
 }
 
+TangleKeepOut tangle_keep_out(const Mesh& mesh, const SelfCrossings& crossings) {
+  TangleKeepOut out;
+  double length = 0;
+  std::size_t edges = 0;
+  for (std::size_t f : crossings.tangled)
+    for (std::size_t k = 0; k < mesh.face_size(f); ++k, ++edges)
+      length += (mesh.vertices[mesh.face(f)[(k + 1) % mesh.face_size(f)]] - mesh.vertices[mesh.face(f)[k]]).norm();
+  if (edges == 0 || !(length > 0)) return out;
+  out.margin = 2 * length / double(edges);
+  const double step = out.margin / 4;
+  for (std::size_t f : crossings.tangled) {
+    const std::uint32_t* c = mesh.face(f);
+    for (std::size_t i = 1; i + 1 < mesh.face_size(f); ++i) {
+      const Eigen::Vector3d &a = mesh.vertices[c[0]], &b = mesh.vertices[c[i]], &d = mesh.vertices[c[i + 1]];
+      const double longest = std::max({(b - a).norm(), (d - b).norm(), (a - d).norm()});
+      const int n = std::max(1, int(std::ceil(longest / step)));
+      for (int u = 0; u <= n; ++u)
+        for (int v = 0; u + v <= n; ++v) out.samples.push_back(a + (b - a) * (double(u) / n) + (d - a) * (double(v) / n));
+    }
+  }
+  return out;
+}
+
 }  // namespace scallop

@@ -10,6 +10,7 @@
 // the mesh by the parity of three rays (majority): it faces inward.
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <cstddef>
 #include <vector>
@@ -28,5 +29,18 @@ struct SelfCrossings {
 // mesh  any polygons (each fanned from its first corner), closed for the inward test to mean
 //       anything; faces without area are left out of both tests.
 SelfCrossings self_crossings(const Mesh& mesh);
+
+// What a tool must keep off around tangled faces: the part may lie anywhere within margin / 2 of
+// them, margin being twice the tangled faces' mean edge length (a reconstruction's edges are about
+// its cloud's spacing, and the gap it did not resolve about that wide: the ABC plate's pin corner
+// stood 0.135 mm outside its outer mesh where the tangled faces' edges average 0.245 mm). A ball
+// centre kept r + margin from every sample stays r + margin / 4 from such a part: every point of
+// a tangled face lies within margin / 4 of a sample (each triangle of the fan cut into a lattice
+// of triangles whose edges are at most that). None without tangled faces.
+struct TangleKeepOut {
+  std::vector<Eigen::Vector3d> samples;
+  double margin = 0;  // mm
+};
+TangleKeepOut tangle_keep_out(const Mesh& mesh, const SelfCrossings& crossings);
 
 }  // namespace scallop

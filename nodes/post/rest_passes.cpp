@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <optional>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -59,7 +60,7 @@ void trace_left(const std::vector<PartSample>& samples, const std::vector<PartTr
 }  // namespace
 
 RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::vector<Toolpath>& cuts,
-                           const RestOptions& o, const std::vector<Eigen::Vector3d>& held_points) {
+                           const RestOptions& o, const MeshDistance* part_distance) {
   const double r = o.tool_radius, H = o.scallop;
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
   if (!(H > 0) || !(H < r)) throw std::invalid_argument("the scallop limit must be > 0 and below the tool radius");
@@ -75,7 +76,8 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
   const double nominal = std::sqrt(8 * r * H), T = 20 * H, limit = 0.8 * H;
   res.spacing = part_sample_spacing(tris, nominal / 6, o.max_samples);
   std::vector<PartSample> samples = sample_part(tris, res.spacing);
-  const MeshDistance distance = MeshDistance(part).with_points(held_points);
+  const std::optional<MeshDistance> own = part_distance ? std::nullopt : std::optional<MeshDistance>(std::in_place, part);
+  const MeshDistance& distance = part_distance ? *part_distance : *own;
   const auto progress = [&](double f, const std::string& what) {
     if (o.progress) o.progress(f, what);
   };

@@ -34,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "nodes/mesh/mesh_distance.h"
 #include "nodes/surface/setups.h"
 #include "nodes/types/mesh.h"
 #include "nodes/types/toolpath.h"
@@ -72,10 +73,10 @@ struct RestResult {
 // setups  the clampings (rotation, translation; axis in the part frame); new ones are appended
 // cuts    per setup, its passes in its machine frame, already kept off the part; the rest passes
 //         are appended to them (machine frame, kept off the part), and a cut per new setup
-// held_points  points the part holds besides its faces (its cloud, part frame): balls are kept
-//         off them too (MeshDistance::with_points)
+// part_distance  the distance balls are kept off in the part frame (the part's faces with the points
+//         it holds and the places kept out: MeshDistance::with_points); null: the faces alone
 // Throws std::invalid_argument for r <= 0, h <= 0, h >= r, or cuts and setups of different counts.
 RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::vector<Toolpath>& cuts,
-                           const RestOptions& options, const std::vector<Eigen::Vector3d>& held_points = {});
+                           const RestOptions& options, const MeshDistance* part_distance = nullptr);
 
 }  // namespace scallop

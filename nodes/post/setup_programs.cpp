@@ -23,7 +23,8 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
                                          const LinkOptions& link, const GCodeOptions& gcode,
                                          const std::vector<double>& patch_off_part, const RestOptions* rest,
                                          RestResult* rest_result, const std::vector<Eigen::Vector3d>& held_points,
-                                         const std::function<void(double, const std::string&)>& progress) {
+                                         const std::function<void(double, const std::string&)>& progress,
+                                         const TangleKeepOut& keep_out) {
   const auto report = [&](double f, const std::string& what) {
     if (progress) progress(f, what);
   };
@@ -38,10 +39,20 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
   std::vector<SetupProgram> progs(setups.size());
   const double tolerance = part_clearance_tolerance(path.chord_error);
   // One tree, placed in each setup's frame.
-  const MeshDistance part_distance = MeshDistance(part).with_points(held_points);
+  const MeshDistance part_distance =
+      MeshDistance(part).with_points(held_points).with_points(keep_out.samples, keep_out.margin);
   // The part's vertices and the points it holds, for the highest point in each setup.
   std::vector<Eigen::Vector3d> part_points = part.vertices;
   part_points.insert(part_points.end(), held_points.begin(), held_points.end());
+  // In a setup's frame, and the keep-out samples raised by their margin: the part may reach there.
+  const auto placed_points = [&](const Setup& s) {
+    std::vector<Eigen::Vector3d> placed;
+    placed.reserve(part_points.size() + keep_out.samples.size());
+    for (const auto& v : part_points) placed.push_back(s.rotation * v + s.translation);
+    for (const auto& v : keep_out.samples)
+      placed.push_back(s.rotation * v + s.translation + Eigen::Vector3d(0, 0, keep_out.margin));
+    return placed;
+  };
   // Progress: keeping the passes off the part up to 0.3 (by passes), rest passes to 0.85, links.
   const bool resting = rest && rest->rounds > 0 && part.num_faces() > 0;
   const double kept_share = resting ? 0.3 : 0.8;
@@ -72,7 +83,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     }
     if (local.passes.empty() || part.num_faces() == 0) continue;
     double top_z = -std::numeric_limits<double>::infinity();
-    for (const auto& v : part_points) top_z = std::max(top_z, (s.rotation * v + s.translation).z());
+    for (const auto& v : placed_points(s)) top_z = std::max(top_z, v.z());
     const KeepOffStats kept =
         keep_off_part(local, max_drop, part_distance.placed(s.rotation, s.translation), top_z, tolerance);
     SetupProgram& prog = progs[index];
@@ -89,7 +100,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     o.tool_radius = path.tool_radius, o.scallop = path.scallop_height, o.chord = path.chord_error;
     o.progress = [&](double f, const std::string& what) { report(0.3 + 0.55 * f, what); };
     all.assign(setups.begin(), setups.end());
-    RestResult result = add_rest_passes(part, all, cuts, o, held_points);
+    RestResult result = add_rest_passes(part, all, cuts, o, &part_distance);
     progs.resize(all.size());
     for (std::size_t index = 0; index < all.size(); ++index)
       progs[index].rest_passes = result.passes[index], progs[index].rest_length = result.length[index];
@@ -107,8 +118,7 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
     // Every ball left out (no clear way to any of them; an ABC plate's noisy cloud had such a
     // clamping, and linking nothing stopped the whole part): no program for this setup.
     if (local.passes.empty()) return;
-    std::vector<Eigen::Vector3d> placed(part_points.size());
-    for (std::size_t v = 0; v < placed.size(); ++v) placed[v] = s.rotation * part_points[v] + s.translation;
+    const std::vector<Eigen::Vector3d> placed = placed_points(s);
     SetupProgram prog = progs[index];
     prog.setup = index;
     const MeshDistance distance = part_distance.placed(s.rotation, s.translation);

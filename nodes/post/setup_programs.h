@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "nodes/mesh/self_crossings.h"
 #include "nodes/post/gcode.h"
 #include "nodes/post/link.h"
 #include "nodes/post/rest_passes.h"
@@ -68,6 +69,8 @@ struct SetupProgram {
 // held_points   points the part holds besides its faces (the cloud the mesh was made from, part
 //               frame): the balls, moves and links are kept off them too, and the clearance plane
 //               clears them (where the mesh does not hold its cloud, a fold or a filled hole)
+// keep_out      where the part's mesh crosses itself (tangle_keep_out of self_crossings(part)): the
+//               balls, moves and links are kept its margin farther from its samples
 // progress      optional: the fraction done and what is being done (the block's 200 000-point
 //               cloud took 230 s here: keeping the passes off the part, rest passes, linking)
 // Returns one program per setup that cuts anything (a setup none of whose balls could be kept off
@@ -79,7 +82,8 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
                                          const std::vector<double>& patch_off_part = {},
                                          const RestOptions* rest = nullptr, RestResult* rest_result = nullptr,
                                          const std::vector<Eigen::Vector3d>& held_points = {},
-                                         const std::function<void(double, const std::string&)>& progress = {});
+                                         const std::function<void(double, const std::string&)>& progress = {},
+                                         const TangleKeepOut& keep_out = {});
 
 // The setups file: {"format": "scallop-setups/1", "units": "mm", "setups": [{name, gcode,
 // part_to_machine}]}.

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -29,7 +30,7 @@ struct SetupProgramsOptions {
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 16;  // 16: balls dropped by their distance less r again (15: plane steps on slopes, slower on the block: 218 -> 243 s); 14: moves, pass ends and rest setups tested clear by MeshDistance::clear_along (sooner, never less safe); 13: the balls, moves and links kept off the cloud's points too (input cloud); 12: a move lacking less than its ends' height difference goes up by what it lacks; 11: the rest search also refines the thin band beside concave edges a ball of 0.9 r reaches; 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
+  d.version = 17;  // 17: where the measured mesh (input measured, else mesh) crosses itself, the balls kept a margin farther from its tangled faces (crossing_pairs, tangled_faces, tangle_margin); 16: balls dropped by their distance less r again (15: plane steps on slopes, slower on the block: 218 -> 243 s); 14: moves, pass ends and rest setups tested clear by MeshDistance::clear_along (sooner, never less safe); 13: the balls, moves and links kept off the cloud's points too (input cloud); 12: a move lacking less than its ends' height difference goes up by what it lacks; 11: the rest search also refines the thin band beside concave edges a ball of 0.9 r reaches; 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
                   // 3: moves and links kept off the part's faces exactly (MeshDistance::least_along)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), kept off "
@@ -46,6 +47,11 @@ NodeDecl make_setup_programs_node() {
       .input("cloud", "Cloud",
              "the points the part was measured at (the cloud `mesh` was made from): balls, moves and links are kept "
              "off them too, where the mesh does not hold them all (a fold, a filled hole)", false)
+      .input("measured", "Mesh",
+             "the mesh made from the cloud, before mesh.cloud_envelope moved it out into `mesh`: where it crosses "
+             "itself (a gap finer than the points), the balls are kept a margin farther from its tangled faces "
+             "(absent: where `mesh` itself crosses; an outer mesh crosses itself at every concave edge, harmlessly)",
+             false)
       .output("file", "File", "the setups file")
       .output("programs", "SetupPaths", "each program's moves with its part_to_machine (post.simulate_part)")
       .output("report", "Report", "{setups: [{name, gcode, passes, moves, clearance_z (mm, machine frame), lifted (ball positions kept off "
@@ -56,7 +62,9 @@ NodeDecl make_setup_programs_node() {
               "part frame), rest_passes (passes added where the others left material), rest_length (mm)}], rest: {rounds, inside_drops (rest balls left out: they fell through a hole in the mesh onto the inside of a face), new_setups (clampings added for places no other setup's axis comes down to), "
               "spacing, measured_area, left_area_before (mm² the setups' own passes leave over 0.8 h or uncut, by the "
               "rest search's samples), left_area_after, unreached_area (left where no setup's axis comes down clear), "
-              "unreached_at [[x, y, z], ...] (part frame)}}")
+              "unreached_at [[x, y, z], ...] (part frame)}, crossing_pairs and tangled_faces (where the mesh crosses "
+              "itself, and the faces beside those turned into the part: nodes/mesh/self_crossings.h), tangle_margin "
+              "(mm: the balls are kept that much farther from them)}")
       .param_output_path("path", "the setups file to write, relative to the output folder (-o); the programs "
                                  "(setup_1.ngc, ...) go beside it");
   d.options<SetupProgramsOptions>()
@@ -105,6 +113,19 @@ NodeDecl make_setup_programs_node() {
       }
     }
     RestResult rest_result;
+    // Where the mesh crosses itself its faces bound nothing: the balls are kept a margin off them.
+    const auto measured = ctx.has_input("measured") ? ctx.input<Mesh>("measured") : mesh;
+    const SelfCrossings crossings = self_crossings(*measured);
+    const TangleKeepOut keep_out = tangle_keep_out(*measured, crossings);
+    if (!crossings.tangled.empty()) {
+      const Eigen::Vector3d at = measured->vertices[measured->face(crossings.tangled.front())[0]];
+      char text[400];
+      std::snprintf(text, sizeof text,
+                    "the part's mesh crosses itself (%zu face pairs, %zu faces tangled, around %s): the part is not "
+                    "known there, so the balls are kept %.3g mm farther from those faces (stock the certificate counts)",
+                    crossings.pairs.size(), crossings.tangled.size(), point_text(at, 2).c_str(), keep_out.margin);
+      ctx.warn(text);
+    }
     std::vector<Setup> setups;
     std::vector<SetupProgram> programs;
     try {
@@ -112,7 +133,7 @@ NodeDecl make_setup_programs_node() {
       const auto cloud = ctx.has_input("cloud") ? ctx.input<PointCloud>("cloud") : nullptr;
       programs = setup_programs(*path, counts, setups, *mesh, link, g, off_part, &rest, &rest_result,
                                 cloud ? cloud->points : std::vector<Eigen::Vector3d>{},
-                                [&](double f, const std::string& what) { ctx.progress(f, what); });
+                                [&](double f, const std::string& what) { ctx.progress(f, what); }, keep_out);
     } catch (const std::exception& e) {
       throw NodeError(std::string("post.setup_programs: ") + e.what());
     }
@@ -168,6 +189,9 @@ NodeDecl make_setup_programs_node() {
     nlohmann::json unreached = nlohmann::json::array();
     for (const auto& p : rest_result.unreached_at) unreached.push_back({p.x(), p.y(), p.z()});
     report.data = {{"setups", list},
+                   {"crossing_pairs", crossings.pairs.size()},
+                   {"tangled_faces", crossings.tangled.size()},
+                   {"tangle_margin", keep_out.margin},
                    {"rest",
                     {{"rounds", rest_result.rounds},
                      {"inside_drops", rest_result.inside_drops},

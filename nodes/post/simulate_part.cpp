@@ -355,22 +355,24 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   const std::size_t cloud_cut = cloud_tally.cut, unbounded_points = cloud_tally.unbounded;
 
   // Where the part's mesh crosses itself (a reconstruction tangled at a gap finer than its
-  // points), the faces there say nothing of the part: a ball that comes within the tolerance of
-  // one (of a circle about its centre through its farthest corner) may cut what no mesh shows.
+  // points), the faces there bound nothing; the part is taken to lie within half the margin of
+  // them (tangle_keep_out). A ball centre nearer than r + 3/4 of the margin to a sample may come
+  // within half of it of a face: the gouge there is not bounded (post.setup_programs keeps the
+  // balls r + margin off the samples). Not the outer mesh's: moved out, it crosses itself at every
+  // concave edge, and its union still bounds the part.
   const SelfCrossings crossings = self_crossings(part);
-  std::size_t tangled_reached = 0;
-  Deepest tangled_nearest{-INFINITY, Eigen::Vector3d::Zero()};  // minus the clearance, and where
-  for (std::size_t f : crossings.tangled) {
-    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-    for (std::size_t k = 0; k < part.face_size(f); ++k) centre += part.vertices[part.face(f)[k]];
-    centre /= double(part.face_size(f));
-    double size = 0;
-    for (std::size_t k = 0; k < part.face_size(f); ++k) size = std::max(size, (part.vertices[part.face(f)[k]] - centre).norm());
+  const TangleKeepOut keep = tangle_keep_out(part, crossings);
+  std::size_t tangle_samples_reached = 0;
+  Deepest tangle_nearest{-INFINITY, Eigen::Vector3d::Zero()};  // minus the distance, and where
+  {
+    const double reach = r + 0.75 * keep.margin;
     std::vector<std::uint32_t> scratch;
-    const double d = centres.distance(centre, r + tol + size, scratch);
-    if (!(d < r + tol + size)) continue;
-    ++tangled_reached;
-    tangled_nearest = deeper(tangled_nearest, {r + size - d, centre});
+    for (const Eigen::Vector3d& q : keep.samples) {
+      const double d = centres.distance(q, reach, scratch);
+      if (!(d < reach)) continue;
+      ++tangle_samples_reached;
+      tangle_nearest = deeper(tangle_nearest, {-d, q});
+    }
   }
 
   // Statistics: area-weighted over the grid; maxima include the refinement samples.
@@ -436,9 +438,9 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   }
   rep["crossing_pairs"] = crossings.pairs.size();
   rep["tangled_faces"] = crossings.tangled.size();
-  rep["tangled_faces_reached"] = tangled_reached;
-  rep["tangled_reached_at"] = tangled_reached > 0 ? xyz(tangled_nearest.second) : nlohmann::json();
-  rep["faces_not_checked_for_crossings"] = crossings.faces_left_out;
+  rep["tangle_margin"] = keep.margin;
+  rep["tangle_samples_reached"] = tangle_samples_reached;
+  rep["tangle_reached_at"] = tangle_samples_reached > 0 ? xyz(tangle_nearest.second) : nlohmann::json();
   rep["rapids_through_part"] = through_total;
   rep["rapid_min_clearance"] = finite_or_null(rapid_min);
   rep["cut_length"] = cut_total;
@@ -552,12 +554,12 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
                   unbounded_points, unbounded.first, unbounded.second.x(), unbounded.second.y(), unbounded.second.z());
     reasons.push_back(buf);
   }
-  if (tangled_reached > 0) {
+  if (tangle_samples_reached > 0) {
     std::snprintf(buf, sizeof buf,
-                  "the part's mesh crosses itself (%zu face pairs, %zu faces tangled) and balls pass by %zu of those "
-                  "faces, nearest at (%.3f, %.3f, %.3f): the part there is not known, the gouge there is not bounded",
-                  crossings.pairs.size(), crossings.tangled.size(), tangled_reached, tangled_nearest.second.x(),
-                  tangled_nearest.second.y(), tangled_nearest.second.z());
+                  "the part's mesh crosses itself (%zu face pairs, %zu faces tangled) and balls pass within %.3g mm of "
+                  "those faces, nearest at (%.3f, %.3f, %.3f): the part there is not known, the gouge there is not bounded",
+                  crossings.pairs.size(), crossings.tangled.size(), 0.75 * keep.margin, tangle_nearest.second.x(),
+                  tangle_nearest.second.y(), tangle_nearest.second.z());
     reasons.push_back(buf);
   }
   if (measured <= 0) {

@@ -13,7 +13,7 @@ namespace scallop::post_nodes {
 NodeDecl make_simulate_part_node() {
   NodeDecl d;
   d.type = "post.simulate_part";
-  d.version = 14;  // 2: the worst places begin with the moves that reach into the part; 3: faces folded onto a neighbour leave the side to the rays; 4: samples in strips along each face's longest edge, by area, as verify_part.py; 5: refinement seeded from the highest 1 %; 6: and from the samples a ball of 0.9 r reaches; 7: twice as densely where the edge of the reach may cross a seed's square; 8: the report says where the interior maximum stands (scallop_max_interior_at); 9: edge_uncertainty_edges, the cloud's points checked for gouges; 10: and for where the outer mesh does not hold them (gouge_unbounded_*); 11: faces of the outer mesh its moves turned over leave the side to the rays; 12: the reach radius of an unreachable place to r / 32768 (was r / 2^30); 13: faces of the outer mesh turned more than 10 degrees leave the side to the rays (was 90); 14: where the part's mesh crosses itself, a ball passing by its tangled faces fails it (crossing_pairs, tangled_faces*)
+  d.version = 14;  // 2: the worst places begin with the moves that reach into the part; 3: faces folded onto a neighbour leave the side to the rays; 4: samples in strips along each face's longest edge, by area, as verify_part.py; 5: refinement seeded from the highest 1 %; 6: and from the samples a ball of 0.9 r reaches; 7: twice as densely where the edge of the reach may cross a seed's square; 8: the report says where the interior maximum stands (scallop_max_interior_at); 9: edge_uncertainty_edges, the cloud's points checked for gouges; 10: and for where the outer mesh does not hold them (gouge_unbounded_*); 11: faces of the outer mesh its moves turned over leave the side to the rays; 12: the reach radius of an unreachable place to r / 32768 (was r / 2^30); 13: faces of the outer mesh turned more than 10 degrees leave the side to the rays (was 90); 14: where the part's mesh crosses itself, a ball passing within r + 3/4 of the tangle margin of its tangled faces fails it (crossing_pairs, tangled_faces, tangle_*)
   d.description =
       "the certificate of a whole part cut in several clampings: every setup's program taken back to the part, "
       "scallop left over the whole mesh, gouge and rapids against it (verify_part.py's definitions)";
@@ -35,9 +35,9 @@ NodeDecl make_simulate_part_node() {
              "and the certificate failed (gouge_unbounded_points, gouge_unbounded_max, gouge_unbounded_at)", false)
       .output("report", "Report",
               "pass (verify_part.py's rule: interior scallop <= 1.01 h, gouge <= max(e, 0.001), nothing uncut, no rapid "
-              "through the part, and no ball passing within the tolerance of a face where the mesh crosses itself or of a face beside "
-              "those turned into the part: crossing_pairs, tangled_faces, tangled_faces_reached, tangled_reached_at, "
-              "faces_not_checked_for_crossings), fail_reasons, scallop/uncut figures for the whole part and its interior, gouge, "
+              "through the part, and no ball centre within r + 3/4 of tangle_margin of the faces where `mesh` crosses itself or beside "
+              "those turned into the part: crossing_pairs, tangled_faces, tangle_margin, "
+              "tangle_samples_reached, tangle_reached_at), fail_reasons, scallop/uncut figures for the whole part and its interior, gouge, "
               "rapids, base and unreachable fractions, per setup figures, the unreachable places with the largest "
               "tool radius that reaches each, the 10 worst places")
       .output("simulation", "Simulation", "what the programs left at every measured sample, with its face (post.render)")

@@ -274,6 +274,28 @@ TEST(MeshDistance, PointsThePartHoldsBesideItsFacesCountAsPartOfIt) {
             "a point the part holds is not finite");
 }
 
+TEST(MeshDistance, PointsHeldWithAMarginCountAsBallsAboutThemAndAddToThoseHeldBefore) {
+  // The unit cube, the cloud's point 0.3 above the top's middle, and a point 2 above the top held
+  // with a margin of 0.25 (where the part may reach anywhere within 0.25 of it): the distances
+  // are to the union of the solid, the point and that ball.
+  const MeshDistance faces(test::cube_mesh(3));
+  const MeshDistance part = faces.with_points({V(0.5, 0.5, 1.3)}).with_points({V(0.5, 0.5, 3)}, 0.25);
+  EXPECT_NEAR(part(V(0.5, 0.5, 2)), 0.7, 1e-12);                   // the cloud's point, held before
+  EXPECT_NEAR(part(V(0.5, 0.5, 4)), 0.75, 1e-12);                  // the ball: 1 - 0.25
+  EXPECT_NEAR(part.signed_distance(V(0.5, 0.5, 3.1)), -0.15, 1e-12);  // inside the ball
+  EXPECT_NEAR(part.placed(Eigen::Matrix3d::Identity(), V(1, 0, 0))(V(1.5, 0.5, 4)), 0.75, 1e-12);
+  // A segment passing 0.5 beside the held point comes within 0.25 of the ball.
+  V where;
+  std::size_t evaluations = 0;
+  const double least = part.least_along(V(-1, 0.5, 3.5), V(2, 0.5, 3.5), 0.4, 1, 1e-6, where, evaluations, false);
+  EXPECT_LE(least, 0.25 + 1e-12);
+  EXPECT_GE(least, 0.25 - 1e-3);
+  EXPECT_FALSE(part.clear_along(V(-1, 0.5, 3.5), V(2, 0.5, 3.5), 0.4, 0.26));
+  EXPECT_TRUE(part.clear_along(V(-1, 0.5, 3.5), V(2, 0.5, 3.5), 0.4, 0.24));
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { faces.with_points({V(0, 0, 0)}, -1); }),
+            "the margin about held points must be >= 0");
+}
+
 // The nearest point is searched in float boxes (Embree) but found in doubles: on a wavy sheet
 // of 5 000 triangles 1 000 mm from the origin (a float's step there is 6e-5 mm), every distance
 // equals the least over all triangles to the last bit, at 1e-7 to 10 mm from the faces, with and

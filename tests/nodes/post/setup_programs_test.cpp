@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -14,6 +16,7 @@
 #include "nodes/mesh/mesh_distance.h"
 #include "nodes/path/contour_grid.h"
 #include "nodes/surface/setups.h"
+#include "tests/nodes/mesh/mesh_test_util.h"
 #include "tests/nodes/path/scallop_trace.h"
 #include "tests/nodes/surface/surface_test_util.h"
 #include "tests/test_support.h"
@@ -224,21 +227,31 @@ TEST(SetupPrograms, TheCloudsPointsTheMeshDoesNotHoldAreKeptOffToo) {
   EXPECT_LT(nearest_to_bump(through), r - 0.3);
 }
 
+// The square [0, side]^2 at height z as one flat patch, planned as contours (r, h = 0.05,
+// e = 0.01), and the one clamping that cuts it from +z in the part's own frame.
+Toolpath planned_square(double side, double z, double r) {
+  ContourGridOptions o;
+  o.tool_radius = r, o.scallop_height = 0.05, o.chord_error = 0.01;
+  const SurfacePatch square = test::flat_patch({0, 0, z}, {side, 0, z}, {0, side, z}, {side, side, z}, {0, 0, 1});
+  Toolpath path;
+  path.tool_radius = r, path.scallop_height = 0.05, path.chord_error = 0.01;
+  path.passes = plan_contour_grid(BSplinePatch(square.surface, square.direction), o).passes;
+  return path;
+}
+
+scallop::Setup plus_z() {
+  scallop::Setup top;  // gtest has a Setup of its own
+  top.name = "1: +z", top.axis = V::UnitZ(), top.rotation.setIdentity(), top.translation.setZero(), top.patches = {0};
+  return top;
+}
+
 TEST(SetupPrograms, ABallAgainstAWallIsLiftedOverIt) {
   // A 10 x 10 floor (z = 0) against a wall 5 mm high at x = 10: the contour along the floor's
   // edge x = 10 would put the ball (r = 2) into the wall; kept off, it rides on the wall's top
   // edge: its centre at z = 5 + 2 there, a lift of 5.
   const Mesh part = joined(box({0, 0, -5}, {10, 10, 0}), box({10, 0, -5}, {15, 10, 5}));
-  ContourGridOptions o;
-  o.tool_radius = 2, o.scallop_height = 0.05, o.chord_error = 0.01;
-  const SurfacePatch floor = test::flat_patch({0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {10, 10, 0}, {0, 0, 1});
-  const ContourGridResult g = plan_contour_grid(BSplinePatch(floor.surface, floor.direction), o);
-  Toolpath path;
-  path.tool_radius = 2, path.scallop_height = 0.05, path.chord_error = 0.01;
-  path.passes = g.passes;
-  scallop::Setup top;  // gtest has a Setup of its own
-  top.name = "1: +z", top.axis = V::UnitZ(), top.rotation.setIdentity(), top.translation.setZero(), top.patches = {0};
-  const auto programs = setup_programs(path, {g.passes.size()}, {top}, part, {}, {});
+  const Toolpath path = planned_square(10, 0, 2);
+  const auto programs = setup_programs(path, {path.passes.size()}, {plus_z()}, part, {}, {});
   ASSERT_EQ(programs.size(), 1u);
   EXPECT_GT(programs[0].lifted, 0u);
   EXPECT_NEAR(programs[0].lift_max, 5.0, 0.01);
@@ -250,6 +263,29 @@ TEST(SetupPrograms, ABallAgainstAWallIsLiftedOverIt) {
   // No ball centre comes nearer than r - e/4 to the wall.
   const MeshDistance distance(part);
   for (const V& t : tips(programs[0].gcode)) EXPECT_GE(distance(t + V(0, 0, 2)), 2 - 0.0025 - 1e-4);
+}
+
+TEST(SetupPrograms, BallsAreKeptTheMarginFartherFromWhereTheMeshCrossesItself) {
+  // The cube [0, 4]^3 with the middle of its top pulled through its bottom, its top planned as a
+  // flat patch (r = 1): with the tangle's keep-out, every ball centre stays r + margin - e/4 from
+  // its samples (the part may be anywhere within half the margin of those faces); without, the
+  // balls ride on the top, within that of them.
+  std::set<std::size_t> spike;
+  const Mesh part = test::spiked_cube(spike);
+  const TangleKeepOut keep = tangle_keep_out(part, self_crossings(part));
+  ASSERT_GT(keep.margin, 0);
+  const Toolpath path = planned_square(4, 4, 1);
+  const MeshDistance samples = MeshDistance(Mesh()).with_points(keep.samples);
+  const auto kept = setup_programs(path, {path.passes.size()}, {plus_z()}, part, {}, {}, {}, nullptr, nullptr, {}, {}, keep);
+  ASSERT_EQ(kept.size(), 1u);
+  const std::vector<V> t = tips(kept[0].gcode);
+  ASSERT_FALSE(t.empty());
+  for (const V& tip : t) EXPECT_GE(samples(tip + V(0, 0, 1)), 1 + keep.margin - 0.0025 - 1e-4) << tip.transpose();
+  const auto plain = setup_programs(path, {path.passes.size()}, {plus_z()}, part, {}, {});
+  ASSERT_EQ(plain.size(), 1u);
+  double nearest = INFINITY;
+  for (const V& tip : tips(plain[0].gcode)) nearest = std::min(nearest, samples(tip + V(0, 0, 1)));
+  EXPECT_LT(nearest, 1 + 0.5 * keep.margin);
 }
 
 TEST(SetupPrograms, APassEndUnderAnOverhangIsRaisedUntilTheBallGoesUpClear) {

@@ -6,6 +6,7 @@
 #include <set>
 
 #include "engine/node.h"
+#include "nodes/mesh/self_crossings.h"
 #include "nodes/types/document.h"
 #include "nodes/types/toolpath.h"
 #include "tests/nodes/mesh/mesh_test_util.h"
@@ -182,20 +183,26 @@ TEST(SimulatePart, ACloudPointOutsideTheOuterMeshNearABallLeavesTheGougeUnbounde
 TEST(SimulatePart, ABallPassingByWhereTheMeshCrossesItselfLeavesTheGougeUnbounded) {
   // The cube [0, 4]^3 with the middle of its top pulled through its bottom (a reconstruction
   // tangled at a gap finer than its points): a pass over the top at y = 2 comes by the spike's
-  // faces, whatever the meshes say of the gouge there; a pass 20 away comes by none.
+  // faces, whatever the meshes say of the gouge there. The part may lie anywhere within half the
+  // margin of them, so a ball centre within r + 3/4 of it of a sample fails the certificate.
   const double r = 1;
   std::set<std::size_t> spike;
   const Mesh part = test::spiked_cube(spike);
-  std::vector<PartSetupCut> near(1), far(1);
+  const TangleKeepOut keep = tangle_keep_out(part, self_crossings(part));
+  ASSERT_GT(keep.margin, 0);
+  std::vector<PartSetupCut> near(1), beyond(1);
   near[0].name = "near", near[0].feed = {{V(-1, 2, 4 + r), V(5, 2, 4 + r)}};
-  far[0].name = "far", far[0].feed = {{V(-1, 22, 4 + r), V(5, 22, 4 + r)}};
+  // A pass r + the whole margin beside the nearest sample: kept off as post.setup_programs keeps it.
+  double top = -INFINITY;
+  for (const V& q : keep.samples) top = std::max(top, q.z());
+  beyond[0].name = "beyond", beyond[0].feed = {{V(-1, 2, top + r + keep.margin), V(5, 2, top + r + keep.margin)}};
   const PartSimulateOptions o = options(r, 0.05);
   const nlohmann::json rep = simulate_part(part, near, o, {}).report;
   EXPECT_GT(rep["crossing_pairs"].get<int>(), 0);
   EXPECT_GE(rep["tangled_faces"].get<std::size_t>(), spike.size());
-  EXPECT_GE(rep["tangled_faces_reached"].get<std::size_t>(), 1u);
-  EXPECT_FALSE(rep["tangled_reached_at"].is_null());
-  EXPECT_EQ(rep["faces_not_checked_for_crossings"], 0);
+  EXPECT_DOUBLE_EQ(rep["tangle_margin"].get<double>(), keep.margin);
+  EXPECT_GE(rep["tangle_samples_reached"].get<std::size_t>(), 1u);
+  EXPECT_FALSE(rep["tangle_reached_at"].is_null());
   EXPECT_FALSE(rep["pass"].get<bool>());
   const std::string prefix = "the part's mesh crosses itself (" + std::to_string(rep["crossing_pairs"].get<int>()) +
                              " face pairs, " + std::to_string(rep["tangled_faces"].get<int>()) + " faces tangled)";
@@ -208,16 +215,20 @@ TEST(SimulatePart, ABallPassingByWhereTheMeshCrossesItselfLeavesTheGougeUnbounde
                          }),
             reasons.end())
       << reasons;
-  const nlohmann::json away = simulate_part(part, far, o, {}).report;
+  const nlohmann::json away = simulate_part(part, beyond, o, {}).report;
   EXPECT_EQ(away["crossing_pairs"], rep["crossing_pairs"]);
-  EXPECT_EQ(away["tangled_faces_reached"], 0);
-  EXPECT_TRUE(away["tangled_reached_at"].is_null());
+  EXPECT_EQ(away["tangle_samples_reached"], 0);
+  EXPECT_TRUE(away["tangle_reached_at"].is_null());
   for (const auto& reason : away["fail_reasons"])
     EXPECT_EQ(reason.get<std::string>().find("crosses itself"), std::string::npos) << reason;
-  // A mesh that does not cross itself: none of it.
-  const nlohmann::json box = simulate_part(test::cube_mesh(4, 4.0), near, o, {}).report;
-  EXPECT_EQ(box["crossing_pairs"], 0);
-  EXPECT_EQ(box["tangled_faces"], 0);
+  // The outer mesh's crossings are not counted (moved out, it crosses itself at concave edges);
+  // a mesh that crosses nothing: none of it.
+  const Mesh box = test::cube_mesh(4, 4.0);
+  EXPECT_EQ(simulate_part(box, near, o, {}, &part).report["tangle_samples_reached"], 0);
+  const nlohmann::json plain = simulate_part(box, near, o, {}).report;
+  EXPECT_EQ(plain["crossing_pairs"], 0);
+  EXPECT_EQ(plain["tangled_faces"], 0);
+  EXPECT_EQ(plain["tangle_margin"], 0.0);
 }
 
 TEST(SimulatePart, GougesInsideAndNearAreMeasuredAndARapidThroughThePartIsCounted) {
