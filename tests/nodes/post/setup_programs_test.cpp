@@ -225,6 +225,12 @@ TEST(SetupPrograms, TheCloudsPointsTheMeshDoesNotHoldAreKeptOffToo) {
   EXPECT_NEAR(kept[0].clearance_z, 5.4 + 5, 1e-9);  // the top setup: z up
   const auto through = setup_programs(b.path, b.counts, b.setups, b.part, {}, {});
   EXPECT_LT(nearest_to_bump(through), r - 0.3);
+  // Points the closed mesh holds (on its top, inside it) change nothing: the same programs.
+  std::vector<V> held(cloud.begin() + 1, cloud.end());
+  held.push_back(V(10, 5, 2.5));
+  const auto same = setup_programs(b.path, b.counts, b.setups, b.part, {}, {}, {}, nullptr, nullptr, held);
+  ASSERT_EQ(same.size(), through.size());
+  for (std::size_t i = 0; i < same.size(); ++i) EXPECT_EQ(same[i].gcode, through[i].gcode);
 }
 
 // The square [0, side]^2 at height z as one flat patch, planned as contours (r, h = 0.05,
