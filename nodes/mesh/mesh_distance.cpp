@@ -341,11 +341,20 @@ double MeshDistance::faces_signed(const Eigen::Vector3d& p) const {
   // A folded face is left to the rays: by its normal alone a ball centre 5.7 mm outside block.off
   // read as a 7.7 mm gouge.
   if (inside_face && !folded) return (q - foot) * normal < 0 ? -d : d;
+  return inside_in_mesh(p) ? -d : d;
+}
+
+bool MeshDistance::inside_by_rays(const Eigen::Vector3d& p) const {
+  return !impl_->tris.empty() && inside_in_mesh(to_mesh(p));
+}
+
+bool MeshDistance::inside_in_mesh(const Eigen::Vector3d& p) const {
+  const Kernel::Point_3 q = point(p);
   int odd = 0;
   for (const Kernel::Vector_3& dir : {Kernel::Vector_3(0.5773, 0.3131, 0.7544), Kernel::Vector_3(-0.6421, 0.5172, -0.2913),
                                       Kernel::Vector_3(0.1173, -0.8839, 0.3253)})
     odd += impl_->ray_tree().number_of_intersected_primitives(Kernel::Ray_3(q, dir)) % 2;
-  return odd >= 2 ? -d : d;
+  return odd >= 2;
 }
 
 double MeshDistance::least_along(const Eigen::Vector3d& a_placed, const Eigen::Vector3d& b_placed, double step, double floor,

@@ -62,6 +62,10 @@ class MeshDistance {
   // crossings of three skew rays (majority), which needs a closed mesh. Within 1e-9 mm of the
   // faces, that distance unsigned. +infinity without faces.
   double signed_distance(const Eigen::Vector3d& p) const;
+  // Whether p lies inside the faces by the parity of the faces three skew rays from it cross (the
+  // majority of the three; needs a closed mesh); false without faces. The signed distance's side
+  // where the nearest face does not tell it.
+  bool inside_by_rays(const Eigen::Vector3d& p) const;
   // The least signed distance along the segment [a, b], as a lower bound within
   // max(eps, (floor - truth) / 1000) of the truth wherever the truth is below `floor` (where it is
   // not, the result is only known to be at least min(floor, the least found)): sampled every
@@ -101,6 +105,7 @@ class MeshDistance {
   // has_near), which then gets p's nearest point on them: along a segment the searches are near.
   double unsigned_near(const Eigen::Vector3d& p, Eigen::Vector3d& near, bool& has_near) const;
   double faces_signed(const Eigen::Vector3d& p) const;
+  bool inside_in_mesh(const Eigen::Vector3d& p) const;  // inside_by_rays, p in the mesh's frame
   double to_held_points(const Eigen::Vector3d& p) const;  // the least over the held sets; +infinity without them
   std::shared_ptr<Impl> impl_;
   std::vector<std::shared_ptr<const HeldPoints>> held_;  // each set with its margin

@@ -1,8 +1,5 @@
 #include "nodes/mesh/self_crossings.h"
 
-#include <CGAL/AABB_face_graph_triangle_primitive.h>
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
@@ -11,17 +8,18 @@
 #include <cmath>
 #include <deque>
 
+#include "nodes/mesh/mesh_distance.h"
+
 namespace scallop {
 namespace {
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Surface = CGAL::Surface_mesh<Kernel::Point_3>;
 using Face = Surface::Face_index;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, CGAL::AABB_face_graph_triangle_primitive<Surface>>>;
 
-// Whether the point just off triangle f's centre along its normal lies inside the surface: the
-// parity of the faces three skew rays from it cross, the majority of the three.
-bool faces_inward(const Surface& s, const Tree& tree, Face f) {
+// Whether the point just off triangle f's centre along its normal lies inside the mesh (by the
+// rays' parity): the face faces inward.
+bool faces_inward(const Surface& s, const MeshDistance& rays, Face f) {
   const auto h = s.halfedge(f);
   const Kernel::Point_3 &a = s.point(s.source(h)), &b = s.point(s.target(h)), &c = s.point(s.target(s.next(h)));
   const Kernel::Vector_3 n = CGAL::cross_product(b - a, c - a);
@@ -29,11 +27,7 @@ bool faces_inward(const Surface& s, const Tree& tree, Face f) {
   if (!(length > 0)) return false;
   const double shortest = std::sqrt(std::min({(b - a).squared_length(), (c - b).squared_length(), (a - c).squared_length()}));
   const Kernel::Point_3 q = CGAL::centroid(a, b, c) + n * (1e-3 * shortest / length);
-  int odd = 0;
-  for (const Kernel::Vector_3& d : {Kernel::Vector_3(0.5773, 0.3131, 0.7544), Kernel::Vector_3(-0.6421, 0.5172, -0.2913),
-                                    Kernel::Vector_3(0.1173, -0.8839, 0.3253)})
-    odd += tree.number_of_intersected_primitives(Kernel::Ray_3(q, d)) % 2;
-  return odd >= 2;
+  return rays.inside_by_rays(Eigen::Vector3d(q.x(), q.y(), q.z()));
 }
 
 }  // namespace
@@ -75,7 +69,7 @@ SelfCrossings self_crossings(const Mesh& mesh) {
   out.pairs.erase(std::unique(out.pairs.begin(), out.pairs.end()), out.pairs.end());
 
   // Grown across edges while the faces reached face inward.
-  const Tree tree(faces(s).first, faces(s).second, s);
+  const MeshDistance rays(mesh);
   std::vector<char> tested(s.number_of_faces(), 0);
   while (!grow.empty()) {
     const Face f = grow.front();
@@ -84,7 +78,7 @@ SelfCrossings self_crossings(const Mesh& mesh) {
       const Face g = s.face(s.opposite(h));
       if (g == Surface::null_face() || tangled[g] || tested[g]) continue;
       tested[g] = 1;
-      if (faces_inward(s, tree, g)) tangled[g] = 2, grow.push_back(g);
+      if (faces_inward(s, rays, g)) tangled[g] = 2, grow.push_back(g);
     }
   }
   std::vector<char> polygon(mesh.num_faces(), 0);
