@@ -116,7 +116,7 @@ struct NearestQuery {
   Eigen::Vector3d p;
   double slack;  // what the float query point and Embree's float tests may be off by
   double d2 = std::numeric_limits<double>::infinity();
-  Eigen::Vector3d foot;
+  Eigen::Vector3d foot = Eigen::Vector3d::Zero();
   std::size_t tri = std::numeric_limits<std::size_t>::max();
 };
 

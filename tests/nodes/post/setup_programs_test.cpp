@@ -372,8 +372,11 @@ TEST(SetupPrograms, FacesThePassesMissAreCutByRestPasses) {
   EXPECT_NEAR(found.measured_area, X * Y + 2 * (X + Y) * Z, 1e-6);
   EXPECT_GT(found.left_area_before, 2 * X * Z * 0.9);  // the two sides at least
   EXPECT_EQ(found.left_area_after, 0);
-  for (const auto& p : programs)
-    if (setups[p.setup].patches.front() >= 3) EXPECT_GT(p.rest_passes, 0u) << p.name;
+  for (const auto& p : programs) {
+    if (setups[p.setup].patches.front() >= 3) {
+      EXPECT_GT(p.rest_passes, 0u) << p.name;
+    }
+  }
   EXPECT_LE(worst_scallop(s, feed_centres(programs, setups, r), r), h * 1.01);
 }
 
