@@ -1,8 +1,10 @@
-// The nearest point of a triangle to a point: the mesh distances' exact step after a search has
-// found the triangles that may hold it.
+// The nearest point of a triangle to a point, and the nearest points of a triangle and a segment:
+// the mesh distances' exact step after a search has found the triangles that may hold them.
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <utility>
 
 #include "nodes/geom/segment.h"
 
@@ -34,6 +36,36 @@ inline Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& q, const Eigen
   if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
   if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
   return a + (vb / sum) * ab + (vc / sum) * ac;
+}
+
+// The nearest points of the segment [a, b] and the triangle (t0, t1, t2): on_segment and
+// on_triangle; returns their squared distance (0 where the segment crosses the triangle). Apart,
+// the nearest pair has an end of the segment or a point of an edge of the triangle in it (two
+// convex sets: a pair inside both needs the segment parallel to the plane, and sliding along it
+// keeps the distance until one of those), so it is the nearest of the ends' nearest points and
+// the segment's against each edge.
+inline double closest_segment_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& t0,
+                                       const Eigen::Vector3d& t1, const Eigen::Vector3d& t2, Eigen::Vector3d& on_segment,
+                                       Eigen::Vector3d& on_triangle) {
+  const Eigen::Vector3d n = (t1 - t0).cross(t2 - t0);
+  const double da = n.dot(a - t0), db = n.dot(b - t0);
+  if (n.squaredNorm() > 0 && ((da <= 0 && db >= 0) || (da >= 0 && db <= 0)) && da != db) {
+    // Where the segment meets the plane, inside the triangle: they cross.
+    const Eigen::Vector3d x = a + (da / (da - db)) * (b - a);
+    if (n.dot((t1 - t0).cross(x - t0)) >= 0 && n.dot((t2 - t1).cross(x - t1)) >= 0 &&
+        n.dot((t0 - t2).cross(x - t2)) >= 0) {
+      on_segment = on_triangle = x;
+      return 0;
+    }
+  }
+  on_segment = a, on_triangle = closest_on_triangle(a, t0, t1, t2);
+  double best = (on_triangle - a).squaredNorm();
+  const Eigen::Vector3d at_b = closest_on_triangle(b, t0, t1, t2);
+  if (const double d = (at_b - b).squaredNorm(); d < best) best = d, on_segment = b, on_triangle = at_b;
+  Eigen::Vector3d cs, ct;
+  for (const auto& [p, q] : {std::pair{&t0, &t1}, std::pair{&t1, &t2}, std::pair{&t2, &t0}})
+    if (const double d = closest_between_segments(a, b, *p, *q, cs, ct); d < best) best = d, on_segment = cs, on_triangle = ct;
+  return best;
 }
 
 }  // namespace scallop

@@ -135,6 +135,35 @@ bool nearer_triangle(RTCPointQueryFunctionArguments* args) {
   return true;
 }
 
+// The nearest pair of a segment and the triangles a point query's sphere about its middle meets.
+struct SegmentQuery {
+  const Triangles* tris;
+  Eigen::Vector3d a, b;
+  double half;   // half the segment's length: the sphere is half + the least found
+  double slack;  // as NearestQuery's
+  double least;  // the least distance found, and where on the segment
+  Eigen::Vector3d where;
+};
+
+bool nearer_to_segment(RTCPointQueryFunctionArguments* args) {
+  auto* q = static_cast<SegmentQuery*>(args->userPtr);
+  const Kernel::Triangle_3& tri = (*q->tris)[args->primID];
+  auto corner = [&](int k) { return Eigen::Vector3d(tri[k].x(), tri[k].y(), tri[k].z()); };
+  const Eigen::Vector3d t0 = corner(0), t1 = corner(1), t2 = corner(2);
+  // The triangle's ball about its centroid first: most triangles in the sphere are farther.
+  const Eigen::Vector3d centre = (t0 + t1 + t2) / 3;
+  const double reach = std::sqrt(std::max({(t0 - centre).squaredNorm(), (t1 - centre).squaredNorm(), (t2 - centre).squaredNorm()}));
+  if (!(segment_distance(centre, q->a, q->b) - reach < q->least)) return false;
+  Eigen::Vector3d on_segment, on_triangle;
+  const double d = std::sqrt(closest_segment_triangle(q->a, q->b, t0, t1, t2, on_segment, on_triangle));
+  if (!(d < q->least)) return false;
+  q->least = d, q->where = on_segment;
+  const float radius = float_above(q->half + d + q->slack);
+  if (!(radius < args->query->radius)) return false;
+  args->query->radius = radius;
+  return true;
+}
+
 }  // namespace
 
 bool MeshDistance::Impl::nearest(const Eigen::Vector3d& p, double radius, Eigen::Vector3d& foot, std::size_t& tri) const {
@@ -403,6 +432,60 @@ double MeshDistance::least_along(const Eigen::Vector3d& a_placed, const Eigen::V
   }
   where = from_mesh(where);
   return bound;
+}
+
+double MeshDistance::least_on_segment(const Eigen::Vector3d& a_placed, const Eigen::Vector3d& b_placed,
+                                      Eigen::Vector3d& where) const {
+  const Eigen::Vector3d a = to_mesh(a_placed), b = to_mesh(b_placed);
+  point(a), point(b);  // refuses a point that is not finite
+  double least = std::numeric_limits<double>::infinity();
+  where = a;
+  // Pieces no longer than the distance at their middle (at most 64 of them), each searched once.
+  std::vector<std::array<double, 2>> todo{{0.0, 1.0}};
+  const double L = (b - a).norm();
+  while (!todo.empty()) {
+    const auto [t0, t1] = todo.back();
+    todo.pop_back();
+    const Eigen::Vector3d p = a + t0 * (b - a), q = a + t1 * (b - a), m = 0.5 * (p + q);
+    const double at_middle = unsigned_in_mesh(m);
+    if ((t1 - t0) * L > std::max(at_middle, 1e-3) && (t1 - t0) > 1.0 / 64) {
+      todo.push_back({t0, 0.5 * (t0 + t1)});
+      todo.push_back({0.5 * (t0 + t1), t1});
+      continue;
+    }
+    least_on_piece(p, q, at_middle, least, where);
+  }
+  where = from_mesh(where);
+  return least;
+}
+
+void MeshDistance::least_on_piece(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double distance, double& least,
+                                  Eigen::Vector3d& where) const {
+  const Eigen::Vector3d m = 0.5 * (a + b);
+  const double half = 0.5 * (b - a).norm();
+  // Nothing nearer the segment than `bound` lies beyond half + bound of its middle.
+  const double bound = std::min(least, distance + half);
+  if (!impl_->tris.empty()) {
+    SegmentQuery q{&impl_->tris, a, b, half, 1e-6 * (1 + m.cwiseAbs().maxCoeff()), least, where};
+    RTCPointQuery query;
+    query.x = static_cast<float>(m.x()), query.y = static_cast<float>(m.y()), query.z = static_cast<float>(m.z());
+    query.time = 0;
+    query.radius = std::isfinite(bound) ? float_above(half + bound + q.slack) : std::numeric_limits<float>::infinity();
+    RTCPointQueryContext context;
+    rtcInitPointQueryContext(&context);
+    rtcPointQuery(impl_->scene, &query, &context, nearer_to_segment, &q);
+    least = q.least, where = q.where;
+  }
+  for (const auto& set : held_) {
+    const double radius = half + std::min(least, bound) + set->margin;
+    if (!std::isfinite(radius)) continue;
+    std::vector<std::pair<std::uint32_t, double>> found;
+    set->tree.radiusSearch(m.data(), radius * radius * (1 + 1e-12), found, nanoflann::SearchParams(32, 0, false));
+    for (const auto& f : found) {
+      const Eigen::Vector3d on = closest_on_segment(set->points[f.first], a, b);
+      if (const double d = (on - set->points[f.first]).norm() - set->margin; d < least) least = d, where = on;
+    }
+  }
 }
 
 bool MeshDistance::clear_along(const Eigen::Vector3d& a_placed, const Eigen::Vector3d& b_placed, double step,

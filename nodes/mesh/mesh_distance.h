@@ -80,6 +80,14 @@ class MeshDistance {
   // ambiguous) the result is still a lower bound, only not that close.
   double least_along(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double step, double floor, double eps,
                      Eigen::Vector3d& where, std::size_t& evaluations, bool is_signed = true) const;
+  // The least unsigned distance from the segment [a, b] to the faces and points, exact to
+  // rounding, and into `where` the point of the segment nearest them (a where no face or point is
+  // held): one search of the triangles and points within the segment's half length plus the
+  // distance at its middle of that middle, each asked for its nearest pair with the segment
+  // (closest_segment_triangle). Pieces longer than the distance at their middle are split first,
+  // so a search's sphere stays near the size of one point's. A point that is not finite:
+  // std::invalid_argument.
+  double least_on_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, Eigen::Vector3d& where) const;
   // Whether every point of the segment [a, b] is at least `floor` from the faces and points
   // (unsigned): least_along's test, answered sooner. Marched from a by at least `step`, farther
   // where the distance leaves room (1-Lipschitz: nothing within d - floor of a point d away comes
@@ -107,6 +115,10 @@ class MeshDistance {
   double faces_signed(const Eigen::Vector3d& p) const;
   bool inside_in_mesh(const Eigen::Vector3d& p) const;  // inside_by_rays, p in the mesh's frame
   double to_held_points(const Eigen::Vector3d& p) const;  // the least over the held sets; +infinity without them
+  // least_on_segment in the mesh's frame, for a segment whose middle is `distance` from the faces
+  // and points: lowers `least` and moves `where` where the segment comes nearer.
+  void least_on_piece(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double distance, double& least,
+                      Eigen::Vector3d& where) const;
   std::shared_ptr<Impl> impl_;
   std::vector<std::shared_ptr<const HeldPoints>> held_;  // each set with its margin
   bool placed_ = false;

@@ -101,8 +101,7 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
   // where a point of it lies under the part, what that point needs to clear it; 0 when clear.
   auto lacks = [&](const Eigen::Vector3d& ca, const Eigen::Vector3d& cb) {
     Eigen::Vector3d nearest;
-    std::size_t evaluations = 0;
-    const double least = part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false);
+    const double least = part.least_on_segment(ca, cb, nearest);
     double need = least < r - tolerance ? r - tolerance - least : 0;
     // Its points are r - tolerance off the part here; one under it (inside the solid or under an
     // overhang: the unsigned distance alone misses a centre deep inside) is not clear either.
@@ -126,12 +125,11 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
         if (depth == 0) return false;
         const Eigen::Vector3d ca = a + r * na, cb = b + r * nb;
         // Where the move comes nearest the part, if nearer than r - tolerance (found exactly,
-        // MeshDistance::least_along, unsigned: the part may be open); else where a point of it
-        // lies under the part.
+        // MeshDistance::least_on_segment, unsigned: the part may be open); else where a point of
+        // it lies under the part.
         double q = -1;
         Eigen::Vector3d nearest;
-        std::size_t evaluations = 0;
-        if (part.least_along(ca, cb, r / 4, r - tolerance, 1e-4, nearest, evaluations, false) < r - tolerance) {
+        if (part.least_on_segment(ca, cb, nearest) < r - tolerance) {
           const double len2 = (cb - ca).squaredNorm();
           q = len2 > 0 ? std::clamp((nearest - ca).dot(cb - ca) / len2, 1.0 / 16, 15.0 / 16) : 0.5;
         } else {

@@ -4,7 +4,7 @@
 // Where the part comes closer than r - tolerance to a ball centre, or lies straight above it (the
 // tool comes down along +z: it cannot reach under an overhang, and a centre inside the solid is
 // far from its surface), the ball is lifted along +z until clear. A move's nearest approach to the
-// part is found exactly (MeshDistance::least_along), and where it is too near (or, checked at
+// part is found exactly (MeshDistance::least_on_segment), and where it is too near (or, checked at
 // eighths, a point of it lies under the part) a lifted point is inserted and both halves are
 // checked again (6 times at most); a move that still reaches in (a narrow neck above a free
 // pocket) has its lower end raised to its upper end's height when it lacks at least their height

@@ -52,5 +52,61 @@ TEST(ClosestOnTriangle, NoPointOfTheTriangleIsNearer) {
   }
 }
 
+// Two segments in closed form: skew lines crossing inside both, the nearest pair past an end,
+// parallel ones side by side, and a segment that is a point.
+TEST(ClosestBetweenSegments, ClosedForms) {
+  V c1, c2;
+  // The x axis from -1 to 1 and the line y = 0.5 ... along z at height 2: 2 apart at (0.5, 0, 0).
+  EXPECT_NEAR(closest_between_segments(V(-1, 0, 0), V(1, 0, 0), V(0.5, -1, 2), V(0.5, 1, 2), c1, c2), 4, 1e-12);
+  EXPECT_TRUE(c1.isApprox(V(0.5, 0, 0)));
+  EXPECT_TRUE(c2.isApprox(V(0.5, 0, 2)));
+  // The second moved to x = 3: past the first's end b = (1, 0, 0), sqrt(4 + 4) away.
+  EXPECT_NEAR(closest_between_segments(V(-1, 0, 0), V(1, 0, 0), V(3, -1, 2), V(3, 1, 2), c1, c2), 8, 1e-12);
+  EXPECT_TRUE(c1.isApprox(V(1, 0, 0)));
+  // Parallel, overlapping along x, 0.3 apart.
+  EXPECT_NEAR(closest_between_segments(V(0, 0, 0), V(2, 0, 0), V(1, 0.3, 0), V(5, 0.3, 0), c1, c2), 0.09, 1e-12);
+  EXPECT_NEAR((c1 - c2).norm(), 0.3, 1e-12);
+  // A point against a segment.
+  EXPECT_NEAR(closest_between_segments(V(1, 1, 0), V(1, 1, 0), V(0, 0, 0), V(2, 0, 0), c1, c2), 1, 1e-12);
+  EXPECT_TRUE(c2.isApprox(V(1, 0, 0)));
+}
+
+// The nearest pair of a segment and a triangle against fine sampling of both: on random pairs
+// (crossing, apart, nearly parallel to the plane, in it) never farther than the samples' least,
+// within their spacing of it, the two points on their sets, and 0 exactly where they cross.
+TEST(ClosestSegmentTriangle, NoPairOfPointsIsNearer) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-2, 2);
+  const V t0(0, 0, 0), t1(2, 0, 0), t2(0, 2, 0);
+  V s, t;
+  // Closed forms: through the inside; over it, parallel; beside edge t1-t2; in the plane across it.
+  EXPECT_EQ(closest_segment_triangle(V(0.5, 0.5, -1), V(0.5, 0.5, 1), t0, t1, t2, s, t), 0);
+  EXPECT_TRUE(s.isApprox(V(0.5, 0.5, 0)));
+  EXPECT_NEAR(closest_segment_triangle(V(-5, 0.5, 0.7), V(5, 0.5, 0.7), t0, t1, t2, s, t), 0.49, 1e-12);
+  EXPECT_NEAR(closest_segment_triangle(V(2, 2, -1), V(2, 2, 1), t0, t1, t2, s, t), 2, 1e-12);  // to (1, 1, 0)
+  EXPECT_TRUE(t.isApprox(V(1, 1, 0)));
+  EXPECT_NEAR(closest_segment_triangle(V(-1, 0.5, 0), V(3, 0.5, 0), t0, t1, t2, s, t), 0, 1e-15);
+  for (int trial = 0; trial < 300; ++trial) {
+    const V a(u(rng), u(rng), u(rng)), c(u(rng), u(rng), u(rng)), e(u(rng), u(rng), u(rng));
+    V p(u(rng), u(rng), u(rng)), q(u(rng), u(rng), u(rng));
+    const V n = (c - a).cross(e - a).normalized();
+    if (trial % 3 == 1) q = p + (q - p) - ((q - p).dot(n) - 1e-4 * u(rng)) * n;  // nearly parallel to the plane
+    if (trial % 3 == 2) p -= (p - a).dot(n) * n, q -= (q - a).dot(n) * n;          // in the plane
+    const double d = std::sqrt(closest_segment_triangle(p, q, a, c, e, s, t));
+    EXPECT_NEAR((s - t).norm(), d, 1e-12);
+    EXPECT_NEAR(segment_distance(s, p, q), 0, 1e-9);
+    EXPECT_NEAR((closest_on_triangle(t, a, c, e) - t).norm(), 0, 1e-9);
+    const int N = 60, M = 200;
+    double best = 1e300;
+    for (int k = 0; k <= M; ++k) {
+      const V x = p + (q - p) * (double(k) / M);
+      for (int i = 0; i <= N; ++i)
+        for (int j = 0; i + j <= N; ++j) best = std::min(best, (a + (c - a) * (double(i) / N) + (e - a) * (double(j) / N) - x).norm());
+    }
+    EXPECT_LE(d, best + 1e-12) << trial;
+    EXPECT_GE(d, best - 4.0 * ((c - a).norm() + (e - a).norm()) / N - 2 * (q - p).norm() / M) << trial;
+  }
+}
+
 }  // namespace
 }  // namespace scallop
