@@ -81,22 +81,32 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
                              "; the passes do not follow the surface there (e.g. a gouge guard lift at a "
                              "fold-over of the (u,v) map)");
 
-  XY adaptor{surface};
-  Tree tree(2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  tree.buildIndex();
   // A straight move of the ball centre from a to b is safe when no surface point within r of it
-  // in xy is nearer than r − tol to the centre segment.
+  // in xy is nearer than r − tol to the centre segment. With link_clear the points are not
+  // searched: it checks the whole part, which holds them (a part's vertices lie on its faces;
+  // post.setup_programs' distance holds the cloud's points outside them), and the columns of
+  // points under a link in xy were a tenth of the block's programs node.
+  std::unique_ptr<XY> adaptor;
+  std::unique_ptr<Tree> tree;
+  if (!o.link_clear) {
+    adaptor = std::make_unique<XY>(XY{surface});
+    tree = std::make_unique<Tree>(2, *adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    tree->buildIndex();
+  }
   auto safe = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    Eigen::Vector3d mid = 0.5 * (a + b);
-    double R = 0.5 * (b - a).head<2>().norm() + r;
-    std::vector<std::pair<std::uint32_t, double>> hits;
-    tree.radiusSearch(mid.data(), R * R, hits, nanoflann::SearchParams(32, 0, false));
-    for (const auto& [i, d2] : hits) {
-      const Eigen::Vector3d& q = surface[i];
-      if (seg_dist_xy(q, a, b) > r) continue;
-      if (segment_distance(q, a, b) < r - tol) return false;
+    if (o.link_clear) {
+      if (!o.link_clear(a, b)) return false;
+    } else {
+      Eigen::Vector3d mid = 0.5 * (a + b);
+      double R = 0.5 * (b - a).head<2>().norm() + r;
+      std::vector<std::pair<std::uint32_t, double>> hits;
+      tree->radiusSearch(mid.data(), R * R, hits, nanoflann::SearchParams(32, 0, false));
+      for (const auto& [i, d2] : hits) {
+        const Eigen::Vector3d& q = surface[i];
+        if (seg_dist_xy(q, a, b) > r) continue;
+        if (segment_distance(q, a, b) < r - tol) return false;
+      }
     }
-    if (o.link_clear && !o.link_clear(a, b)) return false;
     if (!model) return true;
     // The model under the ball: ball centres along the link every quarter of the cloud spacing
     // (at most r / 16), each against its foot point on the model (found by stepping from below

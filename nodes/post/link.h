@@ -23,8 +23,9 @@ struct LinkOptions {
   double lead_height = 1;  // mm above a pass start/end where plunges end and lifts begin
   double tolerance = 0;    // mm the ball may come closer than r to the surface on a link; <= 0:
                            // max(path chord error, 0.001) (what a simulation lets pass as gouge)
-  // Optional: a further check that a straight link of the ball centre from a to b is clear (a
-  // whole part's mesh, post.setup_programs): the surface points alone miss a dip between them.
+  // Optional: the check that a straight link of the ball centre from a to b is clear of a whole
+  // part (its mesh, post.setup_programs), in place of the surface points' (which miss a dip
+  // between them): it must hold them, i.e. refuse a link any of them is nearer than r - tolerance to.
   std::function<bool(const Eigen::Vector3d& a, const Eigen::Vector3d& b)> link_clear;
 };
 

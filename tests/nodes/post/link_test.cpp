@@ -93,6 +93,23 @@ TEST(Link, LinksOverABumpOrTooLongRetract) {
   EXPECT_EQ(count(l2, MoveKind::Plunge), 3);
 }
 
+// With link_clear (a whole part's check, which holds the points) the link is its answer alone:
+// the bump the points show is the check's to see, and a check that refuses the link refuses it
+// over a flat cloud. The points still set the clearance plane.
+TEST(Link, AWholePartsCheckDecidesTheLinksInPlaceOfThePoints) {
+  auto cloud = flat_cloud();
+  cloud.emplace_back(10.0, 0.5, 0.5);  // the bump of LinksOverABumpOrTooLongRetract
+  LinkOptions o;
+  int asked = 0;
+  o.link_clear = [&](const Eigen::Vector3d&, const Eigen::Vector3d&) { return ++asked, true; };
+  auto l = link_passes(zigzag(2, 1.0), cloud, o);
+  EXPECT_EQ(asked, 1);
+  EXPECT_EQ(count(l, MoveKind::Rapid), 2);  // fed across
+  EXPECT_DOUBLE_EQ(l.clearance_z, 5.5);
+  o.link_clear = [](const Eigen::Vector3d&, const Eigen::Vector3d&) { return false; };
+  EXPECT_EQ(count(link_passes(zigzag(2, 1.0), flat_cloud(), o), MoveKind::Rapid), 4);
+}
+
 TEST(Link, WithoutACloudThePassesStandForTheSurface) {
   auto l = link_passes(zigzag(3, 1.0), {}, {});
   EXPECT_EQ(count(l, MoveKind::Plunge), 1);
