@@ -1,9 +1,13 @@
-// The nearest point of a triangle to a point, and the nearest points of a triangle and a segment:
-// the mesh distances' exact step after a search has found the triangles that may hold them.
+// The nearest point of a triangle to a point, the nearest points of a triangle and a segment, and
+// where a moving ball first touches a triangle: the mesh distances' exact step after a search has
+// found the triangles that may hold them.
 #pragma once
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <utility>
 
 #include "nodes/geom/segment.h"
@@ -65,6 +69,51 @@ inline double closest_segment_triangle(const Eigen::Vector3d& a, const Eigen::Ve
   Eigen::Vector3d cs, ct;
   for (const auto& [p, q] : {std::pair{&t0, &t1}, std::pair{&t1, &t2}, std::pair{&t2, &t0}})
     if (const double d = closest_between_segments(a, b, *p, *q, cs, ct); d < best) best = d, on_segment = cs, on_triangle = ct;
+  return best;
+}
+
+// How far along the unit direction d the ball of radius r centred at o moves before it first
+// touches the triangle (t0, t1, t2): the least t >= 0 where the triangle comes within r of
+// o + t d; +infinity if it never does. o must be farther than r from the triangle. The points
+// within r of a triangle are the union of balls about its corners, cylinders about its edges and
+// the slab of the face between its planes moved r either way (where a slab's side is reached, an
+// edge's cylinder holds it), so the first touch is the earliest entry into one of those seven.
+inline double ball_touch_triangle(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double r, const Eigen::Vector3d& t0,
+                                  const Eigen::Vector3d& t1, const Eigen::Vector3d& t2) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector3d* c : {&t0, &t1, &t2}) {  // |o + t d - c| = r
+    const Eigen::Vector3d m = o - *c;
+    const double b = m.dot(d), disc = b * b - (m.squaredNorm() - r * r);
+    if (disc >= 0 && -b - std::sqrt(disc) >= 0) best = std::min(best, -b - std::sqrt(disc));
+  }
+  for (const auto& [p, q] : {std::pair{&t0, &t1}, std::pair{&t1, &t2}, std::pair{&t2, &t0}}) {
+    // the distance from the edge's line, for the part of the edge between its ends
+    const Eigen::Vector3d e = *q - *p;
+    const double ee = e.squaredNorm();
+    if (!(ee > 0)) continue;
+    const Eigen::Vector3d m = o - *p, dp = d - (d.dot(e) / ee) * e, mp = m - (m.dot(e) / ee) * e;
+    const double a = dp.squaredNorm();
+    if (!(a > 1e-18)) continue;  // moving along the edge: its ends' balls come first
+    const double b = mp.dot(dp), disc = b * b - a * (mp.squaredNorm() - r * r);
+    if (disc < 0) continue;
+    const double t = (-b - std::sqrt(disc)) / a;
+    const double s = (m + t * d).dot(e) / ee;
+    if (t >= 0 && s >= 0 && s <= 1) best = std::min(best, t);
+  }
+  const Eigen::Vector3d n = (t1 - t0).cross(t2 - t0);
+  const double nn = n.norm();
+  if (nn > 0) {
+    const Eigen::Vector3d u = n / nn;
+    const double towards = u.dot(d);
+    if (towards != 0)
+      for (double side : {-1.0, 1.0}) {
+        const double t = (side * r - u.dot(o - t0)) / towards;
+        if (!(t >= 0 && t < best)) continue;
+        const Eigen::Vector3d x = o + t * d - side * r * u;  // on the face's plane
+        if (n.dot((t1 - t0).cross(x - t0)) >= 0 && n.dot((t2 - t1).cross(x - t1)) >= 0 && n.dot((t0 - t2).cross(x - t2)) >= 0)
+          best = t;
+      }
+  }
   return best;
 }
 

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <mutex>
 
@@ -54,6 +55,12 @@ Triangles triangles(const Mesh& m) {
   return tris;
 }
 
+// The triangles and how far their boxes are grown, for the grown scenes' bounds.
+struct GrownTriangles {
+  const Triangles* tris;
+  double grow;
+};
+
 // Embree's device, one for the process (it holds Embree's own thread pool state).
 RTCDevice embree_device() {
   static const RTCDevice device = [] {
@@ -84,6 +91,7 @@ struct MeshDistance::Impl {
   Impl& operator=(const Impl&) = delete;
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
+    for (auto& [radius, grown_scene] : grown) rtcReleaseScene(grown_scene);
   }
   const Tree& ray_tree() {
     std::call_once(rays_built, [&] {
@@ -92,6 +100,11 @@ struct MeshDistance::Impl {
     });
     return tree;
   }
+  // The triangles' boxes grown by a ball's radius, for touch_along: one scene per radius asked.
+  std::mutex grown_mutex;
+  std::vector<std::pair<double, RTCScene>> grown;
+  std::deque<GrownTriangles> grown_boxes;  // what each scene's bounds read
+  RTCScene grown_by(double radius);
   // The nearest point of the triangles to p and its triangle's index, searched within `radius`
   // (+infinity, or the distance to a point known to be on them): false when none is that near.
   bool nearest(const Eigen::Vector3d& p, double radius, Eigen::Vector3d& foot, std::size_t& tri) const;
@@ -164,6 +177,39 @@ bool nearer_to_segment(RTCPointQueryFunctionArguments* args) {
   return true;
 }
 
+void grown_triangle_box(const RTCBoundsFunctionArguments* args) {
+  const auto* g = static_cast<const GrownTriangles*>(args->geometryUserPtr);
+  const CGAL::Bbox_3 box = (*g->tris)[args->primID].bbox();
+  RTCBounds* out = args->bounds_o;
+  out->lower_x = float_below(box.xmin() - g->grow), out->lower_y = float_below(box.ymin() - g->grow);
+  out->lower_z = float_below(box.zmin() - g->grow);
+  out->upper_x = float_above(box.xmax() + g->grow), out->upper_y = float_above(box.ymax() + g->grow);
+  out->upper_z = float_above(box.zmax() + g->grow);
+}
+
+// A ray's context as Embree hands it to the intersection callback, with the ball it moves.
+struct TouchQuery {
+  RTCIntersectContext context;  // first: the callback gets a pointer to it
+  const Triangles* tris;
+  Eigen::Vector3d o, d;  // the ball's centre and direction, in doubles
+  double r;
+  double slack;  // the float ray's rounding, added to the far end it culls with
+  double t;      // the first touch found
+};
+
+void touch_triangle(const RTCIntersectFunctionNArguments* args) {
+  if (!args->valid[0]) return;
+  auto* q = reinterpret_cast<TouchQuery*>(args->context);
+  const Kernel::Triangle_3& tri = (*q->tris)[args->primID];
+  auto corner = [&](int k) { return Eigen::Vector3d(tri[k].x(), tri[k].y(), tri[k].z()); };
+  const double t = ball_touch_triangle(q->o, q->d, q->r, corner(0), corner(1), corner(2));
+  if (!(t < q->t)) return;
+  q->t = t;
+  RTCRayHit* hit = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N = 1: rtcIntersect1
+  hit->ray.tfar = std::min(hit->ray.tfar, float_above(t + q->slack));
+  hit->hit.geomID = args->geomID, hit->hit.primID = args->primID;
+}
+
 }  // namespace
 
 bool MeshDistance::Impl::nearest(const Eigen::Vector3d& p, double radius, Eigen::Vector3d& foot, std::size_t& tri) const {
@@ -178,6 +224,29 @@ bool MeshDistance::Impl::nearest(const Eigen::Vector3d& p, double radius, Eigen:
   if (q.tri == std::numeric_limits<std::size_t>::max()) return false;
   foot = q.foot, tri = q.tri;
   return true;
+}
+
+RTCScene MeshDistance::Impl::grown_by(double radius) {
+  std::lock_guard<std::mutex> lock(grown_mutex);
+  for (const auto& [r, grown_scene] : grown)
+    if (r == radius) return grown_scene;
+  // The float ray may be off the double one by its rounding: a little more than the radius.
+  GrownTriangles* user = &grown_boxes.emplace_back(GrownTriangles{&tris, radius * (1 + 1e-6) + 1e-6});
+  RTCScene grown_scene = rtcNewScene(embree_device());
+  RTCGeometry boxes = rtcNewGeometry(embree_device(), RTC_GEOMETRY_TYPE_USER);
+  rtcSetGeometryUserPrimitiveCount(boxes, static_cast<unsigned>(tris.size()));
+  rtcSetGeometryUserData(boxes, user);
+  rtcSetGeometryBoundsFunction(boxes, grown_triangle_box, nullptr);
+  rtcSetGeometryIntersectFunction(boxes, touch_triangle);
+  rtcCommitGeometry(boxes);
+  rtcAttachGeometry(grown_scene, boxes);
+  rtcReleaseGeometry(boxes);
+  rtcCommitScene(grown_scene);
+  if (rtcGetDeviceError(embree_device()) != RTC_ERROR_NONE)
+    throw std::runtime_error("Embree could not build the search of the mesh's " + std::to_string(tris.size()) +
+                             " triangles grown by " + std::to_string(radius) + " mm (out of memory?)");
+  grown.emplace_back(radius, grown_scene);
+  return grown_scene;
 }
 
 // A face of a moved mesh whose normal is within 10 degrees of its unmoved place's tells the side.
@@ -486,6 +555,53 @@ void MeshDistance::least_on_piece(const Eigen::Vector3d& a, const Eigen::Vector3
       if (const double d = (on - set->points[f.first]).norm() - set->margin; d < least) least = d, where = on;
     }
   }
+}
+
+double MeshDistance::touch_along(const Eigen::Vector3d& c_placed, const Eigen::Vector3d& d_placed, double r,
+                                 double max) const {
+  if (!(r > 0) || !std::isfinite(r)) throw std::invalid_argument("a ball's radius must be > 0");
+  if (!(max >= 0)) throw std::invalid_argument("how far a ball moves must be >= 0");
+  const Eigen::Vector3d o = to_mesh(c_placed);
+  const Eigen::Vector3d d = placed_ ? Eigen::Vector3d(rotation_.transpose() * d_placed) : d_placed;
+  point(o), point(d);  // refuses a point that is not finite
+  if (!(unsigned_in_mesh(o) > r)) return 0;
+  double t = max;
+  if (!impl_->tris.empty()) {
+    TouchQuery q;
+    rtcInitIntersectContext(&q.context);
+    q.tris = &impl_->tris, q.o = o, q.d = d, q.r = r, q.t = std::numeric_limits<double>::infinity();
+    q.slack = 1e-6 * (1 + o.cwiseAbs().maxCoeff() + (std::isfinite(max) ? max : 0.0));
+    RTCRayHit hit;
+    hit.ray.org_x = static_cast<float>(o.x()), hit.ray.org_y = static_cast<float>(o.y()), hit.ray.org_z = static_cast<float>(o.z());
+    hit.ray.dir_x = static_cast<float>(d.x()), hit.ray.dir_y = static_cast<float>(d.y()), hit.ray.dir_z = static_cast<float>(d.z());
+    hit.ray.tnear = 0;
+    hit.ray.tfar = std::isfinite(max) ? float_above(max + q.slack) : std::numeric_limits<float>::infinity();
+    hit.ray.time = 0, hit.ray.mask = 0xFFFFFFFF, hit.ray.id = 0, hit.ray.flags = 0;
+    hit.hit.geomID = RTC_INVALID_GEOMETRY_ID, hit.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    hit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->grown_by(r), &q.context, &hit);
+    t = std::min(t, q.t);
+  }
+  // The held points: balls of r plus their margin about each, searched along the way in pieces
+  // no longer than 2 r.
+  for (const auto& set : held_) {
+    const double reach = r + set->margin;
+    const int pieces = std::isfinite(t) ? std::max(1, static_cast<int>(std::ceil(t / (2 * r)))) : 0;
+    std::vector<std::pair<std::uint32_t, double>> found;
+    for (int k = 0; k < pieces; ++k) {
+      const double from = t * k / pieces, to = t * (k + 1) / pieces;
+      if (from >= t) break;
+      const Eigen::Vector3d m = o + (0.5 * (from + to)) * d;
+      const double radius = 0.5 * (to - from) + reach;
+      set->tree.radiusSearch(m.data(), radius * radius * (1 + 1e-12), found, nanoflann::SearchParams(32, 0, false));
+      for (const auto& f : found) {
+        const Eigen::Vector3d w = o - set->points[f.first];
+        const double b = w.dot(d), disc = b * b - (w.squaredNorm() - reach * reach);
+        if (disc >= 0 && -b - std::sqrt(disc) >= 0) t = std::min(t, -b - std::sqrt(disc));
+      }
+    }
+  }
+  return t;
 }
 
 bool MeshDistance::clear_along(const Eigen::Vector3d& a_placed, const Eigen::Vector3d& b_placed, double step,

@@ -88,6 +88,14 @@ class MeshDistance {
   // so a search's sphere stays near the size of one point's. A point that is not finite:
   // std::invalid_argument.
   double least_on_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, Eigen::Vector3d& where) const;
+  // How far the ball of radius r centred at c moves along the unit direction d before it touches
+  // the faces or points (a drop-cutter along any axis): the least t in [0, max] with them r from
+  // c + t d, exact to rounding; max when nothing comes that near on the way; 0 when they are r
+  // from c or nearer already. One ray through Embree's boxes of the triangles grown by r (built
+  // for each radius when first asked), each asked where the ball first touches it
+  // (ball_touch_triangle); the held points as balls of r plus their margin. A c or d that is not
+  // finite, r <= 0 or max < 0: std::invalid_argument.
+  double touch_along(const Eigen::Vector3d& c, const Eigen::Vector3d& d, double r, double max) const;
   // Whether every point of the segment [a, b] is at least `floor` from the faces and points
   // (unsigned): least_along's test, answered sooner. Marched from a by at least `step`, farther
   // where the distance leaves room (1-Lipschitz: nothing within d - floor of a point d away comes

@@ -27,14 +27,9 @@ double lift_clear(Eigen::Vector3d& c, const MeshDistance& part, double r, double
   return lift;
 }
 
-double drop_onto(Eigen::Vector3d& c, const MeshDistance& part, double r, double max_drop, int max_steps) {
-  double drop = 0;
-  for (int it = 0; it < max_steps && drop < max_drop; ++it) {
-    const double step = std::min(part(c) - r, max_drop - drop);
-    if (!(step > 1e-6)) break;
-    c.z() -= step;
-    drop += step;
-  }
+double drop_onto(Eigen::Vector3d& c, const MeshDistance& part, double r, double max_drop) {
+  const double drop = part.touch_along(c, -Eigen::Vector3d::UnitZ(), r, max_drop);
+  c.z() -= drop;
   return drop;
 }
 

@@ -40,12 +40,13 @@ struct KeepOffStats {
 // of the part lies straight above it; returns the lift.
 double lift_clear(Eigen::Vector3d& c, const MeshDistance& part, double r, double tolerance);
 
-// The ball centre c lowered along -z, at most max_drop and max_steps steps, until the part is r
-// from it: where the surface a pass was planned on lies above the part (a smooth B-spline over a
-// faceted STL's flat facets, or one that bulges between its quads), the ball comes down onto the
-// part instead of leaving that much stock. Each step is the distance beyond r, so the ball never
-// comes nearer than r (the distance is 1-Lipschitz). Returns the drop.
-double drop_onto(Eigen::Vector3d& c, const MeshDistance& part, double r, double max_drop, int max_steps = 64);
+// The ball centre c lowered along -z, at most max_drop, until it touches the part (r from it):
+// where the surface a pass was planned on lies above the part (a smooth B-spline over a faceted
+// STL's flat facets, or one that bulges between its quads), the ball comes down onto the part
+// instead of leaving that much stock. Exact (MeshDistance::touch_along, one ray); before stop 62
+// it stepped by the distance beyond r, 1 - cos(theta) of the gap a step on a slope of theta.
+// Returns the drop.
+double drop_onto(Eigen::Vector3d& c, const MeshDistance& part, double r, double max_drop);
 
 // One pass kept off the part (see above), each ball first lowered onto the part by at most
 // max_drop. part_top_z: the part's highest z. Returns the pass as pieces: split where a move

@@ -303,7 +303,7 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
       std::atomic<std::size_t> inside_drops{0};
       tbb::parallel_for(std::size_t(0), cells.size(), [&](std::size_t q) {
         Eigen::Vector3d c(cells[q].second * step, cells[q].first * pitch, top_z + r + 1);
-        drop_onto(c, placed_distance, r, top_z - bottom_z + 2 * r + 2, 400);
+        drop_onto(c, placed_distance, r, top_z - bottom_z + 2 * r + 2);
         centre[q] = c;
         const Eigen::Vector3d contact = placed_distance.closest_point(c);
         touches[q] = std::abs((c - contact).norm() - r) <= 1e-3 &&

@@ -108,5 +108,43 @@ TEST(ClosestSegmentTriangle, NoPairOfPointsIsNearer) {
   }
 }
 
+// A ball moving onto a triangle, in closed form: straight down onto the inside, onto an edge and
+// a corner from beside them, and one that passes by.
+TEST(BallTouchTriangle, ClosedForms) {
+  const V t0(0, 0, 0), t1(2, 0, 0), t2(0, 2, 0), down(0, 0, -1);
+  EXPECT_NEAR(ball_touch_triangle(V(0.5, 0.5, 10), down, 1, t0, t1, t2), 9, 1e-12);     // the face
+  EXPECT_NEAR(ball_touch_triangle(V(1, -0.6, 10), down, 1, t0, t1, t2), 9.2, 1e-12);    // edge t0-t1: 10 - 0.8
+  EXPECT_NEAR(ball_touch_triangle(V(-0.6, -0.8, 10), down, 1, t0, t1, t2), 10, 1e-12);  // corner t0, 1 away in xy
+  EXPECT_TRUE(std::isinf(ball_touch_triangle(V(-0.8, -0.8, 10), down, 1, t0, t1, t2)));  // passes by
+  EXPECT_NEAR(ball_touch_triangle(V(0.5, 0.5, -10), V(0, 0, 1), 1, t0, t1, t2), 9, 1e-12);  // from below
+  EXPECT_NEAR(ball_touch_triangle(V(-5, 0.5, 0.5), V(1, 0, 0), 1, t0, t1, t2), 5 - std::sqrt(0.75), 1e-12);  // edge-on
+}
+
+// Against marching on random triangles, starts and directions: where it says the ball touches,
+// the triangle is r away (to 1e-9), and nowhere before that is it nearer than r.
+TEST(BallTouchTriangle, TheBallTouchesThereAndNotBefore) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-2, 2);
+  int touched = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const V a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng)), c(u(rng), u(rng), u(rng));
+    const double r = 0.2 + 0.3 * (u(rng) + 2);
+    V o(4 * u(rng), 4 * u(rng), 4 * u(rng));
+    if ((closest_on_triangle(o, a, b, c) - o).norm() <= r) continue;
+    // aimed at a random point of the triangle's box, or anywhere
+    V d = trial % 2 ? V(a + (b - a) * 0.3 + (c - a) * 0.3 + 0.5 * V(u(rng), u(rng), u(rng)) - o) : V(u(rng), u(rng), u(rng));
+    d.normalize();
+    const double t = ball_touch_triangle(o, d, r, a, b, c);
+    auto distance = [&](double s) { return (closest_on_triangle(o + s * d, a, b, c) - (o + s * d)).norm(); };
+    const double end = std::isfinite(t) ? t : 20.0;
+    if (std::isfinite(t)) {
+      ++touched;
+      EXPECT_NEAR(distance(t), r, 1e-9) << trial;
+    }
+    for (int k = 0; k < 2000; ++k) EXPECT_GT(distance(end * k / 2000.0), r - 1e-12) << trial << " " << k;
+  }
+  EXPECT_GT(touched, 100);
+}
+
 }  // namespace
 }  // namespace scallop

@@ -345,6 +345,60 @@ TEST(MeshDistance, TheLeastOnASegmentIsTheExactLeastOverEveryTriangleAndPoint) {
             "a distance to the mesh was asked at a point that is not finite");
 }
 
+// A ball moved along any direction onto a 1 280-triangle sphere with a point held beside it and a
+// ball held with a margin: where it first touches equals the least over every triangle's and
+// point's first touch (to 1e-12), at most max, 0 from a start already that near; placed, asked
+// in the placed frame; a ball of another radius gets its own search.
+TEST(MeshDistance, ABallMovedAlongADirectionStopsWhereItFirstTouches) {
+  const Mesh sphere = test::icosphere(3, 3.0);
+  const std::vector<V> points{V(0, 0, 3.5)}, balls{V(3.2, 0, 0)};
+  const double margin = 0.3;
+  const MeshDistance part = MeshDistance(sphere).with_points(points).with_points(balls, margin);
+  auto brute = [&](const V& o, const V& d, double r) {
+    double best = INFINITY;
+    for (std::size_t f = 0; f < sphere.num_faces(); ++f)
+      best = std::min(best, ball_touch_triangle(o, d, r, sphere.vertices[sphere.face(f)[0]],
+                                                sphere.vertices[sphere.face(f)[1]], sphere.vertices[sphere.face(f)[2]]));
+    auto ball = [&](const V& c, double reach) {
+      const double b = (o - c).dot(d), disc = b * b - ((o - c).squaredNorm() - reach * reach);
+      return disc >= 0 && -b - std::sqrt(disc) >= 0 ? -b - std::sqrt(disc) : INFINITY;
+    };
+    for (const V& p : points) best = std::min(best, ball(p, r));
+    for (const V& p : balls) best = std::min(best, ball(p, r + margin));
+    return best;
+  };
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int touched = 0;
+  for (int k = 0; k < 300; ++k) {
+    const double r = k % 3 == 0 ? 0.5 : 2.0;
+    const V o = 9 * V(u(rng), u(rng), u(rng));
+    // towards the sphere, roughly, or anywhere
+    const V d = (k % 2 ? V(-o + 2 * V(u(rng), u(rng), u(rng))) : V(u(rng), u(rng), u(rng))).normalized();
+    if (!(part(o) > r)) {
+      EXPECT_EQ(part.touch_along(o, d, r, 100), 0) << k;
+      continue;
+    }
+    const double truth = std::min(100.0, brute(o, d, r));
+    const double t = part.touch_along(o, d, r, 100);
+    EXPECT_NEAR(t, truth, 1e-12) << k;
+    if (truth < 100) {
+      ++touched;
+      EXPECT_NEAR(part(o + t * d), r, 1e-9) << k;
+      EXPECT_NEAR(part.touch_along(o, d, r, 0.5 * truth), 0.5 * truth, 1e-15) << k;
+    }
+  }
+  EXPECT_GT(touched, 100);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, V(1, 2, 3).normalized()).toRotationMatrix();
+  const V t(5, -2, 0.5);
+  // Straight down onto the top from 10 above: the held point at 3.5 stops it, at 5.5.
+  EXPECT_NEAR(part.placed(R, t).touch_along(R * V(0, 0, 10) + t, R * V(0, 0, -1), 2, 100), 4.5, 1e-12);
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { part.touch_along(V(0, 0, 10), V(0, 0, -1), 0, 1); }),
+            "a ball's radius must be > 0");
+  EXPECT_EQ(test::error_of<std::invalid_argument>([&] { part.touch_along(V(0, 0, 10), V(0, std::nan(""), -1), 1, 1); }),
+            "a distance to the mesh was asked at a point that is not finite");
+}
+
 // The nearest point is searched in float boxes (Embree) but found in doubles: on a wavy sheet
 // of 5 000 triangles 1 000 mm from the origin (a float's step there is 6e-5 mm), every distance
 // equals the least over all triangles to the last bit, at 1e-7 to 10 mm from the faces, with and

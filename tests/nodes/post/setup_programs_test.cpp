@@ -562,12 +562,11 @@ TEST(SetupPrograms, ASetupWithNothingLeftToCutGetsNoProgramTheOthersTheirs) {
 
 TEST(SetupPrograms, ABallDroppedOntoASlopeLandsWhereItTouchesNeverNearer) {
   // A plane tilted theta about y through the origin, n = (sin theta, 0, cos theta): a ball of
-  // radius r dropped from above (x0, 0) touches it at centre height (r - x0 sin theta) / cos theta.
-  // Each step, the distance less r, closes 1 - cos theta of the gap: from 40 mm above, to 1e-6 of
-  // r in 9 steps at 30 degrees, 85 at 80 degrees, 188 at 85; 400 at most here (as the rest
-  // passes' drops), and the 64 of a pass's drops leave 0.0002 mm at 80 degrees.
+  // radius r dropped from above (x0, 0) touches it at centre height (r - x0 sin theta) / cos theta,
+  // found exactly (MeshDistance::touch_along). Before stop 62 each step, the distance less r,
+  // closed 1 - cos theta of the gap: 85 steps to 1e-6 at 80 degrees, 188 at 85.
   const double r = 2, x0 = 1.5;
-  for (double degrees : {0.0, 30.0, 60.0, 80.0, 85.0}) {
+  for (double degrees : {0.0, 30.0, 60.0, 80.0, 85.0, 89.0}) {
     const double t = degrees * std::numbers::pi / 180;
     const V n(std::sin(t), 0, std::cos(t)), u(std::cos(t), 0, -std::sin(t)), w(0, 1, 0);
     Mesh plane;
@@ -577,16 +576,15 @@ TEST(SetupPrograms, ABallDroppedOntoASlopeLandsWhereItTouchesNeverNearer) {
     const MeshDistance part(plane);
     const double touch = (r - x0 * std::sin(t)) / std::cos(t);
     V c(x0, 0, touch + 40);
-    const double drop = drop_onto(c, part, r, 1000, 400);
-    // It stops within 1e-6 of r from the plane: 1e-6 / cos theta above it.
-    EXPECT_NEAR(c.z(), touch, 1e-6 / std::cos(t)) << degrees;
-    EXPECT_NEAR(drop, 40, 1e-6 / std::cos(t)) << degrees;
-    EXPECT_GE(part(c), r) << degrees;
-    if (degrees == 80.0) {
-      V short_of(x0, 0, touch + 40);
-      drop_onto(short_of, part, r, 1000, 64);
-      EXPECT_NEAR(short_of.z() - touch, 40 * std::pow(1 - std::cos(t), 64), 1e-9);
-    }
+    const double drop = drop_onto(c, part, r, 1000);
+    EXPECT_NEAR(c.z(), touch, 1e-9 / std::cos(t)) << degrees;
+    EXPECT_NEAR(drop, 40, 1e-9 / std::cos(t)) << degrees;
+    EXPECT_NEAR(part(c), r, 1e-9) << degrees;
+    // Lowered at most max_drop; a ball already touching does not move.
+    V short_of(x0, 0, touch + 40);
+    EXPECT_EQ(drop_onto(short_of, part, r, 25), 25);
+    EXPECT_EQ(short_of.z(), touch + 15);
+    EXPECT_EQ(drop_onto(c, part, r, 1000), 0);
   }
   // Into a V groove of half-angle 45 degrees (faces z = |x|): the ball comes to rest on the face
   // under it, at z = |x| + r sqrt(2), never nearer than r to the other; over the middle on both.
@@ -597,20 +595,26 @@ TEST(SetupPrograms, ABallDroppedOntoASlopeLandsWhereItTouchesNeverNearer) {
   groove.add_face({2, 4, 5, 3});
   const MeshDistance part(groove);
   V c(0.7, 0, 30);
-  drop_onto(c, part, r, 1000, 400);
-  EXPECT_NEAR(c.z(), r * std::sqrt(2.0) + 0.7, 2e-6);
-  EXPECT_GE(part(c), r);
+  drop_onto(c, part, r, 1000);
+  EXPECT_NEAR(c.z(), r * std::sqrt(2.0) + 0.7, 1e-9);
+  EXPECT_GE(part(c), r - 1e-9);
   V middle(0, 0, 30);
-  drop_onto(middle, part, r, 1000, 400);
-  EXPECT_NEAR(middle.z(), r * std::sqrt(2.0), 2e-6);
+  drop_onto(middle, part, r, 1000);
+  EXPECT_NEAR(middle.z(), r * std::sqrt(2.0), 1e-9);
   // A ridge (z = -|x|): over x = -0.3 the ball rests on its apex, sqrt(r^2 - 0.09) above it.
   Mesh ridge = groove;
   for (auto& v : ridge.vertices) v.z() = -v.z();
   const MeshDistance roof(ridge);
   V top(-0.3, 0, 30);
-  drop_onto(top, roof, r, 1000, 400);
-  EXPECT_NEAR(top.z(), std::sqrt(r * r - 0.09), 2e-6);
-  EXPECT_GE(roof(top), r);
+  drop_onto(top, roof, r, 1000);
+  EXPECT_NEAR(top.z(), std::sqrt(r * r - 0.09), 1e-9);
+  EXPECT_GE(roof(top), r - 1e-9);
+  // A point the part holds, 0.5 aside of the ball's way and 3 above the ridge's apex, held with a
+  // margin of 0.1: the ball stops on it, at 3 + sqrt(2.1^2 - 0.5^2).
+  const MeshDistance held = roof.with_points({V(-0.3, 0.5, 3)}, 0.1);
+  V over(-0.3, 0, 30);
+  drop_onto(over, held, r, 1000);
+  EXPECT_NEAR(over.z(), 3 + std::sqrt(2.1 * 2.1 - 0.25), 1e-9);
 }
 
 TEST(SetupPrograms, ABallAboveThePartIsLoweredOntoItByAtMostFiveTimesItsSurfacesDistance) {
