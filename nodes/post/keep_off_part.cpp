@@ -38,23 +38,26 @@ std::vector<ToolpathPass> keep_pass_off_part(ToolpathPass pass, double r, const 
   // A pass's ends: the tool comes down onto its start and leaves its end straight along +z, so the
   // ball must pass the part on the way, not only its centre line (a compound-angle clamping put
   // an overhang 0.33 mm into a ball plunging onto a fandisk contour): the end is raised to the
-  // lowest height from which the vertical up to above the part stays r - tolerance off it
-  // (bisection: clear from a height, clear from any above it).
+  // lowest height from which the vertical up to above the part stays r - tolerance off it: where
+  // a ball of that radius coming down from above the part first touches it (one ray,
+  // MeshDistance::touch_along; a bisection of clear_along's before stop 62).
   const double top = part_top_z + r + 1;
-  // Whether the ball goes straight up clear from centre height z at (x, y) of c.
-  auto goes_up_clear = [&](const Eigen::Vector3d& c, double z) {
-    return z >= top || part.clear_along(Eigen::Vector3d(c.x(), c.y(), z), Eigen::Vector3d(c.x(), c.y(), top), r / 4,
-                                        r - tolerance);
+  // How far below `top` a ball of radius r - tolerance coming down at (x, y) of c first touches
+  // the part (up to `down`).
+  auto touch_from_top = [&](const Eigen::Vector3d& c, double down) {
+    return part.touch_along(Eigen::Vector3d(c.x(), c.y(), top), -Eigen::Vector3d::UnitZ(), r - tolerance, down);
   };
+  // Whether the ball goes straight up clear from centre height z at (x, y) of c.
+  auto goes_up_clear = [&](const Eigen::Vector3d& c, double z) { return z >= top || touch_from_top(c, top - z) >= top - z; };
   auto clear_above = [&](Eigen::Vector3d& contact, const Eigen::Vector3d& n) {
     const Eigen::Vector3d c = contact + r * n;
-    auto clear_from = [&](double z) { return goes_up_clear(c, z); };
-    if (clear_from(c.z())) return;
-    double low = c.z(), high = top;
-    while (high - low > 1e-4) (clear_from(0.5 * (low + high)) ? high : low) = 0.5 * (low + high);
-    contact.z() += high - c.z();
+    if (c.z() >= top) return;
+    const double touch = touch_from_top(c, top - c.z());
+    if (touch >= top - c.z()) return;
+    const double rise = (top - touch) - c.z() + 1e-9;  // the touching height, up from where rounding may leave it
+    contact.z() += rise;
     ++stats.lifted;
-    stats.lift_max = std::max(stats.lift_max, high - c.z());
+    stats.lift_max = std::max(stats.lift_max, rise);
   };
   // The ball at contact lifted clear; returns the lift.
   auto lift_point = [&](Eigen::Vector3d& contact, const Eigen::Vector3d& n) {

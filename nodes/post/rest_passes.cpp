@@ -187,8 +187,10 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
     if (!(n.dot(axis[s]) >= o.min_normal_dot)) return false;
     const Eigen::Vector3d c = samples[i].p + r * n;
     if (std::isfinite(distance.ray_distance(c, axis[s]))) return false;  // its centre line meets the part
-    const Eigen::Vector3d top = c + (highest[s] - c.dot(axis[s]) + r + 1) * axis[s];
-    return distance.clear_along(c, top, r / 4, r - tol_keep);
+    // a ball of r - tol_keep coming down the axis from above the part touches it nowhere above c
+    const double rise = highest[s] - c.dot(axis[s]) + r + 1;
+    if (!(rise > 0)) return distance(c) >= r - tol_keep;
+    return distance.touch_along(c + rise * axis[s], -axis[s], r - tol_keep, rise) >= rise;
   };
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> roots;

@@ -312,7 +312,7 @@ TEST(SetupPrograms, APassEndUnderAnOverhangIsRaisedUntilTheBallGoesUpClear) {
   const auto programs = setup_programs(path, {1}, {top}, part, {}, {});
   ASSERT_EQ(programs.size(), 1u);
   const double centre_z = 11 + std::sqrt(2.9975 * 2.9975 - 4);
-  EXPECT_NEAR(programs[0].lift_max, centre_z - 3, 2e-4);
+  EXPECT_NEAR(programs[0].lift_max, centre_z - 3, 1e-8);
   // Every move of the program, rapids and plunges included, keeps the ball r - e/4 off the part.
   const std::vector<V> t = tips(programs[0].gcode);
   ASSERT_GE(t.size(), 3u);
