@@ -42,6 +42,23 @@ inline Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& q, const Eigen
   return a + (vb / sum) * ab + (vc / sum) * ac;
 }
 
+// Whether x, a point of the triangle's plane, lies in the triangle (t0, t1, t2) (n its normal
+// (t1 - t0) x (t2 - t0), not 0); on an edge counts.
+inline bool in_triangle(const Eigen::Vector3d& x, const Eigen::Vector3d& t0, const Eigen::Vector3d& t1,
+                        const Eigen::Vector3d& t2, const Eigen::Vector3d& n) {
+  return n.dot((t1 - t0).cross(x - t0)) >= 0 && n.dot((t2 - t1).cross(x - t1)) >= 0 && n.dot((t0 - t2).cross(x - t2)) >= 0;
+}
+
+// How far along the unit direction d the ball of radius r centred at o moves before it first
+// touches the point c (|o + t d - c| = r, the smaller root); +infinity if it passes by or c is
+// behind. o must be farther than r from c.
+inline double ball_touch_point(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double r, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d m = o - c;
+  const double b = m.dot(d), disc = b * b - (m.squaredNorm() - r * r);
+  const double t = disc >= 0 ? -b - std::sqrt(disc) : -1.0;
+  return t >= 0 ? t : std::numeric_limits<double>::infinity();
+}
+
 // The nearest points of the segment [a, b] and the triangle (t0, t1, t2): on_segment and
 // on_triangle; returns their squared distance (0 where the segment crosses the triangle). Apart,
 // the nearest pair has an end of the segment or a point of an edge of the triangle in it (two
@@ -56,8 +73,7 @@ inline double closest_segment_triangle(const Eigen::Vector3d& a, const Eigen::Ve
   if (n.squaredNorm() > 0 && ((da <= 0 && db >= 0) || (da >= 0 && db <= 0)) && da != db) {
     // Where the segment meets the plane, inside the triangle: they cross.
     const Eigen::Vector3d x = a + (da / (da - db)) * (b - a);
-    if (n.dot((t1 - t0).cross(x - t0)) >= 0 && n.dot((t2 - t1).cross(x - t1)) >= 0 &&
-        n.dot((t0 - t2).cross(x - t2)) >= 0) {
+    if (in_triangle(x, t0, t1, t2, n)) {
       on_segment = on_triangle = x;
       return 0;
     }
@@ -81,11 +97,7 @@ inline double closest_segment_triangle(const Eigen::Vector3d& a, const Eigen::Ve
 inline double ball_touch_triangle(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double r, const Eigen::Vector3d& t0,
                                   const Eigen::Vector3d& t1, const Eigen::Vector3d& t2) {
   double best = std::numeric_limits<double>::infinity();
-  for (const Eigen::Vector3d* c : {&t0, &t1, &t2}) {  // |o + t d - c| = r
-    const Eigen::Vector3d m = o - *c;
-    const double b = m.dot(d), disc = b * b - (m.squaredNorm() - r * r);
-    if (disc >= 0 && -b - std::sqrt(disc) >= 0) best = std::min(best, -b - std::sqrt(disc));
-  }
+  for (const Eigen::Vector3d* c : {&t0, &t1, &t2}) best = std::min(best, ball_touch_point(o, d, r, *c));
   for (const auto& [p, q] : {std::pair{&t0, &t1}, std::pair{&t1, &t2}, std::pair{&t2, &t0}}) {
     // the distance from the edge's line, for the part of the edge between its ends
     const Eigen::Vector3d e = *q - *p;
@@ -110,8 +122,7 @@ inline double ball_touch_triangle(const Eigen::Vector3d& o, const Eigen::Vector3
         const double t = (side * r - u.dot(o - t0)) / towards;
         if (!(t >= 0 && t < best)) continue;
         const Eigen::Vector3d x = o + t * d - side * r * u;  // on the face's plane
-        if (n.dot((t1 - t0).cross(x - t0)) >= 0 && n.dot((t2 - t1).cross(x - t1)) >= 0 && n.dot((t0 - t2).cross(x - t2)) >= 0)
-          best = t;
+        if (in_triangle(x, t0, t1, t2, n)) best = t;
       }
   }
   return best;

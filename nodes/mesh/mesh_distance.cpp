@@ -124,6 +124,9 @@ void triangle_box(const RTCBoundsFunctionArguments* args) {
   out->upper_x = float_above(box.xmax()), out->upper_y = float_above(box.ymax()), out->upper_z = float_above(box.zmax());
 }
 
+// Corner k of a triangle, in Eigen's terms.
+Eigen::Vector3d corner(const Kernel::Triangle_3& t, int k) { return {t[k].x(), t[k].y(), t[k].z()}; }
+
 struct NearestQuery {
   const Triangles* tris;
   Eigen::Vector3d p;
@@ -137,8 +140,7 @@ bool nearer_triangle(RTCPointQueryFunctionArguments* args) {
   auto* q = static_cast<NearestQuery*>(args->userPtr);
   const std::size_t t = args->primID;
   const Kernel::Triangle_3& tri = (*q->tris)[t];
-  auto corner = [&](int k) { return Eigen::Vector3d(tri[k].x(), tri[k].y(), tri[k].z()); };
-  const Eigen::Vector3d c = closest_on_triangle(q->p, corner(0), corner(1), corner(2));
+  const Eigen::Vector3d c = closest_on_triangle(q->p, corner(tri, 0), corner(tri, 1), corner(tri, 2));
   const double d2 = (c - q->p).squaredNorm();
   if (!(d2 < q->d2)) return false;
   q->d2 = d2, q->foot = c, q->tri = t;
@@ -161,8 +163,7 @@ struct SegmentQuery {
 bool nearer_to_segment(RTCPointQueryFunctionArguments* args) {
   auto* q = static_cast<SegmentQuery*>(args->userPtr);
   const Kernel::Triangle_3& tri = (*q->tris)[args->primID];
-  auto corner = [&](int k) { return Eigen::Vector3d(tri[k].x(), tri[k].y(), tri[k].z()); };
-  const Eigen::Vector3d t0 = corner(0), t1 = corner(1), t2 = corner(2);
+  const Eigen::Vector3d t0 = corner(tri, 0), t1 = corner(tri, 1), t2 = corner(tri, 2);
   // The triangle's ball about its centroid first: most triangles in the sphere are farther.
   const Eigen::Vector3d centre = (t0 + t1 + t2) / 3;
   const double reach = std::sqrt(std::max({(t0 - centre).squaredNorm(), (t1 - centre).squaredNorm(), (t2 - centre).squaredNorm()}));
@@ -201,8 +202,7 @@ void touch_triangle(const RTCIntersectFunctionNArguments* args) {
   if (!args->valid[0]) return;
   auto* q = reinterpret_cast<TouchQuery*>(args->context);
   const Kernel::Triangle_3& tri = (*q->tris)[args->primID];
-  auto corner = [&](int k) { return Eigen::Vector3d(tri[k].x(), tri[k].y(), tri[k].z()); };
-  const double t = ball_touch_triangle(q->o, q->d, q->r, corner(0), corner(1), corner(2));
+  const double t = ball_touch_triangle(q->o, q->d, q->r, corner(tri, 0), corner(tri, 1), corner(tri, 2));
   if (!(t < q->t)) return;
   q->t = t;
   RTCRayHit* hit = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N = 1: rtcIntersect1
@@ -594,11 +594,7 @@ double MeshDistance::touch_along(const Eigen::Vector3d& c_placed, const Eigen::V
       const Eigen::Vector3d m = o + (0.5 * (from + to)) * d;
       const double radius = 0.5 * (to - from) + reach;
       set->tree.radiusSearch(m.data(), radius * radius * (1 + 1e-12), found, nanoflann::SearchParams(32, 0, false));
-      for (const auto& f : found) {
-        const Eigen::Vector3d w = o - set->points[f.first];
-        const double b = w.dot(d), disc = b * b - (w.squaredNorm() - reach * reach);
-        if (disc >= 0 && -b - std::sqrt(disc) >= 0) t = std::min(t, -b - std::sqrt(disc));
-      }
+      for (const auto& f : found) t = std::min(t, ball_touch_point(o, d, reach, set->points[f.first]));
     }
   }
   return t;

@@ -108,6 +108,15 @@ TEST(ClosestSegmentTriangle, NoPairOfPointsIsNearer) {
   }
 }
 
+// A ball moving onto a point: straight at it, 0.6 aside (the 0.8 of the rest of r), past it, away.
+TEST(BallTouchPoint, ClosedForms) {
+  const V down(0, 0, -1);
+  EXPECT_NEAR(ball_touch_point(V(0, 0, 10), down, 1, V(0, 0, 0)), 9, 1e-12);
+  EXPECT_NEAR(ball_touch_point(V(0.6, 0, 10), down, 1, V(0, 0, 0)), 9.2, 1e-12);
+  EXPECT_TRUE(std::isinf(ball_touch_point(V(1.2, 0, 10), down, 1, V(0, 0, 0))));
+  EXPECT_TRUE(std::isinf(ball_touch_point(V(0, 0, 10), V(0, 0, 1), 1, V(0, 0, 0))));
+}
+
 // A ball moving onto a triangle, in closed form: straight down onto the inside, onto an edge and
 // a corner from beside them, and one that passes by.
 TEST(BallTouchTriangle, ClosedForms) {

@@ -359,12 +359,8 @@ TEST(MeshDistance, ABallMovedAlongADirectionStopsWhereItFirstTouches) {
     for (std::size_t f = 0; f < sphere.num_faces(); ++f)
       best = std::min(best, ball_touch_triangle(o, d, r, sphere.vertices[sphere.face(f)[0]],
                                                 sphere.vertices[sphere.face(f)[1]], sphere.vertices[sphere.face(f)[2]]));
-    auto ball = [&](const V& c, double reach) {
-      const double b = (o - c).dot(d), disc = b * b - ((o - c).squaredNorm() - reach * reach);
-      return disc >= 0 && -b - std::sqrt(disc) >= 0 ? -b - std::sqrt(disc) : INFINITY;
-    };
-    for (const V& p : points) best = std::min(best, ball(p, r));
-    for (const V& p : balls) best = std::min(best, ball(p, r + margin));
+    for (const V& p : points) best = std::min(best, ball_touch_point(o, d, r, p));
+    for (const V& p : balls) best = std::min(best, ball_touch_point(o, d, r + margin, p));
     return best;
   };
   std::mt19937 rng(9);
