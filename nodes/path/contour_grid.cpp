@@ -339,6 +339,10 @@ ContourGridResult plan_contour_grid(const ParametricSurface& surface, const Cont
   std::array<double, 2> step_min{kInf, kInf}, step_max{0, 0};  // across u (sides 1, 3), across v (0, 2)
   std::size_t shrinks = 0, points = ca.uv.size();
   std::array<double, 4> share{1, 1, 1, 1};  // of each side's formula step to try first
+  // A step grown or shrunk (scallop ~ step^2) aims at kAim^2 = 0.94 of h, not at h: aimed at 0.99
+  // the block's contours were checked again after 3 829 shrinks, a check of four strips each, and
+  // took 34.1 s; at 0.94, 906 shrinks and 25.8 s, for 1.8 % more contours.
+  constexpr double kAim = 0.97;
   std::string warning;
   while (a.u1 > a.u0 && a.v1 > a.v0) {
     if (result.passes.size() >= o.max_contours)
@@ -364,7 +368,7 @@ ContourGridResult plan_contour_grid(const ParametricSurface& surface, const Cont
         worst[s] = planner.strip_scallop(a, b, s, ca, cb);
         if (!(worst[s] <= o.scallop_height)) {  // NaN too
           ok = false;
-          step[s] *= std::max(0.1, 0.995 * std::sqrt(o.scallop_height / worst[s]));  // scallop ~ step^2
+          step[s] *= std::max(0.1, kAim * std::sqrt(o.scallop_height / worst[s]));  // scallop ~ step^2
           ++shrinks;
         }
       }
@@ -378,7 +382,7 @@ ContourGridResult plan_contour_grid(const ParametricSurface& surface, const Cont
     for (int s = 0; s < 4; ++s) {
       scallop_max = std::max(scallop_max, worst[s]);
       // As a shrink does (scallop ~ step^2), at most doubling.
-      const double grow = 0.995 * std::sqrt(o.scallop_height / std::max(worst[s], o.scallop_height / 4));
+      const double grow = kAim * std::sqrt(o.scallop_height / std::max(worst[s], o.scallop_height / 4));
       share[s] = std::clamp(step[s] / formula[s] * grow, 0.01, 1.0);
       if (!std::isfinite(share[s])) share[s] = 1;
     }

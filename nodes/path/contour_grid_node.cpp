@@ -19,7 +19,7 @@ namespace scallop::path_nodes {
 NodeDecl make_contour_grid_node() {
   NodeDecl d;
   d.type = "path.contour_grid";
-  d.version = 5;  // 4: normals held within the patch's cap (machining_surface); 5: each side starts from the share of its formula step the last contour kept
+  d.version = 6;  // 4: normals held within the patch's cap (machining_surface); 5: each side starts from the share of its formula step the last contour kept; 6: steps aim at 0.94 h, not 0.99 h
   d.description =
       "contour-parallel passes on every B-spline patch (the second paper's Algorithm 1): nested rectangles of the "
       "patch's (u, v) square, each side stepped in from the scallop limit and the scallop between every two "

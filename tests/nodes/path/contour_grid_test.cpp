@@ -125,13 +125,14 @@ TEST(ContourGrid, APlaneGetsNestedRectanglesSpacedForTheirCorners) {
   // w = 2 sqrt(2 r h - h^2) = 0.6917. Where the inner rectangle turns a corner, the point
   // farthest from the balls lies on the diagonal, at d = w sqrt(2) / (1 + sqrt(2)) = 0.586 w from
   // the two outer sides and the inner corner alike: h there needs d = sqrt(2 r h - h^2), so
-  // w = 0.5904 (Algorithm 1, step 7: the corner shrinks the steps).
+  // w = 0.5904 (Algorithm 1, step 7: the corner shrinks the steps). The steps aim a little under
+  // it, at 0.97 w (a scallop of 0.94 h: fewer checks shrink a step again).
   const double d = std::sqrt(2 * 3 * 0.02 - 0.02 * 0.02), w = d * (1 + std::sqrt(2.0)) / std::sqrt(2.0);
   const auto& lines = g.report["grid_lines"];
   for (const char* key : {"u_from_0", "v_from_0"}) {
     const double first = lines[key][1].get<double>() - lines[key][0].get<double>();
     EXPECT_LE(first, w + 1e-9) << key;
-    EXPECT_GE(first, 0.98 * w) << key;
+    EXPECT_GE(first, 0.96 * w) << key;
   }
   // Every contour's steps are the corner's, and after the first contour each side starts from the
   // share of the formula's step the last one kept: the checks shrink the first contour's sides
@@ -140,11 +141,11 @@ TEST(ContourGrid, APlaneGetsNestedRectanglesSpacedForTheirCorners) {
   for (std::size_t k = 1; k + 2 < u0.size(); ++k) {  // the last stops at the middle
     const double step = u0[k + 1].get<double>() - u0[k].get<double>();
     EXPECT_LE(step, w + 1e-9) << k;
-    EXPECT_GE(step, 0.98 * w) << k;
+    EXPECT_GE(step, 0.96 * w) << k;
   }
   EXPECT_LE(g.report["side_steps_shrunk"].get<int>(), 12);
   // 15 mm from the long sides to the middle.
-  EXPECT_LE(g.passes.size(), std::size_t(std::ceil(15 / (0.98 * w))) + 1);
+  EXPECT_LE(g.passes.size(), std::size_t(std::ceil(15 / (0.96 * w))) + 1);
   EXPECT_GE(g.passes.size(), std::size_t(15 / w));
   EXPECT_LE(g.report["scallop_max"].get<double>(), 0.02);
   EXPECT_LE(measured_scallop(plane, g, 3, 61), 0.02 * 1.01);
