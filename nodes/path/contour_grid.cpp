@@ -97,7 +97,7 @@ class ContourPlanner {
   }
 
   // The step across side s into the rectangle (parameter units), the smallest over its samples.
-  double side_step(const Rect& r, int s) {
+  double side_step(const Rect& r, int s, double h) {
     const auto [a, b] = side_ends(r, s);
     double step = kInf;
     for (int j = 0; j < o_.side_samples; ++j) {
@@ -114,10 +114,10 @@ class ContourPlanner {
       // Across the pass, on the surface: perpendicular to r_u (a side along u) or to r_v.
       const double kappa = along_u(s) ? normal_curvature(ff, collapsed ? 0 : -ff.F / ff.E, 1)
                                       : normal_curvature(ff, 1, collapsed ? 0 : -ff.F / ff.G);
-      double interval = side_interval(o_.scallop_height, r_, kappa);
+      double interval = side_interval(h, r_, kappa);
       if (!std::isfinite(interval)) {
         ++unreachable;
-        interval = side_interval(o_.scallop_height, r_, 0);  // the check between contours decides
+        interval = side_interval(h, r_, 0);  // the check between contours decides
       }
       const double sample_step = side_step_corrected(interval, std::sqrt(across), theta);
       if (std::isfinite(sample_step)) step = std::min(step, sample_step);
@@ -343,6 +343,7 @@ ContourGridResult plan_contour_grid(const ParametricSurface& surface, const Cont
   // the block's contours were checked again after 3 829 shrinks, a check of four strips each, and
   // took 34.1 s; at 0.94, 906 shrinks and 25.8 s, for 1.8 % more contours.
   constexpr double kAim = 0.97;
+  double limit_least = o.scallop_height;  // the least contour limit
   std::string warning;
   while (a.u1 > a.u0 && a.v1 > a.v0) {
     if (result.passes.size() >= o.max_contours)
@@ -352,8 +353,25 @@ ContourGridResult plan_contour_grid(const ParametricSurface& surface, const Cont
     // Each side starts from its formula's step times the share the last contour's side kept, grown
     // by how far its scallop stayed under h: the corners, where three balls' fields meet, hold the
     // steps below the formula's (on a plane to about 0.85 of it) contour after contour.
+    // The contour's limit: h less how far the surface lies off the part in the ring its sides'
+    // formula steps at h may cross (a smaller limit only narrows the ring). One for all four
+    // sides: a side held to h beside one held lower pushes the corner they share over it.
     std::array<double, 4> step, formula;
-    for (int s = 0; s < 4; ++s) formula[s] = planner.side_step(a, s), step[s] = formula[s] * share[s];
+    for (int s = 0; s < 4; ++s) formula[s] = planner.side_step(a, s, o.scallop_height);
+    double limit = o.scallop_height;
+    if (o.scallop_limit) {
+      const Rect ring{a.u0 + formula[3], a.u1 - formula[1], a.v0 + formula[0], a.v1 - formula[2]};
+      limit = std::min({limit, o.scallop_limit(a.u0, a.u1, a.v0, std::max(ring.v0, a.v0)),
+                        o.scallop_limit(a.u0, a.u1, std::min(ring.v1, a.v1), a.v1),
+                        o.scallop_limit(a.u0, std::max(ring.u0, a.u0), a.v0, a.v1),
+                        o.scallop_limit(std::min(ring.u1, a.u1), a.u1, a.v0, a.v1)});
+      if (!(limit > 0)) throw std::invalid_argument("the scallop limit is not positive near (u, v) = (" +
+                                                    std::to_string(a.u0) + ", " + std::to_string(a.v0) + ")");
+      if (limit < o.scallop_height)
+        for (int s = 0; s < 4; ++s) formula[s] = planner.side_step(a, s, limit);
+    }
+    limit_least = std::min(limit_least, limit);
+    for (int s = 0; s < 4; ++s) step[s] = formula[s] * share[s];
     Rect b{};
     Contour cb;
     std::array<double, 4> worst{};
@@ -366,9 +384,9 @@ ContourGridResult plan_contour_grid(const ParametricSurface& surface, const Cont
       bool ok = true;
       for (int s = 0; s < 4; ++s) {
         worst[s] = planner.strip_scallop(a, b, s, ca, cb);
-        if (!(worst[s] <= o.scallop_height)) {  // NaN too
+        if (!(worst[s] <= limit)) {  // NaN too
           ok = false;
-          step[s] *= std::max(0.1, kAim * std::sqrt(o.scallop_height / worst[s]));  // scallop ~ step^2
+          step[s] *= std::max(0.1, kAim * std::sqrt(limit / worst[s]));  // scallop ~ step^2
           ++shrinks;
         }
       }
@@ -382,7 +400,7 @@ ContourGridResult plan_contour_grid(const ParametricSurface& surface, const Cont
     for (int s = 0; s < 4; ++s) {
       scallop_max = std::max(scallop_max, worst[s]);
       // As a shrink does (scallop ~ step^2), at most doubling.
-      const double grow = kAim * std::sqrt(o.scallop_height / std::max(worst[s], o.scallop_height / 4));
+      const double grow = kAim * std::sqrt(limit / std::max(worst[s], limit / 4));
       share[s] = std::clamp(step[s] / formula[s] * grow, 0.01, 1.0);
       if (!std::isfinite(share[s])) share[s] = 1;
     }
@@ -414,6 +432,7 @@ ContourGridResult plan_contour_grid(const ParametricSurface& surface, const Cont
                    {"v_step_max", step_max[1]},
                    {"side_steps_shrunk", shrinks},
                    {"scallop_max", scallop_max},
+                   {"scallop_limit_min", limit_least},
                    {"chord_max", planner.chord_max},
                    {"unreachable_samples", planner.unreachable}};
   if (!warning.empty()) result.report["warning"] = warning;

@@ -57,6 +57,10 @@ struct ContourGridOptions {
   int side_samples = 33;         // k: points per side where the step is computed (>= 2)
   std::size_t max_contours = 5000;  // more than this: refused (a vanishing step), with where
   std::function<void(double, const std::string&)> progress;  // optional
+  // Optional: the scallop limit on the (u, v) box [u0, u1] x [v0, v1], at most scallop_height (the
+  // surface lies off the part there, and the part's scallop may be that much more). Asked for the
+  // ring a contour's sides may step across; unset: scallop_height everywhere.
+  std::function<double(double u0, double u1, double v0, double v1)> scallop_limit;
 };
 
 struct ContourGridResult {

@@ -269,22 +269,46 @@ GridFit fit_grid_bspline(const std::vector<Eigen::Vector3d>& points, std::uint32
   return fit;
 }
 
-std::vector<double> surface_distance_max(const Surfaces& surfaces, const Mesh& mesh) {
+std::vector<SurfaceDistanceGrid> surface_distance_grids(const Surfaces& surfaces, const Mesh& mesh) {
   const std::size_t np = surfaces.patches.size();
+  std::vector<SurfaceDistanceGrid> grids(np);
   std::vector<Eigen::Vector3d> samples;
   std::vector<std::size_t> first(np + 1, 0);
   for (std::size_t p = 0; p < np; ++p) {
     const SurfacePatch& sp = surfaces.patches[p];
     const std::uint32_t nu = kFine * (std::max<std::uint32_t>(sp.cols, 2) - 1),
                         nv = kFine * (std::max<std::uint32_t>(sp.rows, 2) - 1);
+    grids[p].nu = nu, grids[p].nv = nv;
     for (std::uint32_t i = 0; i <= nv; ++i)
       for (std::uint32_t j = 0; j <= nu; ++j) samples.push_back(surface_point(sp.surface, double(j) / nu, double(i) / nv));
     first[p + 1] = samples.size();
   }
   const std::vector<double> distance = distances_to_mesh(samples, mesh);
-  std::vector<double> out(np);
   for (std::size_t p = 0; p < np; ++p)
-    out[p] = *std::max_element(distance.begin() + std::ptrdiff_t(first[p]), distance.begin() + std::ptrdiff_t(first[p + 1]));
+    grids[p].distance.assign(distance.begin() + std::ptrdiff_t(first[p]), distance.begin() + std::ptrdiff_t(first[p + 1]));
+  return grids;
+}
+
+double SurfaceDistanceGrid::max_near(double u0, double u1, double v0, double v1) const {
+  if (distance.empty()) return 0;
+  // Sample indices j with j / nu within 1 / nu of [u0, u1]: floor(u0 nu) - 1 .. ceil(u1 nu) + 1, clamped.
+  auto range = [](double lo, double hi, std::uint32_t n) {
+    const double a = std::floor(std::min(lo, hi) * n) - 1, b = std::ceil(std::max(lo, hi) * n) + 1;
+    return std::pair<std::uint32_t, std::uint32_t>(std::uint32_t(std::clamp(a, 0.0, double(n))),
+                                                   std::uint32_t(std::clamp(b, 0.0, double(n))));
+  };
+  const auto [j0, j1] = range(u0, u1, nu);
+  const auto [i0, i1] = range(v0, v1, nv);
+  double worst = 0;
+  for (std::uint32_t i = i0; i <= i1; ++i)
+    for (std::uint32_t j = j0; j <= j1; ++j) worst = std::max(worst, distance[std::size_t(i) * (nu + 1) + j]);
+  return worst;
+}
+
+std::vector<double> surface_distance_max(const Surfaces& surfaces, const Mesh& mesh) {
+  std::vector<double> out;
+  for (const SurfaceDistanceGrid& g : surface_distance_grids(surfaces, mesh))
+    out.push_back(g.distance.empty() ? 0.0 : *std::max_element(g.distance.begin(), g.distance.end()));
   return out;
 }
 

@@ -74,6 +74,17 @@ GridFit fit_grid_bspline(const std::vector<Eigen::Vector3d>& points, std::uint32
 // off the part (path.contour_grid).
 std::vector<double> surface_distance_max(const Surfaces& surfaces, const Mesh& mesh);
 
+// The same distances kept where they were sampled: per patch a (nu + 1) by (nv + 1) grid at
+// (u, v) = (j / nu, i / nv), row-major (row i along u), nu = 4 (cols - 1), nv = 4 (rows - 1).
+struct SurfaceDistanceGrid {
+  std::uint32_t nu = 0, nv = 0;
+  std::vector<double> distance;
+  // The largest distance at the samples within one sample step of the (u, v) box [u0, u1] x [v0,
+  // v1] (0 for an empty grid).
+  double max_near(double u0, double u1, double v0, double v1) const;
+};
+std::vector<SurfaceDistanceGrid> surface_distance_grids(const Surfaces& surfaces, const Mesh& mesh);
+
 // A fitted patch as the planners see it: up its machining direction, and its normals held within
 // its segment's cap (n . direction >= min_normal_dot) less 0.1, the fit's own lean (BSplinePatch:
 // where the fitted map degenerates, the normal is taken from inside).

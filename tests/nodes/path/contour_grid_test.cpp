@@ -297,10 +297,47 @@ TEST(ContourGrid, WhereThePartLiesOffThePatchTheLimitIsLoweredByThatMuch) {
                               {{"surfaces", s}, {"part", part}});
     const auto& r = std::dynamic_pointer_cast<const Report>(out.at("report"))->data["patches"][0];
     EXPECT_NEAR(r["part_distance_max"].get<double>(), depth, 1e-9);
-    EXPECT_NEAR(r["scallop_target"].get<double>(), target, 1e-12);
+    EXPECT_NEAR(r["scallop_limit_min"].get<double>(), target, 1e-12);
     EXPECT_LE(r["scallop_max"].get<double>(), target);
     EXPECT_GT(r["scallop_max"].get<double>(), 0.9 * target);
   }
+}
+
+// The part 0.004 mm under a 20 x 20 mm patch only beyond x = 16 (a step in it, as a patch's rim
+// over a rounded edge stands off the part): the outer contours, whose rings reach there, are
+// held to h - 0.004; the inner ones, whose rings stay short of x = 15.5, to h. Measured on the
+// contours themselves by sphere tracing: across the middle of the inner ones' sides (x = 10,
+// 5.5 < y < 8.5; the steps are the corners', so mid-side the scallop is about 0.85^2 of the
+// contour's aim, 0.0068 at h) over h - 0.004, beyond x = 17 under it.
+TEST(ContourGrid, EachContourIsHeldToHLessThePartsDistanceInItsRing) {
+  auto s = std::make_shared<Surfaces>();
+  s->patches.push_back(test::flat_patch({0, 0, 5}, {20, 0, 5}, {0, 20, 5}, {20, 20, 5}, {0, 0, 1}));
+  s->patches.back().rows = s->patches.back().cols = 11;  // the distances sampled every 0.5 mm
+  auto part = std::make_shared<Mesh>();
+  part->vertices = {{-5, -5, 5},     {16, -5, 5},     {16, 25, 5},     {-5, 25, 5},
+                    {16, -5, 4.996}, {25, -5, 4.996}, {25, 25, 4.996}, {16, 25, 4.996}};
+  part->add_face({0, 1, 2, 3});
+  part->add_face({4, 5, 6, 7});
+  auto out = test::run_node(path_nodes::make_contour_grid_node(),
+                            {{"tool_radius", 2}, {"scallop_height", 0.01}, {"chord_error", 0.005}},
+                            {{"surfaces", s}, {"part", part}});
+  const auto& tp = *std::dynamic_pointer_cast<const Toolpath>(out.at("toolpath"));
+  const auto& r = std::dynamic_pointer_cast<const Report>(out.at("report"))->data["patches"][0];
+  EXPECT_NEAR(r["part_distance_max"].get<double>(), 0.004, 1e-9);
+  EXPECT_NEAR(r["scallop_limit_min"].get<double>(), 0.006, 1e-12);
+  std::vector<test::Segment> segs;
+  for (const auto& p : tp.passes)
+    for (std::size_t k = 0; k + 1 < p.contact.size(); ++k)
+      segs.push_back({p.contact[k] + 2 * p.normal[k], p.contact[k + 1] + 2 * p.normal[k + 1]});
+  double inner = 0, right = 0;
+  for (int i = 0; i <= 300; ++i) {
+    const double y = 5.5 + 3.0 * i / 300;
+    inner = std::max(inner, test::traced_scallop(V(10, y, 5), V::UnitZ(), segs, 2));
+    for (double x : {17.2, 17.9, 18.6, 19.3}) right = std::max(right, test::traced_scallop(V(x, 8.5 + y - 5.5, 5), V::UnitZ(), segs, 2));
+  }
+  EXPECT_LE(inner, 0.01);
+  EXPECT_GT(inner, 0.0063);
+  EXPECT_LE(right, 0.006 * 1.001);
 }
 
 }  // namespace
