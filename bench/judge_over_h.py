@@ -86,8 +86,10 @@ def measure(a):
     over = cut & (scallop > 1.01 * H)
     rng = np.random.default_rng(0)
     some = rng.choice(np.flatnonzero(cut), min(100000, int(cut.sum())), replace=False)
-    print("judge: %.3f %% of the measured area over 1.01 h (interior %.3f %%), %d samples over, %d cut"
-          % (100 * report["frac_over_limit"], 100 * report["frac_over_limit_interior"], over.sum(), cut.sum()))
+    print("judge: %s, %.3f %% of the measured area over 1.01 h (interior %.3f %%, p99 %.5f mm), gouge %.5f mm, "
+          "uncut %.3g, %d samples over, %d cut" % ("pass" if report["pass"] else "fail", 100 * report["frac_over_limit"],
+                                                  100 * report["frac_over_limit_interior"], report["scallop_p99_interior"],
+                                                  report["gouge_max"], report["uncut_fraction"], over.sum(), cut.sum()))
     if not over.any():
         return
     print("%-44s %-26s %-26s" % ("median p90 p99 (mm)", "over 1.01 h", "cut samples"))

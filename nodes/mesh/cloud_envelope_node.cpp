@@ -41,7 +41,9 @@ NodeDecl make_cloud_envelope_node() {
   //  10: with exact feature edges, a face whose points (over it and a spacing around) fit one
   //    local surface gets at most that surface's bulge over the face plus 3 misfits (was the crease
   //    its neighbours' turn allows alone)
-  d.version = 10;
+  //  11: and the same for two planes meeting in a line fit to those points (a crease softer than
+  //    the feature edges, a CAD mesh's facets), seeded by the two faces around that turn most
+  d.version = 11;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "
