@@ -65,9 +65,10 @@ struct CloudEnvelope {
 //         face may hide between its corners, bend * l_f / 2 * tan(T_f / 2) (T_f the largest angle
 //         between two of the face and the faces sharing a corner with it: those below its plane for
 //         out, a crest; above it for in, a valley; l_f its longest edge, at most twice the larger of
-//         s and the gap g_f it bridges), each vertex the largest of its faces'; faces with a corner on a feature edge or at no point are left out
+//         s and the gap g_f it bridges), each vertex the largest of its faces'; faces with a corner on a feature edge are left out
 //         (those corners are bounded below, and a face's tilt through them with them), and a vertex
-//         on a feature edge gets none from its own faces. Where the points over a face and a
+//         on a feature edge gets none from its own faces (a corner at no point off the edges is bounded
+//         below too, and still gets its faces' allowance, which also reaches their other corners). Where the points over a face and a
 //         spacing around it fit one local surface (quadric, largest residual m at most a quarter
 //         spacing, the face bridging no gap wider than twice their own spacing), the face's
 //         allowance is at most that surface's height over the face's plane (1.1 times the largest

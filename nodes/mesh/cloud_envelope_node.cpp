@@ -43,7 +43,9 @@ NodeDecl make_cloud_envelope_node() {
   //    its neighbours' turn allows alone)
   //  11: and the same for two planes meeting in a line fit to those points (a crease softer than
   //    the feature edges, a CAD mesh's facets), seeded by the two faces around that turn most
-  d.version = 11;
+  //  12: a face with a corner at no point (off the feature edges) keeps its crease allowance (was
+  //    left out with the faces on a feature edge)
+  d.version = 12;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "
