@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <optional>
@@ -36,6 +37,28 @@ double CreaseSurface::height(const Eigen::Vector3d& x) const {
   const double t0 = (offset[0] - normal[0].dot(x)) / normal[0].dot(up);
   const double t1 = (offset[1] - normal[1].dot(x)) / normal[1].dot(up);
   return ridge ? std::min(t0, t1) : std::max(t0, t1);
+}
+
+std::pair<double, double> CreaseSurface::extremes_over(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                                       const Eigen::Vector3d& c) const {
+  // Which side of the crease x lies on: the difference of the two planes' heights, affine in x.
+  const auto side = [&](const Eigen::Vector3d& x) {
+    return (offset[0] - normal[0].dot(x)) / normal[0].dot(up) - (offset[1] - normal[1].dot(x)) / normal[1].dot(up);
+  };
+  double above = -INFINITY, below = -INFINITY;
+  const auto at = [&](const Eigen::Vector3d& x) {
+    const double h = height(x);
+    above = std::max(above, h);
+    below = std::max(below, -h);
+  };
+  const std::array<const Eigen::Vector3d*, 3> corner{&a, &b, &c};
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d &p = *corner[k], &q = *corner[(k + 1) % 3];
+    at(p);
+    const double sp = side(p), sq = side(q);
+    if ((sp < 0 && sq > 0) || (sp > 0 && sq < 0)) at(p + sp / (sp - sq) * (q - p));
+  }
+  return {above, below};
 }
 
 std::optional<CreaseSurface> fit_crease_surface(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& up,

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace scallop {
@@ -21,6 +22,11 @@ struct CreaseSurface {
   double misfit = 0;  // the points' largest height off the surface, along up (mm)
   // How far the surface stands above x along up (negative: below).
   double height(const Eigen::Vector3d& x) const;
+  // The most it stands above (first) and below (second, positive) the triangle abc: exact, from
+  // the corners and the places the crease's line crosses the edges (either side of the line the
+  // height is affine in x, so its extremes lie at those places).
+  std::pair<double, double> extremes_over(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                          const Eigen::Vector3d& c) const;
 };
 
 // The crease surface of `points` seen along `up`: the crease's line first taken along the cross

@@ -74,9 +74,11 @@ struct CloudEnvelope {
 //         allowance is at most that surface's height over the face's plane (1.1 times the largest
 //         on a grid of sixths of the face; out where it stands above, in where below) plus 3 m:
 //         a random cloud's faces turn against each other far more than a smooth part bends.
-//         The same holds for two planes meeting in a line fit to those points (CreaseSurface,
-//         seeded by the two faces around that turn most): a crease softer than the feature edges,
-//         as between a CAD mesh's facets, which a quadric misses by the turn times the points' spread.
+//         Where two planes meeting in a line fit those points better (CreaseSurface, seeded by the
+//         two faces around that turn most; a smaller largest residual), their height over the face
+//         (exact) plus 3 of their misfits it is instead: a crease softer than the feature edges, as
+//         between a CAD mesh's facets, which a quadric misses by the turn times the points' spread
+//         and whose crest its bulge falls short of.
 //         Instead, a vertex at no point of the cloud (farther than 1e-6 mm from every one: where
 //         mesh.sharpen extrapolated local surfaces to meet at an edge or a corner; off a feature
 //         edge and within a quarter spacing of a point, as where mesh.repair collapsed a sliver,

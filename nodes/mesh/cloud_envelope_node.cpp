@@ -45,7 +45,9 @@ NodeDecl make_cloud_envelope_node() {
   //    the feature edges, a CAD mesh's facets), seeded by the two faces around that turn most
   //  12: a face with a corner at no point (off the feature edges) keeps its crease allowance (was
   //    left out with the faces on a feature edge)
-  d.version = 12;
+  //  13: the better fit of the quadric and the crease's two planes decides a face's allowance (was
+  //    the smaller), the crease's height over the face exact (was a grid of sixths, plus a tenth)
+  d.version = 13;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "

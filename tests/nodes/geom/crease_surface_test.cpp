@@ -51,6 +51,24 @@ TEST(CreaseSurface, AValleyIsTheHigherOfItsPlanes) {
   EXPECT_NEAR(s->height(V(0.5, -0.4, 0.01)), trough(0.5, -0.4) - 0.01, 1e-12);
 }
 
+// The most a ridge stands above a triangle and a valley below it: at the place the crease's line
+// crosses an edge, between any grid's points. Triangle (0,0,0) (1.9,0,0) (0,1.3,0) under the
+// ridge z = 0.02 - 0.139 |x - 0.77|: above it by 0.02 at x = 0.77 on the edges y = 0 and the
+// hypotenuse, below it by 0.139 * 1.13 - 0.02 at the corner (1.9, 0). A grid of sixths (nearest
+// x = 0.633) finds it 0.001 above.
+TEST(CreaseSurface, ItsExtremesOverATriangleAreWhereItsLineCrossesTheEdges) {
+  const double slope = 0.139, at = 0.77;
+  for (const double sign : {1.0, -1.0}) {  // the ridge, then the same valley (the most below at its line)
+    const auto crease = [&](double x, double) { return sign * (0.02 - slope * std::abs(x - at)); };
+    const auto s = fit_crease_surface(points_on(crease, 0.8, 4), V(0, 0, 1), {V(-0.14, 0, 1), V(0.14, 0, 1)});
+    ASSERT_TRUE(s);
+    EXPECT_EQ(s->ridge, sign > 0);
+    const auto [above, below] = s->extremes_over(V(0, 0, 0), V(1.9, 0, 0), V(0, 1.3, 0));
+    EXPECT_NEAR(sign > 0 ? above : below, 0.02, 1e-12);
+    EXPECT_NEAR(sign > 0 ? below : above, slope * (1.9 - at) - 0.02, 1e-12);
+  }
+}
+
 TEST(CreaseSurface, PointsOnOnePlaneGiveThatPlane) {
   const auto plane = [](double x, double y) { return 0.3 * x - 0.1 * y + 2; };
   const auto pts = points_on(plane, 1, 3);
