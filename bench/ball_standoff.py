@@ -9,7 +9,9 @@ feed move is sampled every --step mm (0.2), the ball centres mapped back to the 
 (tip + R z, then R^T (m - t)), and each centre's distance to MESH (times SCALE) less R printed as
 percentiles, per setup and in all: about 0 where the ball touches the mesh, the stock left under
 it where it stands off. --cylinder keeps the centres whose distance from the vertical axis through
-(CX, CY) lies in [R0, R1] and whose z lies in [Z0, Z1] (a boss's side). Needs ../shared/tools
+(CX, CY) lies in [R0, R1] and whose z lies in [Z0, Z1] (a boss's side). --into TOL also lists,
+per setup, the centres nearer MESH than R - TOL (a ball into the part: a gouge), gathered within
+1 mm of each other, each group's count and deepest centre in the part's frame. Needs ../shared/tools
 (mesh3d.py) beside the repository.
 """
 import argparse, json, os, re, sys
@@ -21,6 +23,7 @@ import mesh3d  # noqa: E402
 ap = argparse.ArgumentParser()
 ap.add_argument("mesh"); ap.add_argument("scale", type=float); ap.add_argument("out"); ap.add_argument("r", type=float)
 ap.add_argument("--cylinder"); ap.add_argument("--step", type=float, default=0.2)
+ap.add_argument("--into", type=float)
 a = ap.parse_args()
 
 V, F, _ = mesh3d.load_mesh(a.mesh, a.scale)
@@ -46,8 +49,18 @@ for setup in json.load(open(os.path.join(a.out, "setups.json")))["setups"]:
         rr = np.hypot(P[:, 0] - cx, P[:, 1] - cy)
         P = P[(rr >= r0) & (rr <= r1) & (P[:, 2] >= z0) & (P[:, 2] <= z1)]
     if len(P) < 100: continue
-    d = index.distance(P, cap=5.0) - a.r
+    d = index.distance(P, cap=5.0)
+    d = np.where(np.isfinite(d), d, 5.0) - a.r  # beyond the cap: 5 mm
     every.append(d)
+    if a.into is not None:
+        deep = np.flatnonzero(d < -a.into)
+        groups = []  # [count, depth, centre]
+        for i in deep[np.argsort(d[deep])]:
+            for g in groups:
+                if np.linalg.norm(P[i] - g[2]) <= 1.0: g[0] += 1; break
+            else: groups.append([1, -d[i], P[i]])
+        for count, depth, c in groups:
+            print("  %s: %d centres up to %.4f mm into the mesh near (%.2f, %.2f, %.2f)" % (setup["name"], count, depth, *c))
     print("%s: %d centres, standoff p1 / p10 / p50 / p90 / p99 %s mm" % (setup["name"], len(d), " / ".join("%.4f" % x for x in np.percentile(d, [1, 10, 50, 90, 99]))))
 if every:
     d = np.concatenate(every)
