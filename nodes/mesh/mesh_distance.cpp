@@ -82,7 +82,7 @@ RTCDevice embree_device() {
 struct MeshDistance::Impl {
   Triangles tris;
   std::vector<std::size_t> face_of;  // #tris: the polygon each triangle was fanned from
-  std::vector<char> folded;          // per polygon: turned more than 150 degrees from a neighbour, or 10 from its unmoved place
+  std::vector<char> folded;          // per polygon: over 150 degrees from a neighbour, 10 from its unmoved place, or untrusted
   RTCScene scene = nullptr;          // the triangles' boxes, for the nearest point
   std::once_flag rays_built;
   Tree tree;                         // for rays only
@@ -252,9 +252,14 @@ RTCScene MeshDistance::Impl::grown_by(double radius) {
 // A face of a moved mesh whose normal is within 10 degrees of its unmoved place's tells the side.
 constexpr double kTrustedTurnCos = 0.98480775301220802;  // cos 10 degrees
 
-MeshDistance::MeshDistance(const Mesh& mesh, const Mesh* unmoved) : impl_(std::make_shared<Impl>()) {
+MeshDistance::MeshDistance(const Mesh& mesh, const Mesh* unmoved, std::span<const std::size_t> untrusted)
+    : impl_(std::make_shared<Impl>()) {
   if (unmoved && !unmoved->same_faces(mesh))
     throw std::invalid_argument("the unmoved mesh's faces differ from the mesh's");
+  for (const std::size_t f : untrusted)
+    if (f >= mesh.num_faces())
+      throw std::invalid_argument("untrusted face " + std::to_string(f) + " is past the mesh's " +
+                                  std::to_string(mesh.num_faces()) + " faces");
   impl_->tris = triangles(mesh);
   impl_->face_of.reserve(impl_->tris.size());
   for (std::size_t f = 0; f < mesh.num_faces(); ++f)
@@ -279,6 +284,7 @@ MeshDistance::MeshDistance(const Mesh& mesh, const Mesh* unmoved) : impl_(std::m
   if (unmoved)
     for (std::size_t f = 0; f < mesh.num_faces(); ++f)
       if (!(normal[f].dot(face_area_vector(*unmoved, f).normalized()) >= kTrustedTurnCos)) impl_->folded[f] = 1;
+  for (const std::size_t f : untrusted) impl_->folded[f] = 1;
   if (impl_->tris.size() > std::numeric_limits<unsigned>::max() - 1)
     throw std::invalid_argument("a mesh of more than 4 billion triangles cannot be searched");
   impl_->scene = rtcNewScene(embree_device());

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "nodes/types/mesh.h"
@@ -21,7 +22,11 @@ class MeshDistance {
   //          degrees against its place there may cross its neighbours, and is left to the rays too
   //          (signed_distance). Faces that differ:
   //          std::invalid_argument.
-  explicit MeshDistance(const Mesh& mesh, const Mesh* unmoved = nullptr);
+  // untrusted  faces (polygon indices, any order) whose normals do not tell the side either, left
+  //          to the rays as well: self_crossings' tangled faces, turned into the part where a
+  //          reconstruction crossed itself (a ball centre 2.5 mm outside the ABC plate read 2.5 mm
+  //          inside by one). An index past the faces: std::invalid_argument.
+  explicit MeshDistance(const Mesh& mesh, const Mesh* unmoved = nullptr, std::span<const std::size_t> untrusted = {});
   // The same faces, and points the part is known to hold besides (the cloud it was measured at,
   // in the mesh's frame): the distances (unsigned, signed, least_along) are to the union of the
   // solid and the points, the nearer of the faces and the nearest point. Where a mesh made from a
@@ -57,8 +62,9 @@ class MeshDistance {
   // Signed distance, negative inside the part: the side of the nearest face's outward normal
   // (corners counter-clockwise seen from outside) where the nearest point lies inside a face;
   // where it lies on an edge or a corner, where faces disagree, or on a face folded back onto a
-  // neighbour (normals more than 150 degrees apart: it faces the wrong way) or turned more than 10
-  // degrees against its unmoved place (the moves may have folded it across its neighbours), the parity of the
+  // neighbour (normals more than 150 degrees apart: it faces the wrong way), turned more than 10
+  // degrees against its unmoved place (the moves may have folded it across its neighbours) or
+  // named untrusted, the parity of the
   // crossings of three skew rays (majority), which needs a closed mesh. Within 1e-9 mm of the
   // faces, that distance unsigned. +infinity without faces.
   double signed_distance(const Eigen::Vector3d& p) const;

@@ -110,13 +110,20 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   std::vector<PartSample> samples = sample_part(tris, spacing);
   if (progress) progress(0.05);
 
-  const MeshDistance distance(part);
+  // Where the part's mesh crosses itself, its tangled faces do not tell the side by their normals
+  // (nor the outer mesh's, the same faces moved): the rays do.
+  const SelfCrossings crossings = self_crossings(part);
+  const MeshDistance distance(part, nullptr, crossings.tangled);
   if (outer && outer->num_faces() == 0) throw std::invalid_argument("the outer mesh has no face");
   if (inner_mesh && !inner_mesh->same_faces(part))
     throw std::invalid_argument("the inner mesh is not the part's mesh with its vertices moved (its faces differ)");
   // The outer mesh is the part's moved outward: a face the moves turned over does not tell the side.
+  const bool outer_moved = outer && outer->same_faces(part);
   const std::unique_ptr<const MeshDistance> outer_distance =
-      outer ? std::make_unique<const MeshDistance>(*outer, outer->same_faces(part) ? &part : nullptr) : nullptr;
+      outer ? std::make_unique<const MeshDistance>(*outer, outer_moved ? &part : nullptr,
+                                                   outer_moved ? std::span<const std::size_t>(crossings.tangled)
+                                                               : std::span<const std::size_t>())
+            : nullptr;
   const MeshDistance& gouge_distance = outer ? *outer_distance : distance;  // what balls must stay off
   const CentreIndex keep_off(edges_to_keep_off(part, tris, o.feature_angle), std::max(spacing, margin / 2));
   const CentreIndex centres(feed, centre_piece_length(feed, spacing, r));
@@ -360,7 +367,6 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   // within half of it of a face: the gouge there is not bounded (post.setup_programs keeps the
   // balls r + margin off the samples). Not the outer mesh's: moved out, it crosses itself at every
   // concave edge, and its union still bounds the part.
-  const SelfCrossings crossings = self_crossings(part);
   const TangleKeepOut keep = tangle_keep_out(part, crossings);
   std::size_t tangle_samples_reached = 0;
   Deepest tangle_nearest{-INFINITY, Eigen::Vector3d::Zero()};  // minus the distance, and where

@@ -7,9 +7,11 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <set>
 
 #include "nodes/geom/triangle.h"
 #include "nodes/mesh/mesh_topology.h"
+#include "nodes/mesh/self_crossings.h"
 #include "tests/nodes/mesh/mesh_test_util.h"
 #include "tests/test_support.h"
 
@@ -129,6 +131,37 @@ TEST(MeshDistance, AFaceTheMovesTurnedOverIsLeftToTheRays) {
   // Faces that are not the mesh's own are refused.
   const Mesh other = test::cube_mesh(3);
   EXPECT_THROW(MeshDistance(moved, &other), std::invalid_argument);
+}
+
+TEST(MeshDistance, AFaceNamedUntrustedIsLeftToTheRays) {
+  // The spiked cube: the middle of the top pulled down through the bottom to (2, 2, -1), as a
+  // reconstruction tangles at a gap finer than its points. Below the bottom the spike's faces are
+  // seen from behind: the point beside the tip, outside the part (winding number 0), reads inside
+  // by the nearest face's normal; named untrusted (self_crossings' tangled faces), the rays say
+  // outside, and a point inside the cube away from the spike keeps its side.
+  std::set<std::size_t> spike;
+  const Mesh part = test::spiked_cube(spike);
+  const std::vector<std::size_t> tangled = self_crossings(part).tangled;
+  const V beside(1.5, 1.95, -0.6);
+  const MeshDistance by_normals(part), by_rays(part, nullptr, tangled);
+  ASSERT_TRUE(spike.count(by_normals.closest_face(beside)));
+  ASSERT_TRUE(std::binary_search(tangled.begin(), tangled.end(), by_normals.closest_face(beside)));
+  const double d = by_normals(beside);
+  EXPECT_GT(d, 0.1);
+  EXPECT_NEAR(by_normals.signed_distance(beside), -d, 1e-12);  // the defect
+  EXPECT_NEAR(by_rays.signed_distance(beside), d, 1e-12);
+  EXPECT_FALSE(by_rays.inside_by_rays(beside));
+  EXPECT_NEAR(by_rays.signed_distance(V(0.5, 0.5, 0.5)), -0.5, 1e-12);
+  EXPECT_NEAR(by_rays.signed_distance(V(0.5, 0.5, 4.25)), 0.25, 1e-12);
+  // An index past the faces is refused with what it was.
+  const std::vector<std::size_t> past = {part.num_faces()};
+  try {
+    MeshDistance(part, nullptr, past);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "untrusted face " + std::to_string(part.num_faces()) + " is past the mesh's " + std::to_string(part.num_faces()) + " faces");
+  }
 }
 
 TEST(MeshDistance, APlacedOneAnswersAsTheMovedMesh) {

@@ -180,6 +180,21 @@ TEST(SimulatePart, ACloudPointOutsideTheOuterMeshNearABallLeavesTheGougeUnbounde
   EXPECT_FALSE(simulate_part(box, cuts, o, {}, nullptr, nullptr, &cloud).report.contains("gouge_unbounded_points"));
 }
 
+TEST(SimulatePart, ABallBesideWhereTheMeshCrossesItselfIsNoGougeByTheFacesSeenFromBehind) {
+  // The spiked cube's spike runs out of its bottom; beside it, below the bottom, a ball centre is
+  // outside the part, but the spike's faces, nearest and seen from behind, read it 0.41 inside
+  // by their normals: a gouge of r + 0.41 with nothing cut. The tangled faces' side is the rays'.
+  std::set<std::size_t> spike;
+  const Mesh part = test::spiked_cube(spike);
+  const double r = 0.3;
+  std::vector<PartSetupCut> beside(1);
+  beside[0].name = "beside", beside[0].feed = {{V(1.5, 1.95, -0.6), V(1.5, 1.9, -0.6)}};
+  const nlohmann::json rep = simulate_part(part, beside, options(r, 0.05), {}).report;
+  EXPECT_LT(rep["gouge_max"].get<double>(), 0.01) << rep["gouge_max"];
+  // With the outer mesh the part's own faces moved (here not at all), the same.
+  EXPECT_LT(simulate_part(part, beside, options(r, 0.05), {}, &part).report["gouge_max"].get<double>(), 0.01);
+}
+
 TEST(SimulatePart, ABallPassingByWhereTheMeshCrossesItselfLeavesTheGougeUnbounded) {
   // The cube [0, 4]^3 with the middle of its top pulled through its bottom (a reconstruction
   // tangled at a gap finer than its points): a pass over the top at y = 2 comes by the spike's
