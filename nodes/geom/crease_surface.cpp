@@ -32,10 +32,13 @@ std::optional<Plane> plane_of(double count, const Eigen::Vector3d& sum, const Ei
 }
 }  // namespace
 
-double CreaseSurface::height(const Eigen::Vector3d& x) const {
+std::array<double, 2> CreaseSurface::plane_heights(const Eigen::Vector3d& x) const {
   // x + t up meets plane i at t = (offset_i - n_i·x) / (n_i·up).
-  const double t0 = (offset[0] - normal[0].dot(x)) / normal[0].dot(up);
-  const double t1 = (offset[1] - normal[1].dot(x)) / normal[1].dot(up);
+  return {(offset[0] - normal[0].dot(x)) / normal[0].dot(up), (offset[1] - normal[1].dot(x)) / normal[1].dot(up)};
+}
+
+double CreaseSurface::height(const Eigen::Vector3d& x) const {
+  const auto [t0, t1] = plane_heights(x);
   return ridge ? std::min(t0, t1) : std::max(t0, t1);
 }
 
@@ -43,7 +46,8 @@ std::pair<double, double> CreaseSurface::extremes_over(const Eigen::Vector3d& a,
                                                        const Eigen::Vector3d& c) const {
   // Which side of the crease x lies on: the difference of the two planes' heights, affine in x.
   const auto side = [&](const Eigen::Vector3d& x) {
-    return (offset[0] - normal[0].dot(x)) / normal[0].dot(up) - (offset[1] - normal[1].dot(x)) / normal[1].dot(up);
+    const auto [t0, t1] = plane_heights(x);
+    return t0 - t1;
   };
   double above = -INFINITY, below = -INFINITY;
   const auto at = [&](const Eigen::Vector3d& x) {

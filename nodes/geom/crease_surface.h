@@ -20,7 +20,10 @@ struct CreaseSurface {
   Eigen::Vector3d up;                     // unit: the direction heights are measured along
   bool ridge = true;
   double misfit = 0;  // the points' largest height off the surface, along up (mm)
-  // How far the surface stands above x along up (negative: below).
+  // How far each plane stands above x along up (negative: below).
+  std::array<double, 2> plane_heights(const Eigen::Vector3d& x) const;
+  // How far the surface stands above x along up: the lower of the planes' for a ridge, the higher
+  // for a valley.
   double height(const Eigen::Vector3d& x) const;
   // The most it stands above (first) and below (second, positive) the triangle abc: exact, from
   // the corners and the places the crease's line crosses the edges (either side of the line the

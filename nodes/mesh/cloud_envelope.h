@@ -82,17 +82,18 @@ struct CloudEnvelope {
 //         Instead, a vertex at no point of the cloud (farther than 1e-6 mm from every one: where
 //         mesh.sharpen extrapolated local surfaces to meet at an edge or a corner; off a feature
 //         edge and within a quarter spacing of a point, as where mesh.repair collapsed a sliver,
-//         that distance bounds it both ways instead) is measured
-//         against each face of the part around it (the faces reached from its own across the other
-//         edges without leaving the points' search radius): the local surface (quadric) of that face's points nearest it (the first of 6, 12, 24 or 48 spacings
-//         holding 20; a point on the face nearest it), its height h above that surface and the
-//         fit's largest residual m give out_v >= max(0, -h) + 3 m, in_v >= max(0, h) + 3 m (the
-//         residual counts the shape the quadric misses, facets or curvature, as cloud.height_field's
-//         model does). Where a face's points make no surface (fewer than 10 within 48 spacings, or
+//         that distance bounds it both ways instead) is measured against each face of the part
+//         around it (the faces reached from its own across the other edges without leaving the
+//         points' search radius): the local surface (quadric) of that face's points nearest it
+//         (the first of 6, 12, 24 or 48 spacings holding 20; a point on the face nearest it), its
+//         height h above that surface and the fit's largest residual m give
+//         out_v >= max(0, -h) + 3 m, in_v >= max(0, h) + 3 m (the residual counts the shape the
+//         quadric misses, facets or curvature, as cloud.height_field's model does). Where a face's points make no surface (fewer than 10 within 48 spacings, or
 //         a misfit above a quarter spacing: points of two faces across an edge not flagged, or a
 //         face curved too tightly for a quadric, whose three misfits fold the outer mesh), the vertex
-//         gets the bend allowance (as without exact feature edges) instead. On the domed block's 200 000-point cloud (seed 3) the quadric over the top's
-//         1 mm facets put the corner (0, 40, 15) 0.005 mm low, while every point near it lay on the mesh.
+//         gets the bend allowance (as without exact feature edges) instead. On the domed block's
+//         200 000-point cloud (seed 3) the quadric over the top's 1 mm facets put the corner
+//         (0, 40, 15) 0.005 mm low, while every point near it lay on the mesh.
 // spread  c above (0: the largest deviation alone).
 // Throws std::invalid_argument for a mesh without faces, fewer than k points, k < 1, a non-finite
 // point, max_gap < 0, bend < 0 or spread < 0.
