@@ -135,10 +135,13 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
   out.clearance_z = top + o.safety;
   const Eigen::Vector3d lead(0, 0, o.lead_height);
   auto& mv = out.moves;
+  // Down at rapid rate to lead_height above the start, the last of it at plunge rate: the column
+  // above a start is clear (a ball dropped there first touches the part at the start), and a
+  // plunge from the clearance plane at plunge rate was 42 % of the fandisk's programs' feed length.
   auto come_down = [&](const Eigen::Vector3d& tip) {
     mv.push_back({MoveKind::Rapid, {tip.x(), tip.y(), out.clearance_z}});
-    if (tip.z() + o.lead_height < out.clearance_z) mv.push_back({MoveKind::Plunge, tip + lead});
-    mv.push_back({MoveKind::Feed, tip});
+    if (tip.z() + o.lead_height < out.clearance_z) mv.push_back({MoveKind::Rapid, tip + lead});
+    mv.push_back({MoveKind::Plunge, tip});
   };
   auto go_up = [&](const Eigen::Vector3d& tip) {
     if (tip.z() + o.lead_height < out.clearance_z) mv.push_back({MoveKind::Feed, tip + lead});

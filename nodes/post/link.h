@@ -5,7 +5,7 @@
 // closer than r − tolerance to the segment between the two ball centres (the ball never dips into
 // the surface). Otherwise the tool lifts by `lead_height`, rises to the clearance plane (the
 // highest surface point + `safety`, so rapids there never touch the part), travels, and comes
-// down: plunge at plunge rate to `lead_height` above the next start, then feed down.
+// down: at rapid rate to `lead_height` above the next start, then plunges at plunge rate.
 #pragma once
 
 #include <Eigen/Core>
@@ -20,7 +20,8 @@ namespace scallop {
 struct LinkOptions {
   double max_link = 0;     // mm; <= 0: twice the largest stepover between consecutive passes
   double safety = 5;       // mm above the highest surface point: the clearance plane
-  double lead_height = 1;  // mm above a pass start/end where plunges end and lifts begin
+  double lead_height = 1;  // mm above a pass start where rapids end and the plunge begins, and above
+                           // a pass end where the lift ends: more than the stock left on the part
   double tolerance = 0;    // mm the ball may come closer than r to the surface on a link; <= 0:
                            // max(path chord error, 0.001) (what a simulation lets pass as gouge)
   // Optional: the check that a straight link of the ball centre from a to b is clear of a whole

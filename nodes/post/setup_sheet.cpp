@@ -84,6 +84,20 @@ SetupSheet setup_sheet(const SetupPaths& programs, const std::vector<Setup>& set
           fixed(cut_length(p.path), 0) + " | " + fixed(p.path.clearance_z, 2) + " |\n";
   }
   md += "\n";
+  // How far above a pass start the rapids come down (a rapid, then the plunge): the roughing's
+  // stock must stand lower, or the rapid runs into it.
+  auto rapid_down_to = [](const LinkedPath& p) {
+    double lead = 0;
+    for (std::size_t i = 1; i < p.moves.size(); ++i)
+      if (p.moves[i].kind == MoveKind::Plunge && p.moves[i - 1].kind == MoveKind::Rapid)
+        lead = std::max(lead, p.moves[i - 1].tip.z() - p.moves[i].tip.z());
+    return lead;
+  };
+  auto rapids = [&](const LinkedPath& p) {
+    const double lead = rapid_down_to(p);
+    return "rapids at Z " + fixed(p.clearance_z, 2) +
+           (lead > 0 ? ", down to " + fixed(lead, 2) + " mm above each pass start (leave less stock than that)" : "");
+  };
   for (std::size_t k = 0; k < programs.setups.size(); ++k) {
     const SetupPath& p = programs.setups[k];
     const Setup& s = *of[k];
@@ -97,14 +111,13 @@ SetupSheet setup_sheet(const SetupPaths& programs, const std::vector<Setup>& set
             fixed(s.rotation(r, 2), 4) + " | " + fixed(s.translation[r], 3) + "]";
     if (s.patches.empty()) {
       md += ".\n- **Cuts** only what the other setups leave (rest passes, no patch of its own); " +
-            fixed(cut_length(p.path), 0) + " mm of cut; rapids at Z " + fixed(p.path.clearance_z, 2) + ".\n";
+            fixed(cut_length(p.path), 0) + " mm of cut; " + rapids(p.path) + ".\n";
     } else {
       md += ".\n- **Cuts** " + std::to_string(s.patches.size()) + " patch" + (s.patches.size() == 1 ? "" : "es") + " (";
       for (std::size_t i = 0; i < s.patches.size(); ++i) md += (i ? ", " : "") + std::to_string(s.patches[i]);
       md += "), steepest surface at " +
             fixed(std::acos(std::clamp(s.min_normal_dot, -1.0, 1.0)) * 180 / 3.14159265358979, 0) +
-            "° from the tool axis; " + fixed(cut_length(p.path), 0) + " mm of cut; rapids at Z " +
-            fixed(p.path.clearance_z, 2) + ".\n";
+            "° from the tool axis; " + fixed(cut_length(p.path), 0) + " mm of cut; " + rapids(p.path) + ".\n";
     }
     if (certificate && certificate->contains("setups"))
       for (const auto& c : (*certificate)["setups"])

@@ -13,7 +13,7 @@ namespace scallop::post_nodes {
 NodeDecl make_setup_sheet_node() {
   NodeDecl d;
   d.type = "post.setup_sheet";
-  d.version = 2;  // 2: a setup added for rest passes is named as cutting only what the others leave
+  d.version = 3;  // 2: a setup added for rest passes is named as cutting only what the others leave; 3: how far above a pass start the rapids come down
   d.description =
       "the setup sheet a machinist reads: the clampings in order, how to clamp (which direction up, which side "
       "down), work zero, the program, what it cuts, the certificate's verdict, a picture per setup (Markdown)";

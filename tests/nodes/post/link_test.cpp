@@ -36,19 +36,27 @@ int count(const LinkedPath& l, MoveKind k) {
 TEST(Link, ShortSafeLinksAreFeedMoves) {
   auto l = link_passes(zigzag(4, 1.0), flat_cloud(), {});
   EXPECT_DOUBLE_EQ(l.clearance_z, 5.0);  // highest surface point 0 + safety 5
-  // Rapid to clearance, plunge to lead height; then all passes fed; lift and rapid at the end.
-  EXPECT_EQ(count(l, MoveKind::Rapid), 2);
+  // Rapid to clearance and down to lead height, plunge to the start; then all passes fed; lift
+  // and rapid at the end.
+  EXPECT_EQ(count(l, MoveKind::Rapid), 3);
   EXPECT_EQ(count(l, MoveKind::Plunge), 1);
   ASSERT_GE(l.moves.size(), 4u);
   EXPECT_EQ(l.moves[0].kind, MoveKind::Rapid);
   EXPECT_DOUBLE_EQ(l.moves[0].tip.z(), 5.0);
-  EXPECT_EQ(l.moves[1].kind, MoveKind::Plunge);
+  EXPECT_EQ(l.moves[1].kind, MoveKind::Rapid);
   EXPECT_DOUBLE_EQ(l.moves[1].tip.z(), 1.0);  // lead height above the first tip
-  EXPECT_EQ(l.moves[2].kind, MoveKind::Feed);
+  EXPECT_EQ(l.moves[2].kind, MoveKind::Plunge);
   EXPECT_DOUBLE_EQ(l.moves[2].tip.z(), 0.0);
   EXPECT_EQ(l.moves.back().kind, MoveKind::Rapid);
   // 3 + 4 × 11 points + lift + rapid
   EXPECT_EQ(l.moves.size(), 3u + 4 * 10 + 3 + 2);
+  // A lead reaching the clearance plane: straight from it at plunge rate.
+  LinkOptions high;
+  high.lead_height = 6;
+  const auto h = link_passes(zigzag(4, 1.0), flat_cloud(), high);
+  EXPECT_EQ(count(h, MoveKind::Rapid), 2);
+  EXPECT_EQ(h.moves[1].kind, MoveKind::Plunge);
+  EXPECT_DOUBLE_EQ(h.moves[1].tip.z(), 0.0);
 }
 
 // A link across a convex dome z = 10 - 0.005 (x^2 + y^2) sampled every 2 mm: the straight move of
@@ -71,10 +79,10 @@ TEST(Link, ALinkThatDipsBetweenSparsePointsIsCaughtByTheHeightField) {
     t.passes.push_back(p);
   }
   const auto points_only = link_passes(t, cloud, {});
-  EXPECT_EQ(count(points_only, MoveKind::Rapid), 2);  // down ... up: the link is a feed move
+  EXPECT_EQ(count(points_only, MoveKind::Rapid), 3);  // over, down ... up: the link is a feed move
   const HeightFieldModel model(cloud, 20);
   const auto checked = link_passes(t, cloud, {}, &model);
-  EXPECT_EQ(count(checked, MoveKind::Rapid), 4);  // down, up, over, up
+  EXPECT_EQ(count(checked, MoveKind::Rapid), 6);  // over, down, up, over, down, up
 }
 
 TEST(Link, LinksOverABumpOrTooLongRetract) {
@@ -82,10 +90,11 @@ TEST(Link, LinksOverABumpOrTooLongRetract) {
   cloud.emplace_back(10.0, 0.5, 0.5);  // a bump between the end of pass 0 and the start of pass 1
   auto l = link_passes(zigzag(2, 1.0), cloud, {});
   EXPECT_DOUBLE_EQ(l.clearance_z, 5.5);
-  EXPECT_EQ(count(l, MoveKind::Rapid), 4);  // down, up, over, up
+  EXPECT_EQ(count(l, MoveKind::Rapid), 6);  // over, down, up, over, down, up
   EXPECT_EQ(count(l, MoveKind::Plunge), 2);
-  for (const auto& m : l.moves)
-    if (m.kind == MoveKind::Rapid) EXPECT_DOUBLE_EQ(m.tip.z(), 5.5);
+  for (std::size_t i = 0; i < l.moves.size(); ++i)
+    if (l.moves[i].kind == MoveKind::Rapid && (i + 1 == l.moves.size() || l.moves[i + 1].kind != MoveKind::Plunge))
+      EXPECT_DOUBLE_EQ(l.moves[i].tip.z(), 5.5);  // all at the clearance plane but the way down to the lead
 
   LinkOptions o;
   o.max_link = 0.5;  // shorter than the stepover
@@ -104,10 +113,10 @@ TEST(Link, AWholePartsCheckDecidesTheLinksInPlaceOfThePoints) {
   o.link_clear = [&](const Eigen::Vector3d&, const Eigen::Vector3d&) { return ++asked, true; };
   auto l = link_passes(zigzag(2, 1.0), cloud, o);
   EXPECT_EQ(asked, 1);
-  EXPECT_EQ(count(l, MoveKind::Rapid), 2);  // fed across
+  EXPECT_EQ(count(l, MoveKind::Rapid), 3);  // fed across
   EXPECT_DOUBLE_EQ(l.clearance_z, 5.5);
   o.link_clear = [](const Eigen::Vector3d&, const Eigen::Vector3d&) { return false; };
-  EXPECT_EQ(count(link_passes(zigzag(2, 1.0), flat_cloud(), o), MoveKind::Rapid), 4);
+  EXPECT_EQ(count(link_passes(zigzag(2, 1.0), flat_cloud(), o), MoveKind::Rapid), 6);
 }
 
 TEST(Link, WithoutACloudThePassesStandForTheSurface) {

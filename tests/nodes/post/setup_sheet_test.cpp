@@ -33,7 +33,10 @@ struct TwoClampings {
       p.name = s.name, p.file = "setup_" + std::to_string(setups.size()) + ".ngc";
       p.rotation = s.rotation, p.translation = s.translation;
       p.path.tool_radius = 3, p.path.scallop_height = 0.05, p.path.chord_error = 0.01, p.path.clearance_z = 25;
-      p.path.moves = {{MoveKind::Rapid, V(0, 0, 25)}, {MoveKind::Plunge, V(0, 0, 10)}, {MoveKind::Feed, V(40, 0, 10)}};
+      p.path.moves = {{MoveKind::Rapid, V(0, 0, 25)},
+                      {MoveKind::Rapid, V(0, 0, 11)},
+                      {MoveKind::Plunge, V(0, 0, 10)},
+                      {MoveKind::Feed, V(40, 0, 10)}};
     }
   }
 };
@@ -52,7 +55,8 @@ TEST(SetupSheet, SaysHowToClampEachSetupWithAPictureAndTheVerdict) {
   for (const char* line :
        {"Tool: ball-end mill, radius 3.000 mm (diameter 6.000 mm)",
         "**Certificate: FAIL — do not cut.** interior scallop max 0.06 > 1.01 H.",
-        "| 1 | `setup_1.ngc` | +z | 1 | 3 | 55 | 25.00 |", "| 2 | `setup_2.ngc` | +x | 1 | 3 | 55 | 25.00 |",
+        "| 1 | `setup_1.ngc` | +z | 1 | 4 | 41 | 25.00 |", "| 2 | `setup_2.ngc` | +x | 1 | 4 | 41 | 25.00 |",
+        "mm of cut; rapids at Z 25.00, down to 1.00 mm above each pass start (leave less stock than that).",
         "turn the part so that its direction +z points up at the spindle; the side facing -z rests on the table or "
         "fixture (the part as it stands).",
         "turn the part so that its direction +x points up at the spindle; the side facing -x rests on the table or "
