@@ -90,6 +90,9 @@ def measure(a):
           "uncut %.3g, %d samples over, %d cut" % ("pass" if report["pass"] else "fail", 100 * report["frac_over_limit"],
                                                   100 * report["frac_over_limit_interior"], report["scallop_p99_interior"],
                                                   report["gouge_max"], report["uncut_fraction"], over.sum(), cut.sum()))
+    print("judge: cut %.1f m, rapids %.1f m (least clearance %.4f mm, %d through the part)%s" % (
+        report["cut_length"] / 1000, report["rapid_length"] / 1000, report["rapid_min_clearance"],
+        report["rapids_through_part"], "; " + "; ".join(report["fail_reasons"]) if report["fail_reasons"] else ""))
     if not over.any():
         return
     print("%-44s %-26s %-26s" % ("median p90 p99 (mm)", "over 1.01 h", "cut samples"))
