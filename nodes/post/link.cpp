@@ -88,7 +88,7 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
   // points under a link in xy were a tenth of the block's programs node.
   std::unique_ptr<XY> adaptor;
   std::unique_ptr<Tree> tree;
-  if (!o.link_clear) {
+  if (!o.link_clear || !o.drop) {
     adaptor = std::make_unique<XY>(XY{surface});
     tree = std::make_unique<Tree>(2, *adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
     tree->buildIndex();
@@ -133,18 +133,35 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
   out.scallop_height = path.scallop_height;
   out.chord_error = path.chord_error;
   out.clearance_z = top + o.safety;
-  const Eigen::Vector3d lead(0, 0, o.lead_height);
   auto& mv = out.moves;
-  // Down at rapid rate to lead_height above the start, the last of it at plunge rate: the column
-  // above a start is clear (a ball dropped there first touches the part at the start), and a
-  // plunge from the clearance plane at plunge rate was 42 % of the fandisk's programs' feed length.
+  // The tip's height above a pass start or end where the rapids stop: where a ball of
+  // r + lead_height coming down that column first touches the part (a ball of r there keeps
+  // lead_height off it), at least lead_height above the tip. A rapid down beside a wall would
+  // otherwise graze it, and a finish's stock on it.
+  auto rapid_stop = [&](const Eigen::Vector3d& tip) {
+    const double R = r + o.lead_height;
+    const Eigen::Vector3d high(tip.x(), tip.y(), out.clearance_z + r);
+    double centre_z = -INFINITY;
+    if (o.drop) {
+      centre_z = high.z() - o.drop(high, R, std::max(0.0, out.clearance_z - tip.z()));
+    } else {
+      std::vector<std::pair<std::uint32_t, double>> hits;
+      tree->radiusSearch(high.data(), R * R, hits, nanoflann::SearchParams(32, 0, false));
+      for (const auto& [i, d2] : hits) centre_z = std::max(centre_z, surface[i].z() + std::sqrt(R * R - d2));
+    }
+    return std::min(out.clearance_z, std::max(tip.z() + o.lead_height, centre_z - r));
+  };
+  // Down at rapid rate to there, the rest at plunge rate (a plunge from the clearance plane was
+  // 42 % of the fandisk's programs' feed length); up at feed rate to there, then the rapid.
   auto come_down = [&](const Eigen::Vector3d& tip) {
     mv.push_back({MoveKind::Rapid, {tip.x(), tip.y(), out.clearance_z}});
-    if (tip.z() + o.lead_height < out.clearance_z) mv.push_back({MoveKind::Rapid, tip + lead});
+    const double stop = rapid_stop(tip);
+    if (stop < out.clearance_z) mv.push_back({MoveKind::Rapid, {tip.x(), tip.y(), stop}});
     mv.push_back({MoveKind::Plunge, tip});
   };
   auto go_up = [&](const Eigen::Vector3d& tip) {
-    if (tip.z() + o.lead_height < out.clearance_z) mv.push_back({MoveKind::Feed, tip + lead});
+    const double stop = rapid_stop(tip);
+    if (stop < out.clearance_z) mv.push_back({MoveKind::Feed, {tip.x(), tip.y(), stop}});
     mv.push_back({MoveKind::Rapid, {tip.x(), tip.y(), out.clearance_z}});
   };
 

@@ -5,7 +5,10 @@
 // closer than r − tolerance to the segment between the two ball centres (the ball never dips into
 // the surface). Otherwise the tool lifts by `lead_height`, rises to the clearance plane (the
 // highest surface point + `safety`, so rapids there never touch the part), travels, and comes
-// down: at rapid rate to `lead_height` above the next start, then plunges at plunge rate.
+// down: at rapid rate to where a ball of r + `lead_height` coming down that column would touch the
+// part (at least `lead_height` above the next start: higher on a slope or beside a wall), then
+// plunges at plunge rate. Lifts feed up to that height above a pass end before the rapid: rapids
+// keep `lead_height` off the part.
 #pragma once
 
 #include <Eigen/Core>
@@ -20,14 +23,18 @@ namespace scallop {
 struct LinkOptions {
   double max_link = 0;     // mm; <= 0: twice the largest stepover between consecutive passes
   double safety = 5;       // mm above the highest surface point: the clearance plane
-  double lead_height = 1;  // mm above a pass start where rapids end and the plunge begins, and above
-                           // a pass end where the lift ends: more than the stock left on the part
+  double lead_height = 1;  // mm the rapids keep off the part (more than the stock left on it): at
+                           // least this above a pass start and end
   double tolerance = 0;    // mm the ball may come closer than r to the surface on a link; <= 0:
                            // max(path chord error, 0.001) (what a simulation lets pass as gouge)
   // Optional: the check that a straight link of the ball centre from a to b is clear of a whole
   // part (its mesh, post.setup_programs), in place of the surface points' (which miss a dip
   // between them): it must hold them, i.e. refuse a link any of them is nearer than r - tolerance to.
   std::function<bool(const Eigen::Vector3d& a, const Eigen::Vector3d& b)> link_clear;
+  // Optional: how far a ball of `radius` centred at c moves down (-z) before it touches the part,
+  // at most `max` (MeshDistance::touch_along), in place of the surface points' (where the rapids
+  // down to a pass start stop).
+  std::function<double(const Eigen::Vector3d& c, double radius, double max)> drop;
 };
 
 // surface  #S by 3 points of the surface (the cloud); when empty the passes' own contact points

@@ -10,7 +10,7 @@ namespace scallop::post_nodes {
 NodeDecl make_link_node() {
   NodeDecl d;
   d.type = "post.link";
-  d.version = 7;  // 7: down at rapid rate to lead_height above a start, then the plunge (was a plunge from the clearance plane); 2: fails where the passes rise more than 10 r + the part's height range above it; 4: the height field's uncertainty counts its fit's misfit; 5: the moves stored without their padding bytes; 6: the height field solved by a fixed-size Cholesky
+  d.version = 8;  // 7: down at rapid rate to lead_height above a start, then the plunge (was a plunge from the clearance plane); 8: the rapids stop where a ball of r + lead_height would touch the part; 2: fails where the passes rise more than 10 r + the part's height range above it; 4: the height field's uncertainty counts its fit's misfit; 5: the moves stored without their padding bytes; 6: the height field solved by a fixed-size Cholesky
                   // 3: links checked against the cloud's height field too
   d.description = "joins passes in order: short feed links where the ball stays above the surface, else retract to a clearance plane";
   d.input("path", "Toolpath", "the passes, in cutting order")
@@ -21,7 +21,7 @@ NodeDecl make_link_node() {
               "longest direct feed link; 0: twice the largest stepover")
       .number("safety", &LinkOptions::safety, 0, 1e4, "mm", "clearance plane height above the highest surface point")
       .number("lead_height", &LinkOptions::lead_height, 0, 1e3, "mm",
-              "height above a pass start where the rapid down stops and the plunge starts (more than the stock left), and above a pass end where the lift stops")
+              "how far the rapids keep off the part (more than the stock left): they stop where a ball of r + this coming down would touch it, at least this above a pass start or end")
       .number("tolerance", &LinkOptions::tolerance, 0, 10, "mm",
               "how much closer than r a link may bring the ball to the surface; 0: max(chord error, 0.001)");
   d.run = [](NodeContext& ctx) {

@@ -160,6 +160,9 @@ std::vector<SetupProgram> setup_programs(const Toolpath& path, const std::vector
       linking.link_clear = [&distance, r, tolerance](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
         return distance.clear_along(a, b, r / 4, r - tolerance);
       };
+      linking.drop = [&distance](const Eigen::Vector3d& c, double radius, double max) {
+        return distance.touch_along(c, Eigen::Vector3d(0, 0, -1), radius, max);
+      };
     }
     const LinkedPath linked = link_passes(local, placed, linking);
     prog.name = s.name;

@@ -84,19 +84,21 @@ SetupSheet setup_sheet(const SetupPaths& programs, const std::vector<Setup>& set
           fixed(cut_length(p.path), 0) + " | " + fixed(p.path.clearance_z, 2) + " |\n";
   }
   md += "\n";
-  // How far above a pass start the rapids come down (a rapid, then the plunge): the roughing's
-  // stock must stand lower, or the rapid runs into it.
+  // How near above a pass start the rapids come down (a rapid, then the plunge; post.link keeps
+  // them that far off the part): the roughing's stock must stand lower, or a rapid runs into it.
   auto rapid_down_to = [](const LinkedPath& p) {
-    double lead = 0;
+    double lead = INFINITY;
     for (std::size_t i = 1; i < p.moves.size(); ++i)
       if (p.moves[i].kind == MoveKind::Plunge && p.moves[i - 1].kind == MoveKind::Rapid)
-        lead = std::max(lead, p.moves[i - 1].tip.z() - p.moves[i].tip.z());
+        lead = std::min(lead, p.moves[i - 1].tip.z() - p.moves[i].tip.z());
     return lead;
   };
   auto rapids = [&](const LinkedPath& p) {
     const double lead = rapid_down_to(p);
     return "rapids at Z " + fixed(p.clearance_z, 2) +
-           (lead > 0 ? ", down to " + fixed(lead, 2) + " mm above each pass start (leave less stock than that)" : "");
+           (std::isfinite(lead) ? ", stopping at least " + fixed(lead, 2) +
+                                      " mm above each pass start (leave less stock than that)"
+                                : "");
   };
   for (std::size_t k = 0; k < programs.setups.size(); ++k) {
     const SetupPath& p = programs.setups[k];

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace scallop {
 namespace {
 
@@ -20,6 +22,64 @@ Toolpath zigzag(int passes, double s, double length = 10) {
     t.passes.push_back(p);
   }
   return t;
+}
+
+// One pass along y from `start`, on a surface of normal n there (r = 2).
+Toolpath pass_from(const Eigen::Vector3d& start, const Eigen::Vector3d& n) {
+  Toolpath t;
+  t.tool_radius = 2;
+  t.chord_error = 0.002;
+  ToolpathPass p;
+  for (int i = 0; i <= 4; ++i) p.contact.push_back(start + Eigen::Vector3d(0, i, 0)), p.normal.push_back(n.normalized());
+  t.passes.push_back(p);
+  return t;
+}
+
+// The rapids keep lead_height off the part: they stop where a ball of r + lead_height coming down
+// would touch it. On a plane sloped at 30 degrees that is lead_height / cos 30 above the start's
+// tip; beside a wall 10 high, a ball touching its foot stops sqrt((r + lead)^2 - r^2) - r above
+// the wall's top (the wall's edge within r + lead of the column), not 1 mm above the floor, where
+// it would graze the wall.
+TEST(Link, TheRapidsDownStopWhereABallOfRPlusTheLeadWouldTouchThePart) {
+  const double r = 2, lead = 1, slope = M_PI / 6;
+  std::vector<Eigen::Vector3d> plane;
+  for (double x = -10; x <= 10; x += 0.02)
+    for (double y = -6; y <= 10; y += 0.5) plane.emplace_back(x, y, x * std::tan(slope));
+  const Eigen::Vector3d n(-std::sin(slope), 0, std::cos(slope));
+  const Toolpath on_slope = pass_from(Eigen::Vector3d(0, 0, 0), n);
+  const auto l = link_passes(on_slope, plane, {});
+  ASSERT_GE(l.moves.size(), 3u);
+  ASSERT_EQ(l.moves[1].kind, MoveKind::Rapid);
+  ASSERT_EQ(l.moves[2].kind, MoveKind::Plunge);
+  const Eigen::Vector3d tip = on_slope.tip(on_slope.passes[0].contact[0], on_slope.passes[0].normal[0]);
+  EXPECT_NEAR(l.moves[1].tip.z() - tip.z(), lead / std::cos(slope), 1e-4);
+  EXPECT_DOUBLE_EQ(l.moves[2].tip.z(), tip.z());
+  // Up from the pass's end: fed to the same height over it, then the rapid.
+  const auto& up = l.moves[l.moves.size() - 2];
+  EXPECT_EQ(up.kind, MoveKind::Feed);
+  EXPECT_NEAR(up.tip.z() - l.moves[l.moves.size() - 3].tip.z(), lead / std::cos(slope), 1e-4);
+
+  std::vector<Eigen::Vector3d> floor_and_wall;
+  for (int i = -200; i <= 300; ++i)  // x = i / 20: the wall's top edge a point at x = 5
+    for (double y = -6; y <= 10; y += 0.5) floor_and_wall.emplace_back(i / 20.0, y, i < 100 ? 0 : 10);
+  for (int k = 0; k <= 200; ++k)
+    for (double y = -6; y <= 10; y += 0.5) floor_and_wall.emplace_back(5, y, k / 20.0);
+  const auto w = link_passes(pass_from(Eigen::Vector3d(5 - r, 0, 0), Eigen::Vector3d(0, 0, 1)), floor_and_wall, {});
+  ASSERT_EQ(w.moves[1].kind, MoveKind::Rapid);
+  EXPECT_NEAR(w.moves[1].tip.z(), 10 + std::sqrt((r + lead) * (r + lead) - r * r) - r, 1e-9);
+  // Away from the wall, 1 mm over the floor.
+  const auto away = link_passes(pass_from(Eigen::Vector3d(-5, 0, 0), Eigen::Vector3d(0, 0, 1)), floor_and_wall, {});
+  EXPECT_NEAR(away.moves[1].tip.z(), lead, 1e-9);
+  // A whole part's drop, where given, decides in place of the points: a ball of r + lead coming
+  // down from r above the clearance plane that stops after 3 mm.
+  LinkOptions o;
+  o.drop = [&](const Eigen::Vector3d& c, double radius, double) {
+    EXPECT_DOUBLE_EQ(radius, r + lead);
+    EXPECT_DOUBLE_EQ(c.z(), away.clearance_z + r);
+    return 3.0;
+  };
+  const auto dropped = link_passes(pass_from(Eigen::Vector3d(-5, 0, 0), Eigen::Vector3d(0, 0, 1)), floor_and_wall, o);
+  EXPECT_NEAR(dropped.moves[1].tip.z(), away.clearance_z - 3, 1e-9);
 }
 
 std::vector<Eigen::Vector3d> flat_cloud() {

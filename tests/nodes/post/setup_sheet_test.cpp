@@ -56,7 +56,7 @@ TEST(SetupSheet, SaysHowToClampEachSetupWithAPictureAndTheVerdict) {
        {"Tool: ball-end mill, radius 3.000 mm (diameter 6.000 mm)",
         "**Certificate: FAIL — do not cut.** interior scallop max 0.06 > 1.01 H.",
         "| 1 | `setup_1.ngc` | +z | 1 | 4 | 41 | 25.00 |", "| 2 | `setup_2.ngc` | +x | 1 | 4 | 41 | 25.00 |",
-        "mm of cut; rapids at Z 25.00, down to 1.00 mm above each pass start (leave less stock than that).",
+        "mm of cut; rapids at Z 25.00, stopping at least 1.00 mm above each pass start (leave less stock than that).",
         "turn the part so that its direction +z points up at the spindle; the side facing -z rests on the table or "
         "fixture (the part as it stands).",
         "turn the part so that its direction +x points up at the spindle; the side facing -x rests on the table or "
