@@ -13,6 +13,7 @@
 #include <nanoflann.hpp>
 #include <numeric>
 #include <stdexcept>
+#include "nodes/geom/kd_tree.h"
 #include "nodes/post/centre_index.h"
 
 namespace scallop {
@@ -40,17 +41,54 @@ std::vector<CentreSegment> feed_centres(const Toolpath& path) {
   return out;
 }
 
-std::vector<CentreSegment> feed_centres(const LinkedPath& path, double& rapid_length) {
+std::vector<CentreSegment> feed_centres(const LinkedPath& path, double& rapid_length,
+                                        std::vector<CentreSegment>* rapids) {
   std::vector<CentreSegment> out;
   rapid_length = 0;
+  if (rapids) rapids->clear();
   const Eigen::Vector3d up(0, 0, path.tool_radius);
   for (std::size_t i = 1; i < path.moves.size(); ++i) {
     const auto& m0 = path.moves[i - 1];
     const auto& m1 = path.moves[i];
-    if (m1.kind == MoveKind::Rapid)
+    if (m1.kind == MoveKind::Rapid) {
       rapid_length += (m1.tip - m0.tip).norm();
-    else
+      if (rapids) rapids->push_back({m0.tip + up, m1.tip + up});
+    } else {
       out.push_back({m0.tip + up, m1.tip + up});
+    }
+  }
+  return out;
+}
+
+RapidClearance rapid_clearance(const std::vector<Eigen::Vector3d>& points, const std::vector<double>* uncertainty,
+                               const std::vector<CentreSegment>& rapids, double r, double tol) {
+  if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
+  if (!(tol > 0)) throw std::invalid_argument("the rapids' tolerance must be > 0");
+  if (points.empty()) throw std::invalid_argument("no points to check the rapids against");
+  std::vector<Eigen::Vector3d> raised = points;
+  if (uncertainty && uncertainty->size() == points.size())
+    for (std::size_t i = 0; i < raised.size(); ++i) raised[i].z() += (*uncertainty)[i];
+  const PointsAdaptor<Eigen::Vector3d> adaptor{raised};
+  KdTree<Eigen::Vector3d, 3> tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  RapidClearance out;
+  for (const CentreSegment& s : rapids) {
+    if (!s.a.allFinite() || !s.b.allFinite()) throw std::invalid_argument("a rapid has a non-finite point");
+    const double L = (s.b - s.a).norm();
+    double least = INFINITY, t = 0;
+    Eigen::Vector3d least_at = s.a;
+    for (;;) {
+      const Eigen::Vector3d c = L > 0 ? Eigen::Vector3d(s.a + (s.b - s.a) * (t / L)) : s.a;
+      std::uint32_t nearest;
+      double d2;
+      tree.knnSearch(c.data(), 1, &nearest, &d2);
+      const double clear = std::sqrt(d2) - r;
+      if (clear < least) least = clear, least_at = c;
+      if (t >= L) break;
+      t = std::min(L, t + std::max(std::abs(clear), 0.5 * tol));
+    }
+    if (least < -tol) ++out.through;
+    if (least < out.least) out.least = least, out.at = least_at;
   }
   return out;
 }

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -33,8 +34,24 @@ namespace scallop {
 // Ball centres of a planned path: consecutive contact points of each pass, c + r·n.
 std::vector<CentreSegment> feed_centres(const Toolpath& path);
 // Ball centres (tip + r·ẑ) of the feed and plunge moves of a linked path; rapid_length gets the
-// total length of its rapid moves.
-std::vector<CentreSegment> feed_centres(const LinkedPath& path, double& rapid_length);
+// total length of its rapid moves, and `rapids`, when given, their ball centres.
+std::vector<CentreSegment> feed_centres(const LinkedPath& path, double& rapid_length,
+                                        std::vector<CentreSegment>* rapids = nullptr);
+
+// How near the rapids' balls of radius r come to the cloud's points, each raised by its
+// uncertainty (the real surface may stand that high): the least distance less r along every
+// rapid, marched by that distance itself (it cannot fall faster than the centre moves), to
+// within tol / 2; a rapid whose least is below -tol goes through the surface. verify.py's check,
+// against the points (between them a surface bulges by about spacing² / (8 × its radius)).
+struct RapidClearance {
+  double least = INFINITY;  // mm; +infinity without rapids
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();  // the ball centre there
+  std::size_t through = 0;  // rapids below -tol
+};
+// points  #P by 3; uncertainty  null or #P (mm). Throws std::invalid_argument for r <= 0,
+// tol <= 0, no points, or a non-finite centre.
+RapidClearance rapid_clearance(const std::vector<Eigen::Vector3d>& points, const std::vector<double>* uncertainty,
+                               const std::vector<CentreSegment>& rapids, double r, double tol);
 
 struct SimulateOptions {
   double tool_radius = 0;   // r (mm)

@@ -1,3 +1,6 @@
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "engine/node.h"
@@ -11,7 +14,7 @@ namespace scallop::post_nodes {
 NodeDecl make_simulate_node() {
   NodeDecl d;
   d.type = "post.simulate";
-  d.version = 8;  // 3: scallop and gouge are bounds that include the cloud's uncertainty; 7: and the height field's misfit; 8: the height field solved by a fixed-size Cholesky (the same to rounding)
+  d.version = 9;  // 9: the rapids checked against the cloud (rapid_min_clearance, rapids_through_part); 3: scallop and gouge are bounds that include the cloud's uncertainty; 7: and the height field's misfit; 8: the height field solved by a fixed-size Cholesky (the same to rounding)
                   // 4: the uncertainty grows at gaps beyond the cloud's edge
                   // 5: pass asks the whole patch, rim included, not the interior only
                   // 6: outputs the simulation (post.render draws it), no heat map of its own
@@ -22,7 +25,7 @@ NodeDecl make_simulate_node() {
       .input("loops", "Loops", "the patch's boundary loops (outer first, then holes; indices into 'cloud'): "
              "the patch is what lies inside them in xy, and the margin is measured from them; "
              "absent: the outline is guessed from the cloud", false)
-      .output("report", "Report", "scallop/gouge/uncut statistics (whole patch, rim included, and interior), pass (the whole patch within the limits) and fail reasons, the 10 worst places")
+      .output("report", "Report", "scallop/gouge/uncut statistics (whole patch, rim included, and interior), with a linked path the rapids' least clearance from the cloud (rapid_min_clearance, rapids_through_part), pass (the whole patch within the limits, no rapid through it) and fail reasons, the 10 worst places")
       .output("simulation", "Simulation",
               "what the path left at every surface sample and the limits judged against, for "
               "pictures (post.render, view 'scallop')")
@@ -39,7 +42,7 @@ NodeDecl make_simulate_node() {
     if (ctx.has_input("path") == ctx.has_input("linked"))
       throw NodeError("give exactly one of the inputs 'path' and 'linked'");
     auto cloud = ctx.input<PointCloud>("cloud");
-    std::vector<CentreSegment> feed;
+    std::vector<CentreSegment> feed, rapids;
     double rapid = 0, r, h, e;
     if (ctx.has_input("path")) {
       auto p = ctx.input<Toolpath>("path");
@@ -47,7 +50,7 @@ NodeDecl make_simulate_node() {
       r = p->tool_radius, h = p->scallop_height, e = p->chord_error;
     } else {
       auto p = ctx.input<LinkedPath>("linked");
-      feed = feed_centres(*p, rapid);
+      feed = feed_centres(*p, rapid, &rapids);
       r = p->tool_radius, h = p->scallop_height, e = p->chord_error;
     }
     SimulateOptions o = ctx.options<SimulateOptions>();
@@ -58,6 +61,23 @@ NodeDecl make_simulate_node() {
       if (ctx.has_input("loops")) o.loops = loop_polygons_xy(*ctx.input<BoundaryLoops>("loops"), cloud->points);
       HeightFieldModel surf(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
       Simulation sim = simulate_cut(surf, feed, rapid, o, [&](double f) { ctx.progress(f, "simulating"); });
+      if (ctx.has_input("linked")) {
+        // The rapids come down to a ball of r + lead_height above the part (post.link): checked,
+        // as verify.py checks them, against the cloud's points raised by their uncertainty.
+        const double tol = std::max(o.chord, 1e-3);
+        const RapidClearance rc = rapid_clearance(cloud->points, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr,
+                                                  rapids, r, tol);
+        nlohmann::json& j = sim.report;
+        j["rapid_min_clearance"] = std::isfinite(rc.least) ? nlohmann::json(rc.least) : nlohmann::json();
+        j["rapids_through_part"] = rc.through;
+        if (rc.through > 0) {
+          char buf[200];
+          std::snprintf(buf, sizeof buf, "%zu rapids pass through the surface (least clearance %.4g mm at (%.3f, %.3f, %.3f))",
+                        rc.through, rc.least, rc.at.x(), rc.at.y(), rc.at.z());
+          j["fail_reasons"].push_back(buf);
+          j["pass"] = false;
+        }
+      }
       Report rep;
       rep.data = sim.report;
       ctx.set("report", std::move(rep));

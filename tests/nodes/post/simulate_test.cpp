@@ -2,8 +2,16 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <random>
+
+#include "engine/node.h"
+#include "nodes/all_nodes.h"
+#include "nodes/types/cloud.h"
+#include "nodes/types/document.h"
+#include "tests/test_support.h"
 
 namespace scallop {
 namespace {
@@ -235,6 +243,77 @@ TEST(Simulate, LinkedPathCentresAndRapids) {
   ASSERT_EQ(segs.size(), 2u);
   EXPECT_NEAR(rapid, 13, 1e-12);
   EXPECT_NEAR((segs[1].a - Eigen::Vector3d(0, 0, 3)).norm(), 0, 1e-12);
+}
+
+// The rapids against the points: a plane z = 0 sampled every 0.1 mm, r = 2. A rapid whose ball
+// stays 1 mm over it has clearance 1; one coming down to 0.01 mm into it goes through (tol
+// 0.005), with the least where it ends; points raised by their uncertainty 0.3 take 0.3 off.
+TEST(Simulate, TheRapidsAreCheckedAgainstThePointsRaisedByTheirUncertainty) {
+  std::vector<Eigen::Vector3d> plane;
+  for (int i = 0; i <= 100; ++i)
+    for (int j = 0; j <= 100; ++j) plane.emplace_back(i * 0.1, j * 0.1, 0);
+  const double r = 2;
+  const CentreSegment over{{1, 1, r + 1}, {9, 9, r + 1}}, down{{5, 5, 20}, {5, 5, r - 0.01}};
+  RapidClearance c = rapid_clearance(plane, nullptr, {over}, r, 0.005);
+  EXPECT_NEAR(c.least, 1, 1e-12);
+  EXPECT_EQ(c.through, 0u);
+  c = rapid_clearance(plane, nullptr, {over, down}, r, 0.005);
+  EXPECT_NEAR(c.least, -0.01, 1e-12);
+  EXPECT_NEAR((c.at - down.b).norm(), 0, 1e-12);
+  EXPECT_EQ(c.through, 1u);
+  const std::vector<double> u(plane.size(), 0.3);
+  EXPECT_NEAR(rapid_clearance(plane, &u, {over}, r, 0.005).least, 0.7, 1e-12);
+  EXPECT_TRUE(std::isinf(rapid_clearance(plane, nullptr, {}, r, 0.005).least));
+  EXPECT_THROW(rapid_clearance({}, nullptr, {over}, r, 0.005), std::invalid_argument);
+  // The linked path's rapids are its rapid moves' ball centres.
+  LinkedPath p;
+  p.tool_radius = r;
+  p.moves = {{MoveKind::Rapid, {5, 5, 20}}, {MoveKind::Rapid, {5, 5, 1}}, {MoveKind::Plunge, {5, 5, 0}},
+             {MoveKind::Feed, {6, 5, 0}}, {MoveKind::Feed, {6, 5, 1}}, {MoveKind::Rapid, {6, 5, 20}}};
+  double length = 0;
+  std::vector<CentreSegment> rapids;
+  feed_centres(p, length, &rapids);
+  ASSERT_EQ(rapids.size(), 2u);
+  EXPECT_NEAR((rapids[0].a - Eigen::Vector3d(5, 5, 22)).norm(), 0, 1e-12);
+  EXPECT_NEAR((rapids[0].b - Eigen::Vector3d(5, 5, 3)).norm(), 0, 1e-12);
+  EXPECT_NEAR(rapid_clearance(plane, nullptr, rapids, r, 0.005).least, 1, 1e-12);
+}
+
+// The node's certificate counts the rapids: a linked raster over the plane z = 0 whose one way
+// down ends 0.01 mm into it fails with where; the same path coming down to 1 mm over it reports
+// that clearance and no such reason.
+TEST(SimulateNode, ARapidThroughTheSurfaceFailsTheCertificate) {
+  const NodeDecl& simulate = *builtin_registry().find("post.simulate");
+  auto cloud = std::make_shared<PointCloud>();
+  for (int i = 0; i <= 100; ++i)
+    for (int j = 0; j <= 100; ++j) cloud->points.emplace_back(i * 0.1, j * 0.1, 0);
+  auto linked = [](double down_to) {
+    auto p = std::make_shared<LinkedPath>();
+    p->tool_radius = 2, p->scallop_height = 0.05, p->chord_error = 0.005, p->clearance_z = 10;
+    p->moves = {{MoveKind::Rapid, {0, 0, 10}}, {MoveKind::Rapid, {0, 0, down_to}}, {MoveKind::Plunge, {0, 0, 0}}};
+    for (int j = 0; j <= 10; ++j) {
+      p->moves.push_back({MoveKind::Feed, {j % 2 ? 10.0 : 0.0, j * 1.0, 0}});
+      p->moves.push_back({MoveKind::Feed, {j % 2 ? 0.0 : 10.0, j * 1.0, 0}});
+    }
+    p->moves.push_back({MoveKind::Feed, {0, 10, 1}});
+    p->moves.push_back({MoveKind::Rapid, {0, 10, 10}});
+    return p;
+  };
+  auto report = [&](double down_to) {
+    const auto out = test::run_node(simulate, {}, {{"linked", linked(down_to)}, {"cloud", cloud}});
+    return std::dynamic_pointer_cast<const Report>(out.at("report"))->data;
+  };
+  const nlohmann::json through = report(-0.01);
+  EXPECT_EQ(through["rapids_through_part"], 1);
+  EXPECT_NEAR(through["rapid_min_clearance"].get<double>(), -0.01, 1e-12);
+  EXPECT_FALSE(through["pass"].get<bool>());
+  const std::string reason = "1 rapids pass through the surface (least clearance -0.01 mm at (0.000, 0.000, 1.990))";
+  EXPECT_NE(std::find(through["fail_reasons"].begin(), through["fail_reasons"].end(), reason), through["fail_reasons"].end())
+      << through["fail_reasons"];
+  const nlohmann::json clear = report(1);
+  EXPECT_EQ(clear["rapids_through_part"], 0);
+  EXPECT_NEAR(clear["rapid_min_clearance"].get<double>(), 1, 1e-12);
+  for (const auto& f : clear["fail_reasons"]) EXPECT_EQ(f.get<std::string>().find("rapids"), std::string::npos) << f;
 }
 
 // A sparse flat patch z = 5 over [0, 40] × [0, 30] (cloud spacing 2.5 mm) and its outline
