@@ -9,7 +9,10 @@ feed move is sampled every --step mm (0.2), the ball centres mapped back to the 
 (tip + R z, then R^T (m - t)), and each centre's distance to MESH (times SCALE) less R printed as
 percentiles, per setup and in all: about 0 where the ball touches the mesh, the stock left under
 it where it stands off. --cylinder keeps the centres whose distance from the vertical axis through
-(CX, CY) lies in [R0, R1] and whose z lies in [Z0, Z1] (a boss's side). --into TOL also lists,
+(CX, CY) lies in [R0, R1] and whose z lies in [Z0, Z1] (a boss's side). --rapids samples the rapid
+moves (G0, from where the program's position is known) instead of the feed moves: how near the
+rapids come to the mesh, unsigned (a rapid that starts above the part and never comes nearer than
+R has not entered it). --into TOL also lists,
 per setup, the centres nearer MESH than R - TOL (a ball into the part: a gouge), gathered within
 1 mm of each other, each group's count and deepest centre in the part's frame. Needs ../shared/tools
 (mesh3d.py) beside the repository.
@@ -24,6 +27,7 @@ ap = argparse.ArgumentParser()
 ap.add_argument("mesh"); ap.add_argument("scale", type=float); ap.add_argument("out"); ap.add_argument("r", type=float)
 ap.add_argument("--cylinder"); ap.add_argument("--step", type=float, default=0.2)
 ap.add_argument("--into", type=float)
+ap.add_argument("--rapids", action="store_true")
 a = ap.parse_args()
 
 V, F, _ = mesh3d.load_mesh(a.mesh, a.scale)
@@ -32,13 +36,13 @@ keep = [float(x) for x in a.cylinder.split(",")] if a.cylinder else None
 every = []
 for setup in json.load(open(os.path.join(a.out, "setups.json")))["setups"]:
     M = np.array(setup["part_to_machine"]); R, t = M[:, :3], M[:, 3]
-    pos, centres = np.zeros(3), []
+    pos, centres = np.full(3, np.nan), []  # unknown until the program sets it
     for line in open(os.path.join(a.out, setup["gcode"])):
         words = line.split()
         if not words or words[0] not in ("G0", "G1"): continue
         new = pos.copy()
         for ax, val in re.findall(r"([XYZ])(-?[\d.]+)", line): new["XYZ".index(ax)] = float(val)
-        if words[0] == "G1":
+        if words[0] == ("G0" if a.rapids else "G1") and not np.isnan(pos).any():
             n = max(1, int(np.ceil(np.linalg.norm(new - pos) / a.step)))
             centres += [pos + s * (new - pos) for s in np.linspace(0, 1, n + 1)]
         pos = new
@@ -61,8 +65,9 @@ for setup in json.load(open(os.path.join(a.out, "setups.json")))["setups"]:
             else: groups.append([1, -d[i], P[i]])
         for count, depth, c in groups:
             print("  %s: %d centres up to %.4f mm into the mesh near (%.2f, %.2f, %.2f)" % (setup["name"], count, depth, *c))
-    print("%s: %d centres, standoff p1 / p10 / p50 / p90 / p99 %s mm" % (setup["name"], len(d), " / ".join("%.4f" % x for x in np.percentile(d, [1, 10, 50, 90, 99]))))
+    print("%s: %d centres, standoff least %.4f, p1 / p10 / p50 / p90 / p99 %s mm" % (
+        setup["name"], len(d), d.min(), " / ".join("%.4f" % x for x in np.percentile(d, [1, 10, 50, 90, 99]))))
 if every:
     d = np.concatenate(every)
-    print("all: %d centres, standoff p1 / p10 / p50 / p90 / p99 %s mm; more than 0.01 mm off: %.1f %%, 0.02: %.1f %%" % (
-        len(d), " / ".join("%.4f" % x for x in np.percentile(d, [1, 10, 50, 90, 99])), 100 * (d > 0.01).mean(), 100 * (d > 0.02).mean()))
+    print("all: %d centres, standoff least %.4f, p1 / p10 / p50 / p90 / p99 %s mm; more than 0.01 mm off: %.1f %%, 0.02: %.1f %%" % (
+        len(d), d.min(), " / ".join("%.4f" % x for x in np.percentile(d, [1, 10, 50, 90, 99])), 100 * (d > 0.01).mean(), 100 * (d > 0.02).mean()))
