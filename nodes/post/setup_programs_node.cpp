@@ -19,7 +19,7 @@ namespace scallop::post_nodes {
 namespace {
 struct SetupProgramsOptions {
   std::string dialect = "linuxcnc";
-  double feed = 1000, plunge_feed = 300, spindle_rpm = 10000;
+  double feed = 1000, plunge_feed = 300, spindle_rpm = 10000, lead_height = 1;
   double safety = 5;
   int rest_rounds = 3;
   int rest_setups = 2;
@@ -74,6 +74,9 @@ NodeDecl make_setup_programs_node() {
       .number("spindle_rpm", &SetupProgramsOptions::spindle_rpm, 0, 1e6, "rpm", "spindle speed; 0: no spindle words")
       .number("safety", &SetupProgramsOptions::safety, 0, 1e3, "mm",
               "clearance plane height above the part's highest point in each setup")
+      .number("lead_height", &SetupProgramsOptions::lead_height, 0, 1e3, "mm",
+              "how far the rapids keep off the part, more than the stock left on it: they stop where a ball of r + "
+              "this coming down would touch it, at least this above a pass start, and the tool plunges from there")
       .integer("rest_rounds", &SetupProgramsOptions::rest_rounds, 0, 10, "",
                "rounds of rest passes: what every setup's passes leave over the scallop limit is found on the part "
                "and cut again by a raster of balls dropped onto it, from the setup whose axis reaches it best, the "
@@ -99,6 +102,7 @@ NodeDecl make_setup_programs_node() {
     }
     LinkOptions link;
     link.safety = o.safety;
+    link.lead_height = o.lead_height;
     GCodeOptions g;
     g.dialect = o.dialect, g.feed = o.feed, g.plunge_feed = o.plunge_feed, g.spindle_rpm = o.spindle_rpm;
     RestOptions rest;

@@ -271,6 +271,30 @@ TEST(SetupPrograms, ABallAgainstAWallIsLiftedOverIt) {
   for (const V& t : tips(programs[0].gcode)) EXPECT_GE(distance(t + V(0, 0, 2)), 2 - 0.0025 - 1e-4);
 }
 
+// The rapids keep lead_height off the whole part: beside the wall of ABallAgainstAWallIsLiftedOverIt
+// a way down stops over the wall, not lead_height over the floor, and every rapid's ball ends at
+// least r + lead_height from the part (2.5 mm here, for more stock than the default 1 mm).
+TEST(SetupPrograms, TheRapidsKeepTheLeadHeightOffThePart) {
+  const Mesh part = joined(box({0, 0, -5}, {10, 10, 0}), box({10, 0, -5}, {15, 10, 5}));
+  const Toolpath path = planned_square(10, 0, 2);
+  LinkOptions link;
+  link.lead_height = 2.5;
+  const auto programs = setup_programs(path, {path.passes.size()}, {plus_z()}, part, link, {});
+  ASSERT_EQ(programs.size(), 1u);
+  const MeshDistance distance(part);
+  const auto& moves = programs[0].linked.moves;
+  std::size_t ways_down = 0;
+  for (std::size_t i = 1; i < moves.size(); ++i) {
+    if (moves[i].kind != MoveKind::Rapid) continue;
+    EXPECT_GE(distance(moves[i].tip + V(0, 0, 2)), 2 + 2.5 - 1e-3) << "rapid " << i << " to " << moves[i].tip.transpose();
+    if (i + 1 < moves.size() && moves[i + 1].kind == MoveKind::Plunge) {
+      ++ways_down;
+      EXPECT_GE(moves[i].tip.z() - moves[i + 1].tip.z(), 2.5 - 1e-4);
+    }
+  }
+  EXPECT_GE(ways_down, 1u);
+}
+
 TEST(SetupPrograms, BallsAreKeptTheMarginFartherFromWhereTheMeshCrossesItself) {
   // The cube [0, 4]^3 with the middle of its top pulled through its bottom, its top planned as a
   // flat patch (r = 1): with the tangle's keep-out, every ball centre stays r + margin - e/4 from
