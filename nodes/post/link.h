@@ -3,7 +3,7 @@
 // Consecutive passes are joined by a straight feed move between their ball centres when that is
 // safe: the link is at most `max_link` long and no surface point within r (in xy) of it comes
 // closer than r − tolerance to the segment between the two ball centres (the ball never dips into
-// the surface). Otherwise the tool lifts by `lead_height`, rises to the clearance plane (the
+// the surface). Otherwise the tool lifts, rises to the clearance plane (the
 // highest surface point + `safety`, so rapids there never touch the part), travels, and comes
 // down: at rapid rate to where a ball of r + `lead_height` coming down that column would touch the
 // part (at least `lead_height` above the next start: higher on a slope or beside a wall), then

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include "nodes/geom/kd_tree.h"
 #include "nodes/post/centre_index.h"
+#include "nodes/post/clearance_march.h"
 
 namespace scallop {
 namespace {
@@ -65,28 +66,27 @@ RapidClearance rapid_clearance(const std::vector<Eigen::Vector3d>& points, const
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
   if (!(tol > 0)) throw std::invalid_argument("the rapids' tolerance must be > 0");
   if (points.empty()) throw std::invalid_argument("no points to check the rapids against");
-  std::vector<Eigen::Vector3d> raised = points;
-  if (uncertainty && uncertainty->size() == points.size())
+  RapidClearance out;
+  if (rapids.empty()) return out;
+  // The points raised by their uncertainty: a copy only where there is one to add.
+  std::vector<Eigen::Vector3d> raised;
+  if (uncertainty && uncertainty->size() == points.size()) {
+    raised = points;
     for (std::size_t i = 0; i < raised.size(); ++i) raised[i].z() += (*uncertainty)[i];
-  const PointsAdaptor<Eigen::Vector3d> adaptor{raised};
+  }
+  const PointsAdaptor<Eigen::Vector3d> adaptor{raised.empty() ? points : raised};
   KdTree<Eigen::Vector3d, 3> tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
-  RapidClearance out;
+  const auto nearest_point = [&](const Eigen::Vector3d& c) {
+    std::uint32_t nearest;
+    double d2;
+    tree.knnSearch(c.data(), 1, &nearest, &d2);
+    return std::sqrt(d2);
+  };
   for (const CentreSegment& s : rapids) {
     if (!s.a.allFinite() || !s.b.allFinite()) throw std::invalid_argument("a rapid has a non-finite point");
-    const double L = (s.b - s.a).norm();
-    double least = INFINITY, t = 0;
     Eigen::Vector3d least_at = s.a;
-    for (;;) {
-      const Eigen::Vector3d c = L > 0 ? Eigen::Vector3d(s.a + (s.b - s.a) * (t / L)) : s.a;
-      std::uint32_t nearest;
-      double d2;
-      tree.knnSearch(c.data(), 1, &nearest, &d2);
-      const double clear = std::sqrt(d2) - r;
-      if (clear < least) least = clear, least_at = c;
-      if (t >= L) break;
-      t = std::min(L, t + std::max(std::abs(clear), 0.5 * tol));
-    }
+    const double least = least_clearance_along(s.a, s.b, r, tol, nearest_point, &least_at);
     if (least < -tol) ++out.through;
     if (least < out.least) out.least = least, out.at = least_at;
   }

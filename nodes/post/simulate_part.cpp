@@ -21,6 +21,7 @@
 #include "nodes/mesh/mesh_distance.h"
 #include "nodes/mesh/mesh_topology.h"
 #include "nodes/mesh/self_crossings.h"
+#include "nodes/post/clearance_march.h"
 #include "nodes/post/part_samples.h"
 
 namespace scallop {
@@ -57,16 +58,7 @@ nlohmann::json xyz(const Eigen::Vector3d& p) { return {{"x", p.x()}, {"y", p.y()
 // itself (it cannot fall faster than c moves), to within `tol` / 2.
 double rapid_clearance(const MeshDistance& part, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
                        double tol) {
-  const double L = (b - a).norm();
-  double least = INFINITY, t = 0;
-  for (;;) {
-    const Eigen::Vector3d c = L > 0 ? Eigen::Vector3d(a + (b - a) * (t / L)) : a;
-    const double clear = part.signed_distance(c) - r;
-    least = std::min(least, clear);
-    if (t >= L) break;
-    t = std::min(L, t + std::max(std::abs(clear), 0.5 * tol));
-  }
-  return least;
+  return least_clearance_along(a, b, r, tol, [&](const Eigen::Vector3d& c) { return part.signed_distance(c); });
 }
 
 }  // namespace
