@@ -445,6 +445,27 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
             }
           }
         };
+        std::vector<std::uint32_t> side_faces;  // the faces of a side's points
+        // The vertex v against two planes meeting in a line fit to a side's points (kSidePoints at
+        // least), seen along v's normal: seeded by the side's own facing and the face of its points
+        // that turns most from it. False where they do not fit within kMostMisfit spacings (or a
+        // plane turns more than 60 degrees from the normal).
+        const auto bound_by_crease = [&](std::size_t v, const Eigen::Vector3d& facing, const std::vector<Eigen::Vector3d>& pts,
+                                         const std::vector<std::uint32_t>& faces_of_pts) {
+          if (!(facing.norm() > 0) || pts.size() < kSidePoints) return false;
+          const Eigen::Vector3d own = facing.normalized();
+          Eigen::Vector3d turned = own;
+          for (const std::uint32_t f : faces_of_pts)
+            if (g.area[f] > 0 && g.normal[f].dot(own) < turned.dot(own)) turned = g.normal[f];
+          const std::optional<CreaseSurface> crease = fit_crease_surface(pts, n[v], {own, turned});
+          if (!crease || crease->misfit > kMostMisfit * e.spacing_median) return false;
+          // how far the part stands above v along its normal (positive: outside the mesh)
+          const double above = crease->height(mesh.vertices[v]);
+          side_cos[v] = std::min({side_cos[v], crease->normal[0].dot(n[v]), crease->normal[1].dot(n[v])});
+          off_out[v] = std::max(off_out[v], std::max(0.0, above) + kMisfits * crease->misfit);
+          off_in[v] = std::max(off_in[v], std::max(0.0, -above) + kMisfits * crease->misfit);
+          return true;
+        };
         constexpr std::uint32_t kNoSide = std::numeric_limits<std::uint32_t>::max();
         std::vector<std::uint32_t> side_start;  // one face of v's on each side
         std::vector<std::uint32_t> side_of;     // #around(v): which of them
@@ -482,20 +503,24 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
               for (const auto& [i, d2] : hits)
                 if (face_of_point[i] != kEitherFace && reached[face_of_point[i]] == round) side_points.push_back(points[i]);
             }
+            side_faces.clear();
+            for (const auto& [i, d2] : hits)
+              if (face_of_point[i] != kEitherFace && reached[face_of_point[i]] == round) side_faces.push_back(face_of_point[i]);
             const std::optional<LocalSurface> surface = fit_local_surface(side_points);
-            if (!surface) {  // too few points, or not on a plane and a quadric over it
-              no_surface[v] = 1;
+            // Points of two faces (an edge not flagged, or its line broken off), or a surface curved
+            // too tightly for a quadric over them: three misfits of up to a spacing had moved the
+            // fandisk cloud's vertices up to 1.1 mm beside neighbours moved 0.05 (259 faces of the
+            // outer mesh turned over; 47 so).
+            const double misfit = surface ? largest_residual(*surface, side_points) : INFINITY;
+            if (misfit > kMostMisfit * e.spacing_median) {
+              // Two faces of the part meeting in an edge are two planes meeting in a line: where
+              // those fit the points, the vertex is bounded by them as by one face's surface (the
+              // ABC plate's 200 000-point cloud: 308 vertices on its edges got the spacing's
+              // allowance, 0.13 mm out, and held the balls off a band along the edges).
+              if (!bound_by_crease(v, facing, side_points, side_faces)) no_surface[v] = 1;
               continue;
             }
             const double outward = surface->normal.dot(facing) < 0 ? -1 : 1;
-            const double misfit = largest_residual(*surface, side_points);
-            // Points of two faces (an edge not flagged), or a surface curved too tightly for a quadric
-            // over them: three misfits of up to a spacing had moved the fandisk cloud's vertices up to
-            // 1.1 mm beside neighbours moved 0.05 (259 faces of the outer mesh turned over; 47 so).
-            if (misfit > kMostMisfit * e.spacing_median) {
-              no_surface[v] = 1;
-              continue;
-            }
             const double height = outward * surface->value(mesh.vertices[v]);
             side_cos[v] = std::min(side_cos[v], outward * surface->gradient(mesh.vertices[v]).normalized().dot(n[v]));
             off_out[v] = std::max(off_out[v], std::max(0.0, -height) + kMisfits * misfit);

@@ -47,7 +47,10 @@ NodeDecl make_cloud_envelope_node() {
   //    left out with the faces on a feature edge)
   //  13: the better fit of the quadric and the crease's two planes decides a face's allowance (was
   //    the smaller), the crease's height over the face exact (was a grid of sixths, plus a tenth)
-  d.version = 13;
+  //  14: with exact feature edges, a vertex whose side's points fit no quadric (two faces of the
+  //    part: an edge's line broken off) is bounded by two planes meeting in a line where those fit
+  //    them (was the spacing's allowance)
+  d.version = 14;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "
