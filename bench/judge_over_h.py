@@ -5,7 +5,10 @@ those left over 1.01 h by cause:
 
 - the envelope: how deep the true part lies inside the mesh the balls were kept off
   (mesh.cloud_envelope's outer mesh); where that is more than the sample's excess over h, a ball
-  that touched the outer mesh could not have cut the excess;
+  that touched the outer mesh could not have cut the excess; and, wider, how far the ball tangent
+  to the true part at the sample reaches into the outer mesh (anywhere within its radius): where
+  that is more than the excess, no ball kept off the outer mesh could have cut it, and how far the
+  outer mesh stands outside the true part where that ball meets it;
 - the patch surfaces: their distance from the sample (surfaces.ply, its face label the patch);
 - the true part's sharp edges: how near the sample is to one.
 
@@ -40,8 +43,8 @@ def graph_with_outer(src, dst):
 
 
 def judge_samples(out, true_mesh, a):
-    """verify_part.py's samples: positions, status (0 cut, 1 uncut, 2 base, 3 out of reach,
-    4 gouged) and scallop, with its report."""
+    """verify_part.py's samples: positions, normals, status (0 cut, 1 uncut, 2 base, 3 out of
+    reach, 4 gouged) and scallop, with its report."""
     base = json.load(open(os.path.join(out, "base_report.json")))["base_direction"]
     argv = ["--mesh", true_mesh, "--scale", str(a.scale), "--setups", os.path.join(out, "setups.json"),
             "--base-normal=" + ",".join(str(x) for x in base), "--tool-radius", str(a.tool_radius),
@@ -49,10 +52,10 @@ def judge_samples(out, true_mesh, a):
     kept = {}
 
     def keep(fname, mesh, P, N, status, scallop, H, tol, spacing, report):
-        kept.update(P=P, status=status, scallop=np.nan_to_num(scallop))
+        kept.update(P=P, N=N, status=status, scallop=np.nan_to_num(scallop))
     verify_part.plot = keep  # its plot is handed every sample; nothing is drawn
     report, _ = verify_part.measure(verify_part.parse_args(argv))
-    return kept["P"], kept["status"], kept["scallop"], report
+    return kept["P"], kept["N"], kept["status"], kept["scallop"], report
 
 
 def patch_faces(path):
@@ -80,7 +83,7 @@ def quantiles(x):
 
 
 def measure(a):
-    P, status, scallop, report = judge_samples(a.out, a.true_mesh, a)
+    P, N, status, scallop, report = judge_samples(a.out, a.true_mesh, a)
     H = a.scallop
     cut = status == 0
     over = cut & (scallop > 1.01 * H)
@@ -116,6 +119,22 @@ def measure(a):
         print("%-44s %-26s %-26s" % ("depth of the truth inside the outer mesh", quantiles(deep_over), quantiles(deep_some)))
         print("over-h samples deeper inside the outer mesh than their excess: %.1f %%"
               % (100 * np.mean(deep_over >= scallop[over] - H)))
+        # The ball tangent to the true part at each over-h sample: how far it reaches into the outer
+        # mesh, and where it meets it, how far the outer mesh stands outside the true part.
+        centre = P[over] + a.tool_radius * N[over]
+        dist, touched = outer.distance(centre, cap=2 * a.tool_radius, piece=True)
+        reach = a.tool_radius - dist
+        blocked = reach > scallop[over] - H
+        print("%-44s %-26s" % ("reach of the tangent ball into the outer mesh", quantiles(reach)))
+        print("over-h samples whose tangent ball reaches into the outer mesh by more than their excess: %.1f %%"
+              % (100 * np.mean(blocked)))
+        if blocked.any():
+            T = outer.mesh.V[outer.mesh.F[outer.owner[touched[blocked]]]]
+            where, _ = mesh3d.closest_on_triangle(centre[blocked], T[:, 0], T[:, 1], T[:, 2])
+            true_index = mesh3d.MeshIndex(truth, 0.5)
+            print("%-44s %-26s" % ("  where it meets it: outer over the true part", quantiles(true_index.signed(where, cap=2.0))))
+            if edge_tree is not None:
+                print("%-44s %-26s" % ("  where it meets it: distance to a true edge", quantiles(edge_tree.query(where)[0])))
     else:
         print("(no outer.ply in %s: run the graph made by the 'graph' form for the envelope's figures)" % a.out)
     patch = label[surfaces.owner[piece]]
