@@ -50,7 +50,9 @@ NodeDecl make_cloud_envelope_node() {
   //  14: with exact feature edges, a vertex whose side's points fit no quadric (two faces of the
   //    part: an edge's line broken off) is bounded by two planes meeting in a line where those fit
   //    them (was the spacing's allowance)
-  d.version = 14;
+  //  15: ... only where v's faces on that side follow the two planes (14 let a bevel's face cut the
+  //    part between its corners: the block x 5's cloud, 3 samples 0.03 mm outside the outer mesh)
+  d.version = 15;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "
