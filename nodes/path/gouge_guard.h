@@ -6,9 +6,11 @@
 // (u, v) map). Where that model is poor (a fit that straddles a re-entrant corner of the outline,
 // where the map squeezes a narrow spike, at a sparse steep rim) a contact point can be off the
 // surface by more than the chord budget and the ball cuts into the part. The guard measures each
-// ball centre c against two independent witnesses: the height field fitted to the cloud in xy
-// (HeightFieldModel, what post.simulate certifies against), via the foot point of c on it, and the
-// cloud's points themselves within r of c. clearance(c) = distance to the surface − r, and the
+// ball centre c against independent witnesses: the height field fitted to the cloud in xy
+// (HeightFieldModel, what post.simulate certifies against), via the foot point of c on it, and
+// sampled with its uncertainty above every cloud point near c (the foot search finds one nearest
+// place; the uncertainty may peak at another: a crest's top beside the flank the ball touches);
+// and the cloud's points themselves within r of c. clearance(c) = distance to the surface − r, and the
 // ball must clear the surface by its uncertainty δ there (0 on a clean cloud; grown beyond the
 // cloud's edge, where the field is extrapolated): the real surface may be δ higher. A position
 // reaching more than `tolerance` into that band (δ − clearance > tolerance; by default e/4 plus
@@ -53,6 +55,11 @@ class BallClearance {
                                   // outermost points where the part's edge lies, or inside
                                   // the outline
     double uncertainty = 0;       // mm the surface there may be off the real one (on_surface)
+    // How far the ball reaches into the band over the height field (raised by its uncertainty)
+    // sampled above the cloud's points near it (mm, > 0: too deep; -inf: none within reach),
+    // and the upward part of the unit direction from the deepest such sample to the centre.
+    double band_reach = -INFINITY;
+    double band_up = 1;
   };
   // centre  ball centre; hint  a surface point near the contact (where the foot search starts).
   // Thread-safe.

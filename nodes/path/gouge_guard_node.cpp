@@ -13,7 +13,7 @@ namespace scallop::path_nodes {
 NodeDecl make_gouge_guard_node() {
   NodeDecl d;
   d.type = "path.gouge_guard";
-  d.version = 7;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge; 4: a position may reach in by what the planner meant (chord budget) + e/4; 5: the height field's uncertainty counts its fit's misfit; 6: optional loops; 7: the height field solved by a fixed-size Cholesky (the same to rounding)
+  d.version = 8;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge; 4: a position may reach in by what the planner meant (chord budget) + e/4; 5: the height field's uncertainty counts its fit's misfit; 6: optional loops; 7: the height field solved by a fixed-size Cholesky (the same to rounding); 8: the band sampled above every cloud point within reach, not only at the foot point
                   // 3: fails where a ball would have to be lifted by more than 3 tool radii
   d.description =
       "checks every planned ball position and the middle of every move against the cloud's "

@@ -254,6 +254,59 @@ TEST(GougeGuard, LiftedBallsClearAnUncertainSurfaceByItsUncertainty) {
   EXPECT_NEAR(chord_budget(0.01, 0).overcut, 0.009, 1e-15);
 }
 
+TEST(GougeGuard, ABallBesideAMoreUncertainStretchClearsItToo) {
+  // The plane z = 0 sampled every 0.25 mm, its points known exactly for x < 0.7 and to +-0.3 mm
+  // from there on. A ball of radius 10 planned touching the plane at x = 0: its foot point's 20
+  // nearest points (|dx| <= 0.5) are all exact, so the band there is the plane itself and the
+  // foot alone would pass it. But the fit over x >= 1.25 is known only to 0.3 (every neighbour
+  // beyond 0.7), and the ball's centre is sqrt(1.25^2 + 10^2) - 10 = 0.0778 mm farther from
+  // there than its radius: it reaches 0.2222 mm into that band, and is lifted until it clears
+  // it, to sqrt(10.3^2 - 1.25^2) = 10.2239 above the plane (a crest's flank beside its top,
+  // where a flattened fit is least certain, the way a 50 000-point cloud of a 1 mm crest had it).
+  std::vector<Eigen::Vector3d> cloud;
+  std::vector<double> uncertainty;
+  for (double x = -10; x <= 10 + 1e-9; x += 0.25)
+    for (double y = -10; y <= 10 + 1e-9; y += 0.25) {
+      cloud.emplace_back(x, y, 0);
+      uncertainty.push_back(x >= 0.7 ? 0.3 : 0.0);
+    }
+  HeightFieldModel surface(cloud, 20, &uncertainty);
+  constexpr double r = 10;
+  BallClearance clearance(surface, cloud, r);
+  const auto at = clearance(Eigen::Vector3d(0, 0, r), Eigen::Vector3d(0, 0, 0));
+  ASSERT_TRUE(at.on_surface);
+  EXPECT_NEAR(at.uncertainty, 0, 1e-12);
+  EXPECT_NEAR(at.clearance, 0, 1e-9);
+  EXPECT_NEAR(at.band_reach, 0.3 - (std::hypot(1.25, r) - r), 1e-9);
+  EXPECT_NEAR(at.band_up, r / std::hypot(1.25, r), 1e-9);
+
+  Toolpath planned;
+  planned.tool_radius = r;
+  planned.chord_error = 0.01;
+  planned.scallop_height = 0.05;
+  ToolpathPass pass;
+  for (double y = -5; y <= 5 + 1e-9; y += 0.5) {
+    pass.contact.emplace_back(0, y, 0);
+    pass.normal.emplace_back(0, 0, 1);
+  }
+  planned.passes.push_back(pass);
+  auto res = guard_gouges(planned, clearance, {});
+  EXPECT_EQ(res.report["lifted_positions"], pass.contact.size());
+  const auto& q = res.path.passes[0];
+  ASSERT_EQ(q.contact.size(), pass.contact.size());  // the moves along y stay level: none split
+  for (std::size_t i = 0; i < q.contact.size(); ++i) {
+    const Eigen::Vector3d c = res.path.centre(q.contact[i], q.normal[i]);
+    // (the lift's linear steps overshoot a distance that grows faster than linearly: never short)
+    EXPECT_GE(c.z(), std::sqrt(10.3 * 10.3 - 1.25 * 1.25) - 1e-6) << i;
+    EXPECT_LE(c.z(), std::sqrt(10.3 * 10.3 - 1.25 * 1.25) + 1e-4) << i;
+    // every exactly 0.3-uncertain place of the plane (x >= 1.25) is cleared by 0.3
+    double least = INFINITY;
+    for (std::size_t j = 0; j < cloud.size(); ++j)
+      if (cloud[j].x() >= 1.25 - 1e-9) least = std::min(least, (c - cloud[j]).norm() - r);
+    EXPECT_GE(least, 0.3 - 1e-6) << i;
+  }
+}
+
 TEST(GougeGuard, BeyondTheCloudsEdgeTheExtrapolationIsLessCertain) {
   // A ball whose foot lies 0.2 mm beyond the last points of a cloud known to +-0.05 must clear
   // the extrapolated plane by 0.05 (1 + (0.2 - spacing / 2) / (2 spacing)); a ball planned with the
