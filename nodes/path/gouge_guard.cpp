@@ -27,46 +27,43 @@ struct BallClearance::Impl {
   PointsAdaptor<Eigen::Vector3d> adaptor{points};
   KdTree<Eigen::Vector3d, 2> tree{2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};   // by xy
   KdTree<Eigen::Vector3d, 3> tree3{3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};  // in 3-D
-  // The band the ball must clear, sampled above each cloud point: the height field there raised
-  // by its uncertainty. Unlike the foot point it sees every place near the ball: on a crest the
-  // fit has flattened, the foot search settles on one flank while the ball passes within reach
-  // of the top, where the fit's misfit, and so its uncertainty, is largest (a 1 mm crest's 50 000
-  // point cloud: the ball 0.014 mm from a place of uncertainty 0.35 mm whose foot point on the
-  // flank asked for 0.002). Two tiers, so that a few very uncertain samples (an extrapolated
-  // rim, a crest) do not widen every search.
+  // The band the ball must clear, sampled above each cloud point (surface_band.h). Unlike the
+  // foot point it sees every place near the ball: on a crest the fit has flattened, the foot
+  // search settles on one flank while the ball passes within reach of the top, where the fit's
+  // misfit, and so its uncertainty, is largest (a 1 mm crest's 50 000-point cloud: the ball
+  // 0.014 mm from a place of uncertainty 0.35 mm whose foot point on the flank asked for 0.002).
+  // Two tiers, so that a few very uncertain samples (an extrapolated rim, a crest) do not widen
+  // every search.
   struct BandTier {
-    std::vector<Eigen::Vector3d> at;   // the height field above a cloud point
-    std::vector<double> uncertainty;   // how far it may be off there (mm)
+    std::vector<Eigen::Vector3d> at;
+    std::vector<double> uncertainty;
     double uncertainty_max = 0;
     PointsAdaptor<Eigen::Vector3d> adaptor{at};
     KdTree<Eigen::Vector3d, 3> tree{3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
   };
   BandTier band[2];
-  Impl(const HeightFieldModel& s, const std::vector<Eigen::Vector3d>& p, double radius, const Outline* o)
+  Impl(const HeightFieldModel& s, const std::vector<Eigen::Vector3d>& p, double radius, const Outline* o,
+       const SurfaceBandView* given)
       : surface(s), points(p), r(radius), outline(o) {
-    std::vector<Eigen::Vector3d> at(points.size());
-    std::vector<double> uncertainty(points.size(), 0.0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size()), [&](const tbb::blocked_range<std::size_t>& rg) {
-      for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
-        // outside the patch's fit (at its rim) eval leaves z alone: the point itself, with the
-        // uncertainty of the fit extrapolated there
-        double z = points[i].z(), u = 0;
-        Eigen::Vector3d n;
-        surface.eval(points[i].x(), points[i].y(), z, n, /*force=*/true, &u);
-        at[i] = Eigen::Vector3d(points[i].x(), points[i].y(), z);
-        uncertainty[i] = std::isfinite(u) ? u : 0.0;
-      }
-    });
+    const SurfaceBand computed = given ? SurfaceBand{} : surface_band(surface, points);
+    const SurfaceBandView all = given ? *given : SurfaceBandView{computed.at, computed.uncertainty};
+    if (all.at.size() != all.uncertainty.size())
+      throw std::invalid_argument("the surface band has " + std::to_string(all.at.size()) + " places but " +
+                                  std::to_string(all.uncertainty.size()) + " uncertainties");
     // the upper tier: the most uncertain 1 %
-    std::vector<double> sorted = uncertainty;
-    const std::size_t cut = sorted.size() - sorted.size() / 100 - 1;
-    std::nth_element(sorted.begin(), sorted.begin() + cut, sorted.end());
-    const double split = sorted[cut];
-    for (std::size_t i = 0; i < at.size(); ++i) {
-      BandTier& t = band[uncertainty[i] > split ? 1 : 0];
-      t.at.push_back(at[i]);
-      t.uncertainty.push_back(uncertainty[i]);
-      t.uncertainty_max = std::max(t.uncertainty_max, uncertainty[i]);
+    double split = INFINITY;
+    if (!all.uncertainty.empty()) {
+      std::vector<double> sorted = all.uncertainty;
+      const std::size_t cut = sorted.size() - sorted.size() / 100 - 1;
+      std::nth_element(sorted.begin(), sorted.begin() + cut, sorted.end());
+      split = sorted[cut];
+    }
+    for (std::size_t i = 0; i < all.at.size(); ++i) {
+      if (!all.at[i].allFinite() || !std::isfinite(all.uncertainty[i])) continue;
+      BandTier& t = band[all.uncertainty[i] > split ? 1 : 0];
+      t.at.push_back(all.at[i]);
+      t.uncertainty.push_back(all.uncertainty[i]);
+      t.uncertainty_max = std::max(t.uncertainty_max, all.uncertainty[i]);
     }
     tbb::parallel_invoke([&] { tree.buildIndex(); }, [&] { tree3.buildIndex(); },
                          [&] { if (!band[0].at.empty()) band[0].tree.buildIndex(); },
@@ -122,11 +119,11 @@ struct DeepestIntoBand {
 }  // namespace
 
 BallClearance::BallClearance(const HeightFieldModel& surface, const std::vector<Eigen::Vector3d>& points,
-                             double r, const Outline* outline)
+                             double r, const Outline* outline, const SurfaceBandView* band)
     : impl_(nullptr) {
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
   if (points.empty()) throw std::invalid_argument("the cloud has no points");
-  impl_ = new Impl(surface, points, r, outline);
+  impl_ = new Impl(surface, points, r, outline, band);
 }
 
 BallClearance::~BallClearance() { delete impl_; }

@@ -30,6 +30,7 @@
 
 #include "nodes/geom/height_field_model.h"
 #include "nodes/geom/outline.h"
+#include "nodes/geom/surface_band.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
@@ -40,9 +41,10 @@ class BallClearance {
   // surface  the height field of `points`; points  the cloud (mm); outline  optional: the patch's
   // outline in xy (post.simulate's, from the boundary loops): a foot point inside it is on the
   // surface however far from the points (a gap between rim points that the certificate counts).
-  // All must outlive this.
+  // band  optional: surface_band(surface, points), when it is at hand (cached); computed here
+  // otherwise. All must outlive this.
   BallClearance(const HeightFieldModel& surface, const std::vector<Eigen::Vector3d>& points, double r,
-                const Outline* outline = nullptr);
+                const Outline* outline = nullptr, const SurfaceBandView* band = nullptr);
   ~BallClearance();
   BallClearance(const BallClearance&) = delete;
   BallClearance& operator=(const BallClearance&) = delete;

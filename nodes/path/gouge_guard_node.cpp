@@ -1,4 +1,6 @@
+#include <optional>
 #include <stdexcept>
+#include <string>
 
 #include "engine/node.h"
 #include "nodes/geom/height_field_model.h"
@@ -24,6 +26,7 @@ NodeDecl make_gouge_guard_node() {
       .input("loops", "Loops", "optional: the patch's boundary loops (indices into 'cloud'); the surface is "
              "then checked everywhere inside their outline, as post.simulate does, also in gaps between "
              "rim points farther than the band kept without them", false)
+      .input("band", "Cloud", "optional: cloud.surface_band of 'cloud' (computed here when not given)", false)
       .output("toolpath", "Toolpath", "the passes, lifted where needed (lifted contact points are the ball's new touching points)")
       .output("report", "Report",
               "positions and moves checked, lifted and inserted positions, the deepest cut-in "
@@ -48,7 +51,18 @@ NodeDecl make_gouge_guard_node() {
       const Outline outline(ctx.has_input("loops")
                                 ? loop_polygons_xy(*ctx.input<BoundaryLoops>("loops"), cloud->points)
                                 : std::vector<std::vector<Eigen::Vector2d>>{});
-      BallClearance clearance(surface, cloud->points, path->tool_radius, outline.empty() ? nullptr : &outline);
+      std::shared_ptr<const PointCloud> given;
+      std::optional<SurfaceBandView> band;
+      if (ctx.has_input("band")) {
+        given = ctx.input<PointCloud>("band");
+        if (given->size() != cloud->size() || !given->has_uncertainty())
+          throw NodeError("the band has " + std::to_string(given->size()) + " places" +
+                          (given->has_uncertainty() ? "" : " without uncertainties") + " for a cloud of " +
+                          std::to_string(cloud->size()) + " points: give cloud.surface_band of the same cloud");
+        band.emplace(SurfaceBandView{given->points, given->uncertainty});
+      }
+      BallClearance clearance(surface, cloud->points, path->tool_radius, outline.empty() ? nullptr : &outline,
+                              band ? &*band : nullptr);
       auto res = guard_gouges(*path, clearance, o);
       for (const auto& w : res.report["warnings"]) ctx.warn(w.get<std::string>());  // lifts, in one line each
       Report report;

@@ -456,5 +456,37 @@ TEST(GougeGuard, NodeReportsAndKeepsUV) {
   EXPECT_EQ(path->passes[0].uv.size(), path->passes[0].contact.size());
 }
 
+TEST(GougeGuard, NodeTakesTheBandFromCloudSurfaceBand) {
+  // Given the band (as the shipped graphs give it, cached apart from the tool), the same path as
+  // with the band computed in the node; a band of another cloud is refused, saying so.
+  PointCloud pc;
+  pc.points = plane_cloud();
+  pc.uncertainty.assign(pc.points.size(), 0.01);
+  const auto cloud = std::make_shared<const PointCloud>(pc);
+  const auto path = std::make_shared<const Toolpath>(plane_pass(0.5, 4, 0.1));
+  auto band = test::run_node(*builtin_registry().find("cloud.surface_band"), {}, {{"cloud", cloud}}).at("band");
+  const NodeDecl& guard = *builtin_registry().find("path.gouge_guard");
+  auto alone = test::run_node(guard, {}, {{"path", path}, {"cloud", cloud}});
+  auto given = test::run_node(guard, {}, {{"path", path}, {"cloud", cloud}, {"band", band}});
+  const auto& a = std::dynamic_pointer_cast<const Toolpath>(alone.at("toolpath"))->passes[0].contact;
+  const auto& b = std::dynamic_pointer_cast<const Toolpath>(given.at("toolpath"))->passes[0].contact;
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]) << i;
+  EXPECT_EQ(std::dynamic_pointer_cast<const Report>(given.at("report"))->data["lifted_positions"], 21);
+
+  PointCloud other = pc;
+  other.points.pop_back();
+  other.uncertainty.pop_back();
+  auto other_band =
+      test::run_node(*builtin_registry().find("cloud.surface_band"), {}, {{"cloud", std::make_shared<const PointCloud>(other)}})
+          .at("band");
+  try {
+    test::run_node(guard, {}, {{"path", path}, {"cloud", cloud}, {"band", other_band}});
+    FAIL();
+  } catch (const NodeError& e) {
+    EXPECT_STREQ(e.what(), "the band has 6560 places for a cloud of 6561 points: give cloud.surface_band of the same cloud");
+  }
+}
+
 }  // namespace
 }  // namespace scallop
