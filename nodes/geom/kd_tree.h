@@ -26,6 +26,25 @@ using KdTree = nanoflann::KDTreeSingleIndexAdaptor<
     nanoflann::L2_Simple_Adaptor<double, PointsAdaptor<Point>, double, std::uint32_t>, PointsAdaptor<Point>, Dim,
     std::uint32_t>;
 
+// Adaptor over some of a vector's points, named by their indices (no copy of the points): the
+// tree reports the position in `subset`, subset[i] is the point's index in `pts`.
+template <class Point>
+struct SubsetAdaptor {
+  const std::vector<Point>& pts;
+  const std::vector<std::uint32_t>& subset;
+  std::size_t kdtree_get_point_count() const { return subset.size(); }
+  double kdtree_get_pt(std::size_t i, std::size_t d) const { return pts[subset[i]][static_cast<int>(d)]; }
+  template <class BBox>
+  bool kdtree_get_bbox(BBox&) const {
+    return false;
+  }
+};
+
+template <class Point, int Dim>
+using KdSubsetTree = nanoflann::KDTreeSingleIndexAdaptor<
+    nanoflann::L2_Simple_Adaptor<double, SubsetAdaptor<Point>, double, std::uint32_t>, SubsetAdaptor<Point>, Dim,
+    std::uint32_t>;
+
 // A nanoflann result set that keeps every index within a radius, unsorted (cheaper than the
 // sorted matches of radiusSearch): tree.findNeighbors(set, query, nanoflann::SearchParams(32, 0,
 // false)). radius2 is the radius squared; out is cleared first.

@@ -27,47 +27,47 @@ struct BallClearance::Impl {
   PointsAdaptor<Eigen::Vector3d> adaptor{points};
   KdTree<Eigen::Vector3d, 2> tree{2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};   // by xy
   KdTree<Eigen::Vector3d, 3> tree3{3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};  // in 3-D
-  // The band the ball must clear, sampled above each cloud point (surface_band.h). Unlike the
-  // foot point it sees every place near the ball: on a crest the fit has flattened, the foot
-  // search settles on one flank while the ball passes within reach of the top, where the fit's
-  // misfit, and so its uncertainty, is largest (a 1 mm crest's 50 000-point cloud: the ball
-  // 0.014 mm from a place of uncertainty 0.35 mm whose foot point on the flank asked for 0.002).
-  // Two tiers, so that a few very uncertain samples (an extrapolated rim, a crest) do not widen
-  // every search.
+  // The band the ball must clear, sampled above each cloud point (surface_band.h): computed
+  // here when not given. Two tiers of it, so that a few very uncertain samples (an extrapolated
+  // rim, a crest) do not widen every search.
+  SurfaceBand computed;
+  SurfaceBandView band;
   struct BandTier {
-    std::vector<Eigen::Vector3d> at;
-    std::vector<double> uncertainty;
+    std::vector<std::uint32_t> index;  // into band
     double uncertainty_max = 0;
-    PointsAdaptor<Eigen::Vector3d> adaptor{at};
-    KdTree<Eigen::Vector3d, 3> tree{3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
+    SubsetAdaptor<Eigen::Vector3d> adaptor;
+    KdSubsetTree<Eigen::Vector3d, 3> tree{3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
+    explicit BandTier(const std::vector<Eigen::Vector3d>& at) : adaptor{at, index} {}
   };
-  BandTier band[2];
+  BandTier tier[2]{BandTier(band.at), BandTier(band.at)};
   Impl(const HeightFieldModel& s, const std::vector<Eigen::Vector3d>& p, double radius, const Outline* o,
        const SurfaceBandView* given)
-      : surface(s), points(p), r(radius), outline(o) {
-    const SurfaceBand computed = given ? SurfaceBand{} : surface_band(surface, points);
-    const SurfaceBandView all = given ? *given : SurfaceBandView{computed.at, computed.uncertainty};
-    if (all.at.size() != all.uncertainty.size())
-      throw std::invalid_argument("the surface band has " + std::to_string(all.at.size()) + " places but " +
-                                  std::to_string(all.uncertainty.size()) + " uncertainties");
+      : surface(s),
+        points(p),
+        r(radius),
+        outline(o),
+        computed(given ? SurfaceBand{} : surface_band(s, p)),
+        band(given ? *given : SurfaceBandView{computed.at, computed.uncertainty}) {
+    if (band.at.size() != band.uncertainty.size())
+      throw std::invalid_argument("the surface band has " + std::to_string(band.at.size()) + " places but " +
+                                  std::to_string(band.uncertainty.size()) + " uncertainties");
     // the upper tier: the most uncertain 1 %
     double split = INFINITY;
-    if (!all.uncertainty.empty()) {
-      std::vector<double> sorted = all.uncertainty;
+    if (!band.uncertainty.empty()) {
+      std::vector<double> sorted = band.uncertainty;
       const std::size_t cut = sorted.size() - sorted.size() / 100 - 1;
       std::nth_element(sorted.begin(), sorted.begin() + cut, sorted.end());
       split = sorted[cut];
     }
-    for (std::size_t i = 0; i < all.at.size(); ++i) {
-      if (!all.at[i].allFinite() || !std::isfinite(all.uncertainty[i])) continue;
-      BandTier& t = band[all.uncertainty[i] > split ? 1 : 0];
-      t.at.push_back(all.at[i]);
-      t.uncertainty.push_back(all.uncertainty[i]);
-      t.uncertainty_max = std::max(t.uncertainty_max, all.uncertainty[i]);
+    for (std::size_t i = 0; i < band.at.size(); ++i) {
+      if (!band.at[i].allFinite() || !std::isfinite(band.uncertainty[i])) continue;
+      BandTier& t = tier[band.uncertainty[i] > split ? 1 : 0];
+      t.index.push_back(static_cast<std::uint32_t>(i));
+      t.uncertainty_max = std::max(t.uncertainty_max, band.uncertainty[i]);
     }
     tbb::parallel_invoke([&] { tree.buildIndex(); }, [&] { tree3.buildIndex(); },
-                         [&] { if (!band[0].at.empty()) band[0].tree.buildIndex(); },
-                         [&] { if (!band[1].at.empty()) band[1].tree.buildIndex(); });
+                         [&] { if (!tier[0].index.empty()) tier[0].tree.buildIndex(); },
+                         [&] { if (!tier[1].index.empty()) tier[1].tree.buildIndex(); });
   }
 };
 
@@ -91,24 +91,26 @@ struct NearestInDisc {
   double worstDist() const { return best2; }
 };
 
-// A nanoflann result set: how far a ball at c reaches into the band over the samples near it
-// (a sample's uncertainty less its distance from c beyond r), the deepest, and the upward part
-// of the direction from that sample to c (how fast lifting the ball takes it out).
-struct BandView {
-  const std::vector<Eigen::Vector3d>& at;
-  const std::vector<double>& uncertainty;
-};
-
+// A nanoflann result set over one band tier: how far a ball at c reaches into the band over the
+// samples near it (a sample's uncertainty less its distance from c beyond r), the deepest, and
+// the upward part of the direction from that sample to c (how fast lifting the ball takes it
+// out). Unlike the foot point it sees every place near the ball: on a crest the fit has
+// flattened, the foot search settles on one flank while the ball passes within reach of the top,
+// where the fit's misfit, and so its uncertainty, is largest (a 1 mm crest's 50 000-point cloud:
+// the ball 0.014 mm from a place of uncertainty 0.35 mm whose foot point on the flank asked for
+// 0.002).
 struct DeepestIntoBand {
   const Eigen::Vector3d& c;
-  const BandView& band;
+  const SurfaceBandView& band;
+  const std::vector<std::uint32_t>& tier;  // the tree's positions -> the band's indices
   double r, radius2;
   double deepest = -INFINITY, up = 1;
   void init() {}
   std::size_t size() const { return 0; }
   bool full() const { return true; }
-  bool addPoint(double d2, std::uint32_t i) {
+  bool addPoint(double d2, std::uint32_t k) {
     if (!(d2 < radius2)) return true;
+    const std::uint32_t i = tier[k];
     const double d = std::sqrt(d2), reach = band.uncertainty[i] - (d - r);
     if (reach > deepest) deepest = reach, up = d > 0 ? (c.z() - band.at[i].z()) / d : 1.0;
     return true;
@@ -177,10 +179,10 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     res.clearance = (d.dot(n) >= 0 ? d.norm() : -d.norm()) - r;
   }
   // The band sampled above the cloud's points, every sample within reach.
-  for (const auto& tier : impl_->band) {
-    if (tier.at.empty()) continue;
+  for (const auto& tier : impl_->tier) {
+    if (tier.index.empty()) continue;
     const double radius = r + tier.uncertainty_max;
-    DeepestIntoBand deepest{c, {tier.at, tier.uncertainty}, r, radius * radius};
+    DeepestIntoBand deepest{c, impl_->band, tier.index, r, radius * radius};
     tier.tree.findNeighbors(deepest, c.data(), nanoflann::SearchParams(32, 0, false));
     if (deepest.deepest > res.band_reach) res.band_reach = deepest.deepest, res.band_up = deepest.up;
   }
@@ -241,27 +243,20 @@ class PassGuard {
     return 0.25 * e_ + (x.on_surface ? chord_budget(e_, x.uncertainty).reach : 0.0);
   }
 
-  // How far the ball reaches into the band it must clear: the surface raised by its uncertainty
-  // (a real surface that much higher must not be cut either); > 0: too deep.
-  static double reach(const BallClearance::Result& x) {
-    return std::max(x.band_reach, (x.on_surface ? x.uncertainty : 0.0) - x.clearance);
-  }
-
   // Lifts the sample's ball until it only touches that band, when it reaches into it more than
   // position_tolerance (a planned position) or at all (a point inserted into a move); true when
   // it was lifted.
   bool lift_if_needed(Sample& s, bool planned_position, Tally& t) const {
     Eigen::Vector3d c = s.contact + r_ * s.normal;
     auto res = clearance_(c, s.contact);
-    if (!(reach(res) > (planned_position ? position_tolerance(res) : 0.0))) return false;
-    if (reach(res) > t.deepest) t.deepest = reach(res), t.deepest_at = s.contact;
+    if (!(res.reach() > (planned_position ? position_tolerance(res) : 0.0))) return false;
+    if (res.reach() > t.deepest) t.deepest = res.reach(), t.deepest_at = s.contact;
     const Eigen::Vector3d planned = c;
     const double z0 = c.z();
-    for (int it = 0; it < 8 && reach(res) > 1e-6; ++it) {
+    for (int it = 0; it < 8 && res.reach() > 1e-6; ++it) {
       // raising the centre by dz moves it away from a surface with normal n by dz * n_z
-      const bool band_deepest = res.band_reach >= (res.on_surface ? res.uncertainty : 0.0) - res.clearance;
-      const double nz = band_deepest ? std::max(res.band_up, 0.2) : res.on_surface ? std::max(res.normal.z(), 0.2) : 0.5;
-      c.z() += reach(res) / nz;
+      const double nz = res.band_is_deepest() ? std::max(res.band_up, 0.2) : res.on_surface ? std::max(res.normal.z(), 0.2) : 0.5;
+      c.z() += res.reach() / nz;
       res = clearance_(c, res.on_surface ? res.foot : s.contact);
     }
     if (res.on_surface && (c - res.foot).norm() > 0) {
@@ -271,7 +266,7 @@ class PassGuard {
     } else {
       s.contact += Eigen::Vector3d(0, 0, c.z() - z0);
     }
-    if (reach(res) > 1e-6) ++t.unresolved;
+    if (res.reach() > 1e-6) ++t.unresolved;
     if (c.z() - z0 > t.highest_lift)
       t.highest_lift = c.z() - z0, t.highest_lift_at = s.contact, t.highest_lift_from = planned;
     ++t.lifted;
@@ -287,7 +282,7 @@ class PassGuard {
     double worst = -INFINITY, at = 0.5;
     for (int j = 1; j < probes; ++j) {
       const double f = double(j) / probes;
-      const double in = reach(clearance_((1 - f) * ca + f * cb, (1 - f) * a.contact + f * b.contact));
+      const double in = clearance_((1 - f) * ca + f * cb, (1 - f) * a.contact + f * b.contact).reach();
       if (in > worst) worst = in, at = f;
     }
     if (!(worst > chord_tol_)) return;

@@ -23,6 +23,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -62,6 +63,11 @@ class BallClearance {
     // and the upward part of the unit direction from the deepest such sample to the centre.
     double band_reach = -INFINITY;
     double band_up = 1;
+    // How far the ball reaches into the band at its foot point, and by either witness (mm, > 0:
+    // too deep); which of them reaches deeper (the direction a lift takes).
+    double foot_reach() const { return (on_surface ? uncertainty : 0.0) - clearance; }
+    double reach() const { return std::max(band_reach, foot_reach()); }
+    bool band_is_deepest() const { return band_reach >= foot_reach(); }
   };
   // centre  ball centre; hint  a surface point near the contact (where the foot search starts).
   // Thread-safe.
