@@ -299,9 +299,8 @@ class ContourPlanner {
       for (std::size_t i = 0; i < near.segments.size(); ++i) {
         const std::uint32_t k = near.segments[i];
         const double reach = best + index.half[k] + r_;  // +infinity while nothing was entered
-        if (k == first || near.d2[i] >= reach * reach || segment_distance(x.position, c.c[k], c.c[k + 1]) - r_ >= best)
-          continue;
-        best = std::min(best, ray_capsule_entry(x.position, x.normal, c.c[k], c.c[k + 1], r_));
+        if (k == first || near.d2[i] >= reach * reach) continue;
+        best = std::min(best, ray_capsule_entry(x.position, x.normal, c.c[k], c.c[k + 1], r_, best));
       }
       if (best <= rho || radius > everything) return best;
     }

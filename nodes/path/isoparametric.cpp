@@ -561,10 +561,10 @@ class Planner {
     Eigen::Vector2d hit(kInf, kInf);
     const double reach = r_ + 20 * h_;
     near_segments(A, A.c, t, x.position, reach, [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-      hit[0] = std::min(hit[0], ray_capsule_entry(x.position, x.normal, a, b, r_));
+      hit[0] = std::min(hit[0], ray_capsule_entry(x.position, x.normal, a, b, r_, hit[0]));
     });
     near_segments(B, B.c, t, x.position, reach, [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-      hit[1] = std::min(hit[1], ray_capsule_entry(x.position, x.normal, a, b, r_));
+      hit[1] = std::min(hit[1], ray_capsule_entry(x.position, x.normal, a, b, r_, hit[1]));
     });
     return hit;
   }

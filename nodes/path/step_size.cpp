@@ -69,13 +69,16 @@ double cusp_height_plane(double tool_radius, double spacing) {
 }
 
 double ray_capsule_entry(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                         const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) {
+                         const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r, double before) {
   const Eigen::Vector3d ba = b - a;
   const double baba = ba.squaredNorm();
-  // Inside already?
+  // Inside already? Too far to be entered before `before`? (the ray's point at t is within t
+  // of o, so it reaches the capsule no sooner than the segment's distance less r)
   {
     const double y = baba > 0 ? std::clamp((o - a).dot(ba) / baba, 0.0, 1.0) : 0.0;
-    if ((o - (a + y * ba)).squaredNorm() <= r * r) return 0;
+    const double d2 = (o - (a + y * ba)).squaredNorm();
+    if (d2 <= r * r) return 0;
+    if (before < INFINITY && d2 > (r + before) * (r + before)) return INFINITY;
   }
   // The capsule is the union of the two end balls and the finite cylinder; the first hit of a
   // union is the earliest first hit of its parts.

@@ -11,6 +11,7 @@
 #include <algorithm>
 
 #include <Eigen/Core>
+#include <cmath>
 
 namespace scallop {
 
@@ -91,8 +92,11 @@ double cusp_height_plane(double tool_radius, double spacing);
 
 // First entry t along the ray o + t d (d unit) into the capsule of radius r around segment
 // [a, b] (a == b: a ball). Returns 0 when o is inside, +infinity when the ray misses it or the
-// capsule lies wholly behind o (t < 0).
+// capsule lies wholly behind o (t < 0). Given `before`, +infinity also where the segment stands
+// farther than r + before from o (the entry cannot come before `before`): a caller keeping the
+// least entry over many segments passes the least so far and skips the far ones' work.
 double ray_capsule_entry(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                         const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r);
+                         const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
+                         double before = INFINITY);
 
 }  // namespace scallop

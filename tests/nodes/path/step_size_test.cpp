@@ -87,4 +87,8 @@ TEST(StepSize, RayCapsuleEntry) {
   EXPECT_TRUE(std::isinf(ray_capsule_entry({5, 0, 0}, up, a, b, 2)));         // misses
   EXPECT_TRUE(std::isinf(ray_capsule_entry({0, 0, 10}, up, a, b, 2)));        // behind
   EXPECT_NEAR(ray_capsule_entry({0.5, 0, 0}, up, a, a, 2), 5 - std::sqrt(4 - 2.25), 1e-14);  // ball
+  // Given `before`: the segment 5 from o cannot be entered before 5 - 2 = 3
+  EXPECT_TRUE(std::isinf(ray_capsule_entry({0, 0, 0}, up, a, b, 2, 2.99)));
+  EXPECT_NEAR(ray_capsule_entry({0, 0, 0}, up, a, b, 2, 3.01), 3, 1e-14);
+  EXPECT_EQ(ray_capsule_entry({0, 0, 4}, up, a, b, 2, 0.5), 0);  // inside whatever the bound
 }
