@@ -18,8 +18,9 @@
 // until it clears it by δ (what post.simulate's gouge bound counts), and a move whose quarter
 // points (and points 0.5 mm apart on longer moves) reach more than chord_tolerance into it
 // gets a lifted point inserted at its worst one
-// (and its halves are checked again, up to max_splits times). A lifted ball leaves stock: the
-// report says where and how much, so a planner's weak spot is never hidden.
+// (and its halves are checked again, up to max_splits times); a move still too deep after that
+// is raised whole, both ends, until its probes clear. A lifted ball leaves stock: the report
+// says where and how much, so a planner's weak spot is never hidden.
 #pragma once
 
 #include <Eigen/Core>

@@ -15,7 +15,7 @@ namespace scallop::path_nodes {
 NodeDecl make_gouge_guard_node() {
   NodeDecl d;
   d.type = "path.gouge_guard";
-  d.version = 8;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge; 4: a position may reach in by what the planner meant (chord budget) + e/4; 5: the height field's uncertainty counts its fit's misfit; 6: optional loops; 7: the height field solved by a fixed-size Cholesky (the same to rounding); 8: the band sampled above every cloud point within reach, not only at the foot point
+  d.version = 9;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge; 4: a position may reach in by what the planner meant (chord budget) + e/4; 5: the height field's uncertainty counts its fit's misfit; 6: optional loops; 7: the height field solved by a fixed-size Cholesky (the same to rounding); 8: the band sampled above every cloud point within reach, not only at the foot point; 9: the foot search halves a step that ends farther from the ball (it swung off a crest tighter than the ball onto the flank), a move still too deep after its halvings is raised whole
                   // 3: fails where a ball would have to be lifted by more than 3 tool radii
   d.description =
       "checks every planned ball position and the middle of every move against the cloud's "
@@ -29,8 +29,9 @@ NodeDecl make_gouge_guard_node() {
       .input("band", "Cloud", "optional: cloud.surface_band of 'cloud' (computed here when not given)", false)
       .output("toolpath", "Toolpath", "the passes, lifted where needed (lifted contact points are the ball's new touching points)")
       .output("report", "Report",
-              "positions and moves checked, lifted and inserted positions, the deepest cut-in "
-              "found and the highest lift, with where");
+              "positions and moves checked, lifted and inserted positions, moves raised whole, places "
+              "still cut in (unresolved: a lifted ball more than 1 % of e into the band, a move raised whole "
+              "more than the chord tolerance), the deepest cut-in found and the highest lift, with where");
   d.options<GougeGuardOptions>()
       .number("tolerance", &GougeGuardOptions::tolerance, 0, 10, "mm",
               "how far the surface (raised by its uncertainty) may come inside the ball at a planned "

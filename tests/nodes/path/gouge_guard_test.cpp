@@ -79,6 +79,29 @@ TEST(BallClearance, IsTheDistanceToATiltedPlaneMinusR) {
   }
 }
 
+TEST(BallClearance, FindsTheNearestPlaceOnACrestTighterThanTheBall) {
+  // A ridge of radius 3 (a cylinder's top, z = sqrt(9 - x^2), sampled every 0.1 mm) under a
+  // ball of radius 4: the tangent-plane step overshoots by the factor 4 / 3 there, and the foot
+  // search swung out onto the flank, far from the nearest place, where the ball seemed to
+  // clear what it cut. Exact: the clearance is the centre's distance from the axis less 3 + 4.
+  constexpr double R = 3, r = 4;
+  std::vector<Eigen::Vector3d> cloud;
+  for (double x = -2.5; x <= 2.5 + 1e-9; x += 0.1)
+    for (double y = -5; y <= 5 + 1e-9; y += 0.1) cloud.emplace_back(x, y, std::sqrt(R * R - x * x));
+  HeightFieldModel surface(cloud);
+  BallClearance clearance(surface, cloud, r);
+  for (double x : {0.0, 0.15, 0.4, 0.8})
+    for (double gap : {0.01, -0.009}) {
+      const Eigen::Vector3d axis_to_centre = Eigen::Vector3d(x, 0, std::sqrt((R + r + gap) * (R + r + gap) - x * x));
+      // the hint a planner gives: the contact right under the centre
+      const Eigen::Vector3d hint(x, 0, std::sqrt(R * R - x * x));
+      const auto res = clearance(axis_to_centre, hint);
+      ASSERT_TRUE(res.on_surface);
+      EXPECT_NEAR(res.clearance, gap, 2e-4) << x << " " << gap;
+      EXPECT_NEAR(res.foot.x(), R * x / (R + r + gap), 2e-3) << x << " " << gap;
+    }
+}
+
 TEST(BallClearance, SeesTheCloudsPointsBeyondTheEdge) {
   // A ball beyond the cloud's edge (no height field under it) still meets the edge points.
   auto cloud = plane_cloud();
@@ -371,6 +394,46 @@ TEST(GougeGuard, SplitsAMoveWhoseMiddleCutsIn) {
       EXPECT_GT(cl, -0.009 - 1e-4) << i << " " << f;
     }
   }
+}
+
+TEST(GougeGuard, AMoveTheHalvingsCannotClearIsRaisedWhole) {
+  // The move of SplitsAMoveWhoseMiddleCutsIn with no halving allowed: its middle sags about
+  // 0.25 mm into the sphere; both ends are raised until every probe is within the chord
+  // tolerance, and then the whole straight move clears the exact sphere by the same (its
+  // deepest place is the middle, a probe). Raised balls never come nearer a surface below.
+  auto cloud = cap_cloud();
+  HeightFieldModel surface(cloud);
+  BallClearance clearance(surface, cloud, 2.0);
+  Toolpath path;
+  path.tool_radius = 2;
+  path.chord_error = 0.01;
+  ToolpathPass p;
+  for (double x : {-4.0, 4.0}) {
+    p.contact.push_back(cap_point(x, 0));
+    p.normal.push_back(cap_normal(x, 0));
+  }
+  path.passes.push_back(p);
+  GougeGuardOptions o;
+  o.max_splits = 0;
+  auto res = guard_gouges(path, clearance, o);
+  EXPECT_EQ(res.report["raised_moves"], 1);
+  EXPECT_EQ(res.report["unresolved"], 0);
+  EXPECT_EQ(res.report["inserted_positions"], 0);
+  const auto& q = res.path.passes[0];
+  ASSERT_EQ(q.contact.size(), 2u);
+  const Eigen::Vector3d a = res.path.centre(q.contact[0], q.normal[0]), b = res.path.centre(q.contact[1], q.normal[1]);
+  // both ends raised by the same, at least what the middle sagged less the tolerance
+  const Eigen::Vector3d a0 = path.centre(p.contact[0], p.normal[0]), b0 = path.centre(p.contact[1], p.normal[1]);
+  EXPECT_NEAR(a.z() - a0.z(), b.z() - b0.z(), 1e-12);
+  EXPECT_NEAR((a - a0).head<2>().norm(), 0, 1e-12);
+  double least = INFINITY;
+  for (int i = 0; i <= 400; ++i) {
+    const Eigen::Vector3d c = a + (b - a) * (i / 400.0);
+    least = std::min(least, (c - Eigen::Vector3d(0, 0, 5 - kR)).norm() - kR - 2.0);
+  }
+  EXPECT_GT(least, -0.009 - 1e-4);
+  EXPECT_LT(least, 0.01);  // raised to the tolerance, not far beyond
+  EXPECT_GT(res.report["highest_lift"].get<double>(), 0.2);
 }
 
 TEST(GougeGuard, BadInputGetsClearErrors) {
