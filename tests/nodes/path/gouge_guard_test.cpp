@@ -360,13 +360,9 @@ TEST(GougeGuard, BeyondTheCloudsEdgeTheExtrapolationIsLessCertain) {
   EXPECT_NEAR(after.clearance, grown, 5e-4);
 }
 
-TEST(GougeGuard, SplitsAMoveWhoseMiddleCutsIn) {
-  // Two contacts 8 mm apart on a sphere of radius 30: the straight centre move sags by about
-  // 8^2 / (8 (30 + 2)) = 0.25 mm into it; the guard inserts lifted points until every move's
-  // quarter points are within the chord tolerance.
-  auto cloud = cap_cloud();
-  HeightFieldModel surface(cloud);
-  BallClearance clearance(surface, cloud, 2.0);
+// One move of a ball of radius 2 between contacts 8 mm apart on the cap (x = -4 and 4, y = 0):
+// its straight centre move sags about 8^2 / (8 (30 + 2)) = 0.25 mm into the sphere.
+Toolpath cap_move_8mm() {
   Toolpath path;
   path.tool_radius = 2;
   path.chord_error = 0.01;
@@ -376,6 +372,17 @@ TEST(GougeGuard, SplitsAMoveWhoseMiddleCutsIn) {
     p.normal.push_back(cap_normal(x, 0));
   }
   path.passes.push_back(p);
+  return path;
+}
+
+TEST(GougeGuard, SplitsAMoveWhoseMiddleCutsIn) {
+  // Two contacts 8 mm apart on a sphere of radius 30: the straight centre move sags by about
+  // 8^2 / (8 (30 + 2)) = 0.25 mm into it; the guard inserts lifted points until every move's
+  // quarter points are within the chord tolerance.
+  auto cloud = cap_cloud();
+  HeightFieldModel surface(cloud);
+  BallClearance clearance(surface, cloud, 2.0);
+  const Toolpath path = cap_move_8mm();
   GougeGuardOptions o;
   o.max_splits = 8;
   auto res = guard_gouges(path, clearance, o);
@@ -404,15 +411,8 @@ TEST(GougeGuard, AMoveTheHalvingsCannotClearIsRaisedWhole) {
   auto cloud = cap_cloud();
   HeightFieldModel surface(cloud);
   BallClearance clearance(surface, cloud, 2.0);
-  Toolpath path;
-  path.tool_radius = 2;
-  path.chord_error = 0.01;
-  ToolpathPass p;
-  for (double x : {-4.0, 4.0}) {
-    p.contact.push_back(cap_point(x, 0));
-    p.normal.push_back(cap_normal(x, 0));
-  }
-  path.passes.push_back(p);
+  const Toolpath path = cap_move_8mm();
+  const ToolpathPass& p = path.passes[0];
   GougeGuardOptions o;
   o.max_splits = 0;
   auto res = guard_gouges(path, clearance, o);
