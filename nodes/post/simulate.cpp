@@ -392,12 +392,13 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
   double area = 0, area_i = 0, uncut = 0, uncut_i = 0, gouge_max = 0;
   std::vector<std::pair<double, double>> all, inner;
   double max_all = -INFINITY, max_inner = -INFINITY;
-  std::size_t n_interior = 0;
+  std::size_t n_interior = 0, gouge_at = 0, scallop_at = 0;
   for (std::size_t i = 0; i < res.samples.size(); ++i) {
     const SimSample& s = res.samples[i];
-    gouge_max = std::max(gouge_max, s.gouge);
+    if (s.gouge > gouge_max) gouge_max = s.gouge, gouge_at = i;
     bool cut = !std::isnan(s.scallop);
     if (cut) {
+      if (s.scallop > max_all) scallop_at = i;
       max_all = std::max(max_all, s.scallop);
       if (s.interior) max_inner = std::max(max_inner, s.scallop);
     }
@@ -436,18 +437,29 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
   rep["surface_uncertainty_max_sampled"] = sampled_uncertainty_max;
 
   nlohmann::json reasons = nlohmann::json::array();
-  char buf[160];
+  char buf[400];
+  // Where a bound is over its limit, how much of it the cloud's surface itself shows and how much
+  // is the surface's uncertainty there (both bounds are the value on the surface plus it): a
+  // bound that is mostly uncertainty asks for a better scan, not another program.
+  auto split = [&](const SimSample& at, double bound) {
+    const double u = surf.uncertainty(at.x, at.y);
+    char part[240];
+    std::snprintf(part, sizeof part, ": at (%.4g, %.4g) %.4g on the cloud's surface and %.4g its uncertainty there%s",
+                  at.x, at.y, std::max(0.0, bound - u), u,
+                  u > 0.5 * bound ? " (mostly uncertainty: a finer scan there would tighten it)" : "");
+    return std::string(part);
+  };
   // The whole patch counts, rim included: the rim is part of the part.
   if (std::isnan(max_all)) {
     reasons.push_back("no sample was cut");
   } else if (max_all > 1.01 * H) {
     std::snprintf(buf, sizeof buf, "scallop max %.4g > 1.01 H (rim included; interior %.4g)",
                   max_all, max_inner);
-    reasons.push_back(buf);
+    reasons.push_back(buf + split(res.samples[scallop_at], max_all));
   }
   if (gouge_max > gouge_tol) {
     std::snprintf(buf, sizeof buf, "gouge max %.4g > %.4g", gouge_max, gouge_tol);
-    reasons.push_back(buf);
+    reasons.push_back(buf + split(res.samples[gouge_at], gouge_max));
   }
   if (uncut > 0) {
     std::snprintf(buf, sizeof buf, "uncut fraction %.4g > 0", uncut / area);
@@ -480,7 +492,8 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
     taken.push_back(q);
     std::string kind = s.gouge > gouge_tol ? "gouge" : std::isnan(s.scallop) ? "uncut" : "scallop";
     nlohmann::json v = kind == "gouge" ? nlohmann::json(s.gouge) : kind == "uncut" ? nlohmann::json() : nlohmann::json(s.scallop);
-    worst.push_back({{"x", s.x}, {"y", s.y}, {"z", s.z}, {"kind", kind}, {"value", v}, {"interior", s.interior}});
+    worst.push_back({{"x", s.x}, {"y", s.y}, {"z", s.z}, {"kind", kind}, {"value", v}, {"interior", s.interior},
+                     {"uncertainty", surf.uncertainty(s.x, s.y)}});
   }
   rep["worst"] = worst;
   res.outline = std::move(outline);

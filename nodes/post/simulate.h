@@ -77,8 +77,9 @@ struct SimulateOptions {
 // surface_area, surface_uncertainty_max (the cloud points' largest uncertainty),
 // surface_uncertainty_max_sampled (the largest the bounds used at a grid sample: the
 // HeightFieldModel's, its fit's misfit counted), tool_radius, scallop_limit, chord_limit, pass,
-// fail_reasons, worst (up to 10
-// places {x, y, z, kind: "gouge" | "uncut" | "scallop", value}, worst first).
+// fail_reasons (a bound over its limit says where, and how much of it is the surface's
+// uncertainty there), worst (up to 10 places {x, y, z, kind: "gouge" | "uncut" | "scallop", value,
+// interior, uncertainty: the surface's there, included in value}, worst first).
 // Throws std::invalid_argument for r ≤ 0, h ≤ 0, an empty path, a non-finite centre, or loops
 // whose outer polygon has fewer than 3 points or that have a non-finite point.
 Simulation simulate_cut(const HeightFieldModel& surface, const std::vector<CentreSegment>& feed,

@@ -203,7 +203,8 @@ std::string summary(const Outcome& o) {
   return buf;
 }
 
-// The reasons post.simulate gives for a failing certificate, rebuilt from its numbers.
+// The reasons post.simulate gives for a failing certificate, rebuilt from its numbers (how each
+// begins).
 std::vector<std::string> expected_fail_reasons(const nlohmann::json& rep) {
   std::vector<std::string> reasons;
   char buf[160];
@@ -236,8 +237,11 @@ Outcome expect_honest(const Case& c) {
   EXPECT_LT(o.fit_error, 5e-4) << "the exact cloud's height field is not exact enough to measure with";
   const auto& cert = o.certificate;
   const auto& exact = o.exact;
-  const std::vector<std::string> reasons = cert["fail_reasons"];
-  EXPECT_EQ(reasons, expected_fail_reasons(cert));
+  // (a bound's reason goes on to say where, and how much of it is the surface's uncertainty)
+  const std::vector<std::string> reasons = cert["fail_reasons"], expected = expected_fail_reasons(cert);
+  EXPECT_EQ(reasons.size(), expected.size());
+  for (std::size_t i = 0; i < std::min(reasons.size(), expected.size()); ++i)
+    EXPECT_EQ(reasons[i].substr(0, expected[i].size()), expected[i]);
   if (!cert["pass"].get<bool>()) return o;
   // the certificate passed: the real surface must hold the limits as well
   EXPECT_LE(exact["gouge_max"].get<double>(), kChord + kTiny + o.fit_error) << summary(o);

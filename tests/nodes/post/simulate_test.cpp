@@ -176,6 +176,42 @@ TEST(Simulate, UncertainCloudGivesBoundsForTheRealSurface) {
   }
 }
 
+TEST(Simulate, AFailingBoundSaysHowMuchOfItIsTheSurfacesUncertainty) {
+  // The raster lowered by 0.004 in z over a plane whose points are known to 0.03: the gouge on
+  // the cloud's surface is at most 0.004 n_z = 0.00381, and the bound adds the uncertainty (0.03
+  // inside, grown past the outermost points, where the bound is largest): over e = 0.01, mostly
+  // uncertainty, and the reason says so, with where.
+  const double r = 3, s = 0.7, dz = 0.004, delta = 0.03;
+  const auto cloud = plane_cloud();
+  const std::vector<double> U(cloud.size(), delta);
+  HeightFieldModel surf(cloud, 20, &U);
+  SimulateOptions o;
+  o.tool_radius = r;
+  o.scallop = 0.2;
+  o.chord = 0.01;
+  o.spacing = 0.08;
+  const auto res = simulate_cut(surf, feed_centres(raster(r, s, dz)), 0.0, o);
+  const auto& j = res.report;
+  const double gouge = j["gouge_max"].get<double>();
+  ASSERT_GT(gouge, delta);
+  const auto at = std::find_if(res.samples.begin(), res.samples.end(), [&](const SimSample& x) { return x.gouge == gouge; });
+  ASSERT_NE(at, res.samples.end());
+  const double u = surf.uncertainty(at->x, at->y);
+  EXPECT_GE(u, delta);
+  EXPECT_LE(gouge - u, dz / 1.05 + 1e-9);  // the bound is the surface's gouge plus u
+  char expected[400];
+  std::snprintf(expected, sizeof expected,
+                "gouge max %.4g > 0.01: at (%.4g, %.4g) %.4g on the cloud's surface and %.4g its uncertainty there "
+                "(mostly uncertainty: a finer scan there would tighten it)",
+                gouge, at->x, at->y, std::max(0.0, gouge - u), u);
+  EXPECT_EQ(j["fail_reasons"].back(), expected);
+  // the worst places carry the uncertainty their value includes
+  ASSERT_FALSE(j["worst"].empty());
+  EXPECT_EQ(j["worst"][0]["kind"], "gouge");
+  EXPECT_NEAR(j["worst"][0]["value"].get<double>(), gouge, 1e-15);
+  EXPECT_NEAR(j["worst"][0]["uncertainty"].get<double>(), u, 1e-15);
+}
+
 TEST(Simulate, LoweredRasterGougesByTheNormalComponent) {
   const double r = 3, s = 0.7;
   auto res = run(raster(r, s, -0.1), 0.02);
