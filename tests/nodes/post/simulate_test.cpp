@@ -58,14 +58,20 @@ double line_gap(double s) {
   return (step - step.dot(dir) * dir).norm();
 }
 
+// The options the plane's tests simulate with: a grid of 0.08 mm.
+SimulateOptions plane_options(double r, double h, double chord = 0) {
+  SimulateOptions o;
+  o.tool_radius = r;
+  o.scallop = h;
+  o.chord = chord;
+  o.spacing = 0.08;
+  return o;
+}
+
 Simulation run(const Toolpath& t, double h) {
   static const auto cloud = plane_cloud();
   HeightFieldModel surf(cloud);
-  SimulateOptions o;
-  o.tool_radius = t.tool_radius;
-  o.scallop = h;
-  o.spacing = 0.08;
-  return simulate_cut(surf, feed_centres(t), 0.0, o);
+  return simulate_cut(surf, feed_centres(t), 0.0, plane_options(t.tool_radius, h));
 }
 
 TEST(Simulate, HeightFieldReproducesAPlane) {
@@ -145,12 +151,7 @@ TEST(Simulate, UncertainCloudGivesBoundsForTheRealSurface) {
   EXPECT_NEAR(surf.uncertainty(7, 5), delta, 1e-15);
   EXPECT_EQ(surf.uncertainty_max(), delta);
   EXPECT_NEAR(HeightFieldModel(cloud).uncertainty(7, 5), 0.0, 1e-12);  // a plane: no misfit
-  SimulateOptions o;
-  o.tool_radius = r;
-  o.scallop = 0.05;
-  o.chord = 0.01;
-  o.spacing = 0.08;
-  const auto res = simulate_cut(surf, feed_centres(raster(r, s, dz)), 0.0, o);
+  const auto res = simulate_cut(surf, feed_centres(raster(r, s, dz)), 0.0, plane_options(r, 0.05, 0.01));
   const auto& j = res.report;
   const double w = line_gap(s), cusp = r - std::sqrt(r * r - w * w / 4);
   EXPECT_NEAR(j["scallop_max_interior"].get<double>(), cusp + dz / 1.05 + delta, 0.01 * cusp);
@@ -185,12 +186,7 @@ TEST(Simulate, AFailingBoundSaysHowMuchOfItIsTheSurfacesUncertainty) {
   const auto cloud = plane_cloud();
   const std::vector<double> U(cloud.size(), delta);
   HeightFieldModel surf(cloud, 20, &U);
-  SimulateOptions o;
-  o.tool_radius = r;
-  o.scallop = 0.2;
-  o.chord = 0.01;
-  o.spacing = 0.08;
-  const auto res = simulate_cut(surf, feed_centres(raster(r, s, dz)), 0.0, o);
+  const auto res = simulate_cut(surf, feed_centres(raster(r, s, dz)), 0.0, plane_options(r, 0.2, 0.01));
   const auto& j = res.report;
   const double gouge = j["gouge_max"].get<double>();
   ASSERT_GT(gouge, delta);
