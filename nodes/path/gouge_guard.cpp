@@ -133,38 +133,12 @@ BallClearance::~BallClearance() { delete impl_; }
 BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const Eigen::Vector3d& hint) const {
   const double r = impl_->r;
   Result res;
-  // Foot point of c on the height field: move to the projection of c onto the tangent plane at
-  // the current point until it stops moving. Where the surface curves tighter than |c − foot|
-  // that step overshoots, and the search swung off the top of a crest of radius 3 mm under a
-  // ball of radius 4 onto its flank, 1.1 mm from the nearest place: the ball's clearance came
-  // out 0.026 mm where it cut 0.009 mm into the field (and 0.0103 into the true crest). So a
-  // step that ends farther from c is halved back towards the nearest point found.
-  Eigen::Vector2d s = hint.head<2>(), nearest = s, step = Eigen::Vector2d::Zero();
-  double z = 0, nearest_d2 = INFINITY;
+  // Foot point of c on the height field (at most a ball radius per step: a poor start must not
+  // throw the search off the patch).
+  Eigen::Vector2d s = hint.head<2>();
+  double z = 0;
   Eigen::Vector3d n;
-  bool found = false;
-  for (int it = 0; it < 24; ++it) {
-    if (!impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/true)) break;
-    const Eigen::Vector3d p(s.x(), s.y(), z);
-    const double d2 = (c - p).squaredNorm();
-    if (found && d2 > nearest_d2) {
-      step *= 0.5;
-      if (step.norm() < 1e-7) break;
-      s = nearest + step;
-      continue;
-    }
-    found = true, nearest = s, nearest_d2 = d2;
-    Eigen::Vector2d next = (c - (c - p).dot(n) * n).head<2>();
-    // at most a ball radius per step: a poor start must not throw the search off the patch
-    if ((next - s).norm() > r) next = s + r * (next - s).normalized();
-    step = next - s;
-    s = next;
-    if (step.norm() < 1e-7) {
-      nearest = s;
-      break;
-    }
-  }
-  s = nearest;
+  const bool found = impl_->surface.foot_point(c, hint.head<2>(), r, s);
   // On the patch, or in the band where the part's edge lies: within a cloud spacing of its
   // outermost points (they sit about half a spacing inside the edge), or up to two spacings
   // away in a gap the sample left between the points of a rim (no farther out than half a

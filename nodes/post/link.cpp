@@ -109,21 +109,18 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
     }
     if (!model) return true;
     // The model under the ball: ball centres along the link every quarter of the cloud spacing
-    // (at most r / 16), each against its foot point on the model (found by stepping from below
-    // the centre against the normal: the nearest surface point to a ball resting on it lies r
-    // along the normal from its centre).
+    // (at most r / 16), each against its foot point on the model, looked for from below the
+    // centre (HeightFieldModel::foot_point; stepping to c - r n alone swung off a crest tighter
+    // than the ball and missed a link 0.05 mm into it), and on the patch there.
     const double step = std::min(0.25 * model->spacing(), r / 16);
     const int m = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step)));
     for (int i = 0; i <= m; ++i) {
       const Eigen::Vector3d c = a + (b - a) * (double(i) / m);
-      Eigen::Vector2d q = c.head<2>();
-      for (int it = 0; it < 4; ++it) {
-        double z, u = 0;
-        Eigen::Vector3d n;
-        if (!model->eval(q.x(), q.y(), z, n, false, &u)) break;
-        if ((c - Eigen::Vector3d(q.x(), q.y(), z)).norm() < r - tol + u) return false;
-        q = c.head<2>() - r * n.head<2>();
-      }
+      Eigen::Vector2d q;
+      double z, u = 0;
+      Eigen::Vector3d n;
+      if (!model->foot_point(c, c.head<2>(), r, q) || !model->eval(q.x(), q.y(), z, n, false, &u)) continue;
+      if ((c - Eigen::Vector3d(q.x(), q.y(), z)).norm() < r - tol + u) return false;
     }
     return true;
   };

@@ -10,7 +10,7 @@ namespace scallop::post_nodes {
 NodeDecl make_link_node() {
   NodeDecl d;
   d.type = "post.link";
-  d.version = 8;  // 7: down at rapid rate to lead_height above a start, then the plunge (was a plunge from the clearance plane); 8: the rapids stop where a ball of r + lead_height would touch the part; 2: fails where the passes rise more than 10 r + the part's height range above it; 4: the height field's uncertainty counts its fit's misfit; 5: the moves stored without their padding bytes; 6: the height field solved by a fixed-size Cholesky
+  d.version = 9;  // 9: the model under a link is checked at the foot point HeightFieldModel::foot_point finds (stepping to c - r n alone swung off crests tighter than the ball); 7: down at rapid rate to lead_height above a start, then the plunge (was a plunge from the clearance plane); 8: the rapids stop where a ball of r + lead_height would touch the part; 2: fails where the passes rise more than 10 r + the part's height range above it; 4: the height field's uncertainty counts its fit's misfit; 5: the moves stored without their padding bytes; 6: the height field solved by a fixed-size Cholesky
                   // 3: links checked against the cloud's height field too
   d.description = "joins passes in order: short feed links where the ball stays above the surface, else retract to a clearance plane";
   d.input("path", "Toolpath", "the passes, in cutting order")

@@ -1,5 +1,7 @@
 #include "nodes/post/link.h"
 
+#include "nodes/geom/segment.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -143,6 +145,35 @@ TEST(Link, ALinkThatDipsBetweenSparsePointsIsCaughtByTheHeightField) {
   const HeightFieldModel model(cloud, 20);
   const auto checked = link_passes(t, cloud, {}, &model);
   EXPECT_EQ(count(checked, MoveKind::Rapid), 6);  // over, down, up, over, down, up
+}
+
+// A link along a ridge of radius 3 (a cylinder's top, z = sqrt(9 - x^2)), its ball centres 6.95
+// from the axis: 0.05 mm into the ridge all along, beside its top (x = 1.5). The points miss it
+// (none lies within a strip 0.8 wide where the ball comes nearest); the height field across the
+// strip does not. Found from below the centre by stepping to c - r n, the foot swung from side
+// to side of the top (the step overshoots by r / R = 4 / 3) and never came near.
+TEST(Link, ALinkBesideTheTopOfARidgeTighterThanTheBallIsCaught) {
+  constexpr double R = 3, r = 4, D = 6.95, cx = 1.5;
+  std::vector<Eigen::Vector3d> cloud;
+  for (double y = -6; y <= 6 + 1e-9; y += 0.3) {
+    for (double x = 0.25; x >= -2.9; x -= 0.3) cloud.emplace_back(x, y, std::sqrt(R * R - x * x));
+    for (double x = 1.05; x <= 2.9; x += 0.3) cloud.emplace_back(x, y, std::sqrt(R * R - x * x));
+  }
+  Toolpath t;
+  t.tool_radius = r;
+  t.chord_error = 0.005;
+  const Eigen::Vector3d n = Eigen::Vector3d(cx, 0, std::sqrt(D * D - cx * cx)) / D;
+  for (double y : {-1.0, 1.0}) {
+    ToolpathPass p;
+    p.contact.push_back(Eigen::Vector3d(0, y, 0) + (D - r) * n);  // its centre D from the axis
+    p.normal.push_back(n);
+    t.passes.push_back(p);
+  }
+  for (const auto& q : cloud)  // no point within r - e of the link
+    EXPECT_GT(segment_distance(q, t.centre(t.passes[0].contact[0], n), t.centre(t.passes[1].contact[0], n)), r - 0.005);
+  EXPECT_EQ(count(link_passes(t, cloud, {}), MoveKind::Rapid), 3);  // the link a feed move
+  const HeightFieldModel model(cloud, 20);
+  EXPECT_EQ(count(link_passes(t, cloud, {}, &model), MoveKind::Rapid), 6);  // over, down, up, over, down, up
 }
 
 TEST(Link, LinksOverABumpOrTooLongRetract) {
