@@ -12,14 +12,18 @@ namespace {
 constexpr double kPointsPerCell = 2;
 }
 
-GridKnn2d::GridKnn2d(const std::vector<Eigen::Vector2d>& P) {
+GridKnn2d::GridKnn2d(const std::vector<Eigen::Vector2d>& P) { build(P); }
+GridKnn2d::GridKnn2d(const std::vector<Eigen::Vector3d>& P) { build(P); }
+
+template <class Point>
+void GridKnn2d::build(const std::vector<Point>& P) {
   if (P.empty()) throw std::invalid_argument("no points to search");
-  Eigen::Vector2d lo = P[0], hi = P[0];
+  Eigen::Vector2d lo = P[0].template head<2>(), hi = lo;
   for (std::size_t i = 0; i < P.size(); ++i) {
-    if (!P[i].allFinite())
+    if (!P[i].template head<2>().allFinite())
       throw std::invalid_argument("point " + std::to_string(i) + " has a NaN or infinite coordinate");
-    lo = lo.cwiseMin(P[i]);
-    hi = hi.cwiseMax(P[i]);
+    lo = lo.cwiseMin(P[i].template head<2>());
+    hi = hi.cwiseMax(P[i].template head<2>());
   }
   const std::size_t n = P.size();
   const double w = hi.x() - lo.x(), h = hi.y() - lo.y(), span = std::max(w, h);
@@ -32,7 +36,7 @@ GridKnn2d::GridKnn2d(const std::vector<Eigen::Vector2d>& P) {
   x0_ = lo.x(), y0_ = lo.y();
   slack_ = 1e-13 * (lo.cwiseAbs().cwiseMax(hi.cwiseAbs()).maxCoeff() + cell_);
   nx_ = static_cast<int>(cells_along(w)), ny_ = static_cast<int>(cells_along(h));
-  auto cell_of = [&](const Eigen::Vector2d& p) {
+  auto cell_of = [&](const Point& p) {
     return std::size_t(column_of(p.y(), y0_, ny_)) * std::size_t(nx_) + std::size_t(column_of(p.x(), x0_, nx_));
   };
   // Counting sort by cell, each cell's points in index order.
@@ -45,7 +49,7 @@ GridKnn2d::GridKnn2d(const std::vector<Eigen::Vector2d>& P) {
   index_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t at = next[cell[i]]++;
-    point_[at] = P[i];
+    point_[at] = P[i].template head<2>();
     index_[at] = std::uint32_t(i);
   }
 }

@@ -17,6 +17,8 @@ class GridKnn2d {
   // P  #P planar points, finite (copied: the grid keeps its own, ordered by cell).
   // Throws std::invalid_argument for an empty set or a non-finite coordinate.
   explicit GridKnn2d(const std::vector<Eigen::Vector2d>& P);
+  // The same over the (x, y) of 3-D points (indices into P as above).
+  explicit GridKnn2d(const std::vector<Eigen::Vector3d>& P);
 
   // The min(k, #P) points nearest q (any finite q, inside the points' bounds or not), nearest
   // first, equal distances by index: idx their indices into P, sq their squared distances; both
@@ -28,6 +30,8 @@ class GridKnn2d {
   std::size_t size() const { return index_.size(); }
 
  private:
+  template <class Point>
+  void build(const std::vector<Point>& P);
   int column_of(double x, double origin, int count) const;  // the cell index along one axis
   double x0_ = 0, y0_ = 0, cell_ = 1;  // the grid's corner and cell side
   double slack_ = 0;                   // more than the rounding of a point into its cell

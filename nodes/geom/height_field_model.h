@@ -17,8 +17,11 @@ class HeightFieldModel {
  public:
   // P  #P by 3 cloud points (mm), at least 10. k  neighbours per fit.
   // uncertainty  optional #P bounds (mm) on how far each point may be off the real surface
+  // The model reads P and uncertainty where they are: both must outlive it (a temporary P is
+  // moved in and kept by the model instead).
   HeightFieldModel(const std::vector<Eigen::Vector3d>& P, int k = 20,
-              const std::vector<double>* uncertainty = nullptr);
+                   const std::vector<double>* uncertainty = nullptr);
+  HeightFieldModel(std::vector<Eigen::Vector3d>&& P, int k = 20, const std::vector<double>* uncertainty = nullptr);
   ~HeightFieldModel();
   HeightFieldModel(const HeightFieldModel&) = delete;
   HeightFieldModel& operator=(const HeightFieldModel&) = delete;
@@ -56,8 +59,10 @@ class HeightFieldModel {
   double max_z() const { return zmax_; }
 
  private:
+  HeightFieldModel(std::vector<Eigen::Vector3d>&& own, const std::vector<Eigen::Vector3d>* given, int k,
+                   const std::vector<double>* uncertainty);
   struct Impl;
-  Impl* impl_;
+  Impl* impl_ = nullptr;
   int k_;
   double spacing_ = 0, zmax_ = 0, uncertainty_max_ = 0;
   Eigen::Vector2d lo_, hi_;

@@ -46,6 +46,23 @@ TEST(GridKnn2d, FindsTheSameNeighboursAsBruteForce) {
   for (int k : {1, 6, 21, 64}) expect_exact(P, queries, k);
 }
 
+TEST(GridKnn2d, OverThreeDPointsSearchesTheirXyAlone) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<Eigen::Vector3d> P(2000);
+  std::vector<Eigen::Vector2d> xy;
+  for (auto& p : P) p = {50 * u(rng), 30 * u(rng), 1e3 * (u(rng) - 0.5)}, xy.push_back(p.head<2>());
+  const GridKnn2d over_3d(P), over_xy(xy);
+  std::vector<std::uint32_t> idx, want_idx;
+  std::vector<double> sq, want_sq;
+  for (const Eigen::Vector2d q : {Eigen::Vector2d(25, 15), Eigen::Vector2d(0, 0), Eigen::Vector2d(-9, 40)}) {
+    over_3d.query(q, 21, idx, sq);
+    over_xy.query(q, 21, want_idx, want_sq);
+    EXPECT_EQ(idx, want_idx);
+    EXPECT_EQ(sq, want_sq);
+  }
+}
+
 TEST(GridKnn2d, DenseClustersSparseGapsLinesAndTies) {
   std::mt19937 rng(5);
   std::normal_distribution<double> g(0, 1);

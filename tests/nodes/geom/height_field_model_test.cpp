@@ -153,6 +153,24 @@ TEST(HeightFieldModel, UncertaintyBoundsTheFitsErrorOnAnExactCrest) {
   EXPECT_NEAR(m.uncertainty(7.013, 0.0), 1e-4, 2e-4);  // barely on a flank
 }
 
+TEST(HeightFieldModel, KeepsATemporaryCloudAndReadsAGivenOneInPlace) {
+  // A model reads the caller's cloud where it is (no copy); given a temporary it keeps it: the
+  // same surface either way, also after the temporary's expression has ended.
+  auto f = [](double x, double y) { return 0.02 * x * x - 0.01 * y * y + 0.3 * y; };
+  const auto P = grid(f);
+  const HeightFieldModel in_place(P), kept(grid(f));
+  for (const auto& q : kProbes) {
+    double z0, z1;
+    Eigen::Vector3d n0, n1;
+    ASSERT_TRUE(in_place.eval(q[0], q[1], z0, n0));
+    ASSERT_TRUE(kept.eval(q[0], q[1], z1, n1));
+    EXPECT_EQ(z0, z1);
+    EXPECT_EQ(n0, n1);
+    EXPECT_NEAR(z1, f(q[0], q[1]), 1e-9);
+  }
+  EXPECT_EQ(in_place.spacing(), kept.spacing());
+}
+
 TEST(HeightFieldModel, RefusesTooFewPointsAndMismatchedUncertainties) {
   const std::vector<Eigen::Vector3d> few(9, Eigen::Vector3d::Zero());
   EXPECT_THROW(HeightFieldModel m(few), std::invalid_argument);
