@@ -437,16 +437,25 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
   rep["surface_uncertainty_max_sampled"] = sampled_uncertainty_max;
 
   nlohmann::json reasons = nlohmann::json::array();
-  char buf[400];
+  char buf[160];
   // Where a bound is over its limit, how much of it the cloud's surface itself shows and how much
   // is the surface's uncertainty there (both bounds are the value on the surface plus it): a
   // bound that is mostly uncertainty asks for a better scan, not another program.
+  // A gouge bound below the uncertainty is a ball that clears the cloud's surface by less than
+  // the surface is known (on a noisy dome, "0 on the cloud's surface" read as a touch where the
+  // ball stayed 0.013 mm off).
   auto split = [&](const SimSample& at, double bound) {
-    const double u = surf.uncertainty(at.x, at.y);
+    const double u = surf.uncertainty(at.x, at.y), on_surface = bound - u;
     char part[240];
-    std::snprintf(part, sizeof part, ": at (%.4g, %.4g) %.4g on the cloud's surface and %.4g its uncertainty there%s",
-                  at.x, at.y, std::max(0.0, bound - u), u,
-                  u > 0.5 * bound ? " (mostly uncertainty: a finer scan there would tighten it)" : "");
+    if (on_surface < 0)
+      std::snprintf(part, sizeof part,
+                    ": at (%.4g, %.4g) the ball stays %.4g clear of the cloud's surface, less than its "
+                    "uncertainty there, %.4g (a finer scan there would tighten it)",
+                    at.x, at.y, -on_surface, u);
+    else
+      std::snprintf(part, sizeof part, ": at (%.4g, %.4g) %.4g on the cloud's surface and %.4g its uncertainty there%s",
+                    at.x, at.y, on_surface, u,
+                    u > 0.5 * bound ? " (mostly uncertainty: a finer scan there would tighten it)" : "");
     return std::string(part);
   };
   // The whole patch counts, rim included: the rim is part of the part.

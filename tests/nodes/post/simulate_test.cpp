@@ -177,35 +177,69 @@ TEST(Simulate, UncertainCloudGivesBoundsForTheRealSurface) {
   }
 }
 
-TEST(Simulate, AFailingBoundSaysHowMuchOfItIsTheSurfacesUncertainty) {
-  // The raster lowered by 0.004 in z over a plane whose points are known to 0.03: the gouge on
-  // the cloud's surface is at most 0.004 n_z = 0.00381, and the bound adds the uncertainty (0.03
-  // inside, grown past the outermost points, where the bound is largest): over e = 0.01, mostly
-  // uncertainty, and the reason says so, with where.
-  const double r = 3, s = 0.7, dz = 0.004, delta = 0.03;
+// The raster moved dz in z over a plane whose points are known to 0.03 (r = 3, e = 0.01): the
+// report, the sample of the largest gouge bound and the surface's uncertainty there.
+struct UncertainPlaneRun {
+  nlohmann::json report;
+  SimSample worst;
+  double gouge = 0, uncertainty = 0;
+};
+UncertainPlaneRun raster_over_uncertain_plane(double dz) {
+  const double r = 3, s = 0.7, delta = 0.03;
   const auto cloud = plane_cloud();
   const std::vector<double> U(cloud.size(), delta);
-  HeightFieldModel surf(cloud, 20, &U);
+  const HeightFieldModel surf(cloud, 20, &U);
   const auto res = simulate_cut(surf, feed_centres(raster(r, s, dz)), 0.0, plane_options(r, 0.2, 0.01));
-  const auto& j = res.report;
-  const double gouge = j["gouge_max"].get<double>();
-  ASSERT_GT(gouge, delta);
-  const auto at = std::find_if(res.samples.begin(), res.samples.end(), [&](const SimSample& x) { return x.gouge == gouge; });
-  ASSERT_NE(at, res.samples.end());
-  const double u = surf.uncertainty(at->x, at->y);
-  EXPECT_GE(u, delta);
+  UncertainPlaneRun out;
+  out.report = res.report;
+  out.gouge = res.report["gouge_max"].get<double>();
+  const auto at = std::find_if(res.samples.begin(), res.samples.end(), [&](const SimSample& x) { return x.gouge == out.gouge; });
+  EXPECT_NE(at, res.samples.end());
+  if (at == res.samples.end()) return out;
+  out.worst = *at;
+  out.uncertainty = surf.uncertainty(at->x, at->y);
+  EXPECT_GE(out.uncertainty, delta);  // 0.03 inside, grown past the outermost points
+  return out;
+}
+
+TEST(Simulate, AFailingBoundSaysHowMuchOfItIsTheSurfacesUncertainty) {
+  // The raster lowered by 0.004 in z: the gouge on the cloud's surface is at most 0.004 n_z =
+  // 0.00381, and the bound adds the uncertainty: over e = 0.01, mostly uncertainty, and the
+  // reason says so, with where.
+  const double dz = 0.004;
+  const auto run = raster_over_uncertain_plane(-dz);
+  const double gouge = run.gouge, u = run.uncertainty;
+  EXPECT_GT(gouge - u, 0.0);
   EXPECT_LE(gouge - u, dz / 1.05 + 1e-9);  // the bound is the surface's gouge plus u
   char expected[400];
   std::snprintf(expected, sizeof expected,
                 "gouge max %.4g > 0.01: at (%.4g, %.4g) %.4g on the cloud's surface and %.4g its uncertainty there "
                 "(mostly uncertainty: a finer scan there would tighten it)",
-                gouge, at->x, at->y, std::max(0.0, gouge - u), u);
+                gouge, run.worst.x, run.worst.y, gouge - u, u);
+  const auto& j = run.report;
   EXPECT_EQ(j["fail_reasons"].back(), expected);
   // the worst places carry the uncertainty their value includes
   ASSERT_FALSE(j["worst"].empty());
   EXPECT_EQ(j["worst"][0]["kind"], "gouge");
   EXPECT_NEAR(j["worst"][0]["value"].get<double>(), gouge, 1e-15);
   EXPECT_NEAR(j["worst"][0]["uncertainty"].get<double>(), u, 1e-15);
+}
+
+TEST(Simulate, ABallClearOfTheSurfaceByLessThanItsUncertaintyIsSaidSo) {
+  // The raster raised by 0.004 in z: no ball touches the cloud's surface, but the bound (the
+  // uncertainty less the clearance) is over e = 0.01; the reason says the ball stays clear by
+  // less than the uncertainty (v10 said "0 on the cloud's surface", as if it touched).
+  const double dz = 0.004;
+  const auto run = raster_over_uncertain_plane(dz);
+  const double gouge = run.gouge, u = run.uncertainty;
+  ASSERT_GT(gouge, 0.01);
+  EXPECT_GE(u - gouge, dz / 1.05 - 1e-9);  // clear of the surface by at least dz n_z
+  char expected[400];
+  std::snprintf(expected, sizeof expected,
+                "gouge max %.4g > 0.01: at (%.4g, %.4g) the ball stays %.4g clear of the cloud's surface, less "
+                "than its uncertainty there, %.4g (a finer scan there would tighten it)",
+                gouge, run.worst.x, run.worst.y, u - gouge, u);
+  EXPECT_EQ(run.report["fail_reasons"].back(), expected);
 }
 
 TEST(Simulate, LoweredRasterGougesByTheNormalComponent) {
