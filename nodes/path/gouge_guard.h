@@ -10,7 +10,8 @@
 // (HeightFieldModel, what post.simulate certifies against), via the foot point of c on it, and
 // sampled with its uncertainty above every cloud point near c (the foot search finds one nearest
 // place; the uncertainty may peak at another: a crest's top beside the flank the ball touches);
-// and the cloud's points themselves within r of c. clearance(c) = distance to the surface − r, and the
+// beyond the cloud's edge, where the uncertainty grows outward faster than the ball's distance,
+// also around the foot out to 8 spacings; and the cloud's points themselves within r of c. clearance(c) = distance to the surface − r, and the
 // ball must clear the surface by its uncertainty δ there (0 on a clean cloud; grown beyond the
 // cloud's edge, where the field is extrapolated): the real surface may be δ higher. A position
 // reaching more than `tolerance` into that band (δ − clearance > tolerance; by default e/4 plus

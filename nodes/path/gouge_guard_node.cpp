@@ -15,7 +15,7 @@ namespace scallop::path_nodes {
 NodeDecl make_gouge_guard_node() {
   NodeDecl d;
   d.type = "path.gouge_guard";
-  d.version = 9;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge; 4: a position may reach in by what the planner meant (chord budget) + e/4; 5: the height field's uncertainty counts its fit's misfit; 6: optional loops; 7: the height field solved by a fixed-size Cholesky (the same to rounding); 8: the band sampled above every cloud point within reach, not only at the foot point; 9: the foot search halves a step that ends farther from the ball (it swung off a crest tighter than the ball onto the flank), a move still too deep after its halvings is raised whole
+  d.version = 10;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge; 4: a position may reach in by what the planner meant (chord budget) + e/4; 5: the height field's uncertainty counts its fit's misfit; 6: optional loops; 7: the height field solved by a fixed-size Cholesky (the same to rounding); 8: the band sampled above every cloud point within reach, not only at the foot point; 9: the foot search halves a step that ends farther from the ball (it swung off a crest tighter than the ball onto the flank), a move still too deep after its halvings is raised whole; 10: beyond the cloud's edge the band is checked around the foot too, out to 8 spacings (the uncertainty grows outward faster than the ball's distance)
                   // 3: fails where a ball would have to be lifted by more than 3 tool radii
   d.description =
       "checks every planned ball position and the middle of every move against the cloud's "

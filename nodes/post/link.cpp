@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 #include "nodes/geom/kd_tree.h"
+#include "nodes/path/step_size.h"
 #include "nodes/post/centre_index.h"
 
 namespace scallop {
@@ -48,7 +49,7 @@ double largest_stepover(const Toolpath& path) {
 }
 
 LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>& surface_in,
-                       const LinkOptions& o, const HeightFieldModel* model) {
+                       const LinkOptions& o, const HeightFieldModel* model, const Outline* outline) {
   path.check_passes();
   const double r = path.tool_radius;
   std::vector<Eigen::Vector3d> own;
@@ -119,8 +120,11 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
       Eigen::Vector2d q;
       double z, u = 0;
       Eigen::Vector3d n;
-      if (!model->foot_point(c, c.head<2>(), r, q) || !model->eval(q.x(), q.y(), z, n, false, &u)) continue;
-      if ((c - Eigen::Vector3d(q.x(), q.y(), z)).norm() < r - tol + u) return false;
+      if (!model->foot_point(c, c.head<2>(), r, q)) continue;
+      if (!model->eval(q.x(), q.y(), z, n, false, &u) &&
+          !(outline && outline->contains(q) && model->eval(q.x(), q.y(), z, n, true, &u)))
+        continue;
+      if ((c - Eigen::Vector3d(q.x(), q.y(), z)).norm() < r - (tol - kUncertaintyRoughness * u) + u) return false;
     }
     return true;
   };

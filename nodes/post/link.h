@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "nodes/geom/height_field_model.h"
+#include "nodes/geom/outline.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
@@ -43,11 +44,17 @@ struct LinkOptions {
 //          A link is then also checked against it, the ball every quarter of the cloud spacing
 //          along it: between sparse points the ball could dip into the surface unseen (measured:
 //          0.015 mm on a 5000-point dome, a link along a hole's edge) and the certificate, which
-//          measures against the model, would fail. Throws std::invalid_argument for r <= 0, no pass with points, a pass whose normals
+//          measures against the model, would fail. The ball must clear the model by its
+//          uncertainty u there, less the tolerance, less 0.15 u (the certificate samples the
+//          uncertainty between these places, where it is rough: kUncertaintyRoughness, step_size.h).
+// outline  optional: the patch's outline in xy (the boundary loops, post.simulate's): a place
+//          inside it is on the model however far from the points (a gap between rim points,
+//          where the model is extrapolated and the certificate counts it). Throws std::invalid_argument for r <= 0, no pass with points, a pass whose normals
 // do not match its points, or non-finite coordinates, and std::runtime_error (saying where) when a
 // pass rises more than 10 r + the surface's height range above the surface's highest point.
 LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>& surface,
-                       const LinkOptions& options, const HeightFieldModel* model = nullptr);
+                       const LinkOptions& options, const HeightFieldModel* model = nullptr,
+                       const Outline* outline = nullptr);
 
 // Largest distance between consecutive passes: for each pair, the distance from the middle point
 // of the later pass to the nearest contact point of the earlier one (mm); 0 for a single pass.

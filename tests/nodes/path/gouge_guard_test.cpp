@@ -191,6 +191,39 @@ TEST(BallClearance, WithAnOutlineCoversEveryGapInsideIt) {
   EXPECT_FALSE(probe(with, 10.4, 0).on_surface);
 }
 
+TEST(BallClearance, InAGapAtTheRimTheBandIsCheckedAroundTheFoot) {
+  // The plane known to +-0.02 with a gap at its rim (no points within 1.2 mm of (10, 0)), given
+  // the square outline: in the gap the field's uncertainty grows with the distance from the
+  // points, outward faster than a ball's distance from the plane grows from its foot. A ball
+  // clearing the band at its foot (9.6, 0) by exactly its uncertainty there reaches deeper into
+  // it a few tenths of a mm outward; the certificate samples those places, so the clearance
+  // must see them: its reach is within 0.002 of the deepest over a 0.02 mm grid of the gap
+  // (what the certificate would find), not the foot's 0.
+  const auto cloud = plane_cloud_with_rim_gap(1.2);
+  const std::vector<double> uncertainty(cloud.size(), 0.02);
+  HeightFieldModel surface(cloud, 20, &uncertainty);
+  const Outline outline({{{-10, -10}, {10, -10}, {10, 10}, {-10, 10}}});
+  BallClearance clearance(surface, cloud, 2.0, &outline);
+  const Eigen::Vector3d foot(9.6, 0, plane_z(9.6, 0));
+  const double u_foot = surface.uncertainty(9.6, 0);
+  const Eigen::Vector3d c = foot + (2.0 + u_foot) * kPlaneNormal;
+  const auto x = clearance(c, foot);
+  ASSERT_TRUE(x.on_surface);
+  EXPECT_NEAR(x.foot_reach(), 0, 1e-6);
+  double deepest = -INFINITY;
+  for (double qx = 8.6; qx <= 10 + 1e-9; qx += 0.02)
+    for (double qy = -1; qy <= 1 + 1e-9; qy += 0.02) {
+      double z, u;
+      Eigen::Vector3d n;
+      surface.eval(qx, qy, z, n, true, &u);
+      deepest = std::max(deepest, u - ((c - Eigen::Vector3d(qx, qy, z)).norm() - 2.0));
+    }
+  EXPECT_GT(deepest, 0.004);
+  EXPECT_TRUE(x.band_is_deepest());
+  EXPECT_LE(x.reach(), deepest + 1e-9);
+  EXPECT_GT(x.reach(), deepest - 0.002);
+}
+
 TEST(GougeGuard, LeavesAPathOnTheSurfaceAlone) {
   auto cloud = plane_cloud();
   HeightFieldModel surface(cloud);

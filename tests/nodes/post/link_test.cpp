@@ -254,5 +254,57 @@ TEST(Link, BadInputIsRefused) {
   }
 }
 
+// Two passes on the plane z = 0 (points every 0.25 mm over [-10, 10]^2, each known to +-0.02)
+// joined by a link of the ball centre along x = x_link from y = -1 to 1, the ball `above` the
+// plane.
+struct UncertainPlaneLink {
+  std::vector<Eigen::Vector3d> cloud;
+  std::vector<double> uncertainty;
+  Toolpath path;
+  UncertainPlaneLink(double x_link, double above, double gap_radius = 0) {
+    for (double x = -10; x <= 10 + 1e-9; x += 0.25)
+      for (double y = -10; y <= 10 + 1e-9; y += 0.25)
+        if (std::hypot(x - 10, y) > gap_radius) cloud.emplace_back(x, y, 0);
+    uncertainty.assign(cloud.size(), 0.02);
+    path.tool_radius = 2;
+    path.chord_error = 0.005;
+    for (double y : {-1.0, 1.0}) {
+      ToolpathPass p;
+      p.contact.emplace_back(x_link, y, above);
+      p.normal.emplace_back(0, 0, 1);
+      path.passes.push_back(p);
+    }
+  }
+};
+
+// The ball must clear the height field by its uncertainty less the tolerance, and less 0.15 of
+// the uncertainty (the certificate samples it between the places checked, where it is rough):
+// over the plane known to +-0.02 with e = 0.005, a link may reach 0.005 - 0.003 = 0.002 into the
+// band. 0.0015 in: a feed link; 0.003 in (within e): refused.
+TEST(Link, ALinkOverAnUncertainSurfaceKeepsTheGougeBudget) {
+  for (const auto& [reach, rapids] : {std::pair{0.0015, 3}, std::pair{0.003, 6}}) {
+    const UncertainPlaneLink at(0, 0.02 - reach);
+    const HeightFieldModel model(at.cloud, 20, &at.uncertainty);
+    EXPECT_EQ(count(link_passes(at.path, at.cloud, {}, &model), MoveKind::Rapid), rapids) << reach;
+  }
+}
+
+// A gap at the rim: no points within 2 mm of (10, 0). A link along x = 9.5 over it, the ball
+// 0.02 above the plane (it clears the points' band exactly), passes where the field is
+// extrapolated and its uncertainty grown: off the patch for the model alone (the nearest point
+// 1.5 mm away), so the link is let through; inside the patch's outline (the square), where the
+// certificate measures, it is refused.
+TEST(Link, ALinkOverAGapBetweenRimPointsIsCheckedInsideTheOutline) {
+  const UncertainPlaneLink at(9.5, 0.02, 2.0);
+  const HeightFieldModel model(at.cloud, 20, &at.uncertainty);
+  double z, u;
+  Eigen::Vector3d n;
+  EXPECT_FALSE(model.eval(9.5, 0, z, n, false, &u));
+  EXPECT_GT(u, 0.03);
+  EXPECT_EQ(count(link_passes(at.path, at.cloud, {}, &model), MoveKind::Rapid), 3);
+  const Outline square({{{-10, -10}, {10, -10}, {10, 10}, {-10, 10}}});
+  EXPECT_EQ(count(link_passes(at.path, at.cloud, {}, &model, &square), MoveKind::Rapid), 6);
+}
+
 }  // namespace
 }  // namespace scallop
