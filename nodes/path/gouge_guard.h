@@ -11,9 +11,10 @@
 // sampled with its uncertainty above every cloud point near c (the foot search finds one nearest
 // place; the uncertainty may peak at another: a crest's top beside the flank the ball touches);
 // beyond the cloud's edge, where the uncertainty grows outward faster than the ball's distance,
-// also around the foot out to 8 spacings; and the cloud's points themselves within r of c. clearance(c) = distance to the surface − r, and the
-// ball must clear the surface by its uncertainty δ there (0 on a clean cloud; grown beyond the
-// cloud's edge, where the field is extrapolated): the real surface may be δ higher. A position
+// also around the foot out to 8 spacings; and the cloud's points themselves within r of c.
+// clearance(c) = distance to the surface − r, and the ball must clear the surface by its
+// uncertainty δ there (0 on a clean cloud; grown beyond the cloud's edge, where the field is
+// extrapolated): the real surface may be δ higher. A position
 // reaching more than `tolerance` into that band (δ − clearance > tolerance; by default e/4 plus
 // the reach the planner's chord budget leaves there, min(δ, 0.65 e), step_size.h) is lifted along +z
 // until it clears it by δ (what post.simulate's gouge bound counts), and a move whose quarter

@@ -49,9 +49,10 @@ struct LinkOptions {
 //          uncertainty between these places, where it is rough: kUncertaintyRoughness, step_size.h).
 // outline  optional: the patch's outline in xy (the boundary loops, post.simulate's): a place
 //          inside it is on the model however far from the points (a gap between rim points,
-//          where the model is extrapolated and the certificate counts it). Throws std::invalid_argument for r <= 0, no pass with points, a pass whose normals
-// do not match its points, or non-finite coordinates, and std::runtime_error (saying where) when a
-// pass rises more than 10 r + the surface's height range above the surface's highest point.
+//          where the model is extrapolated and the certificate counts it).
+// Throws std::invalid_argument for r <= 0, no pass with points, a pass whose normals do not match
+// its points, or non-finite coordinates, and std::runtime_error (saying where) when a pass rises
+// more than 10 r + the surface's height range above the surface's highest point.
 LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>& surface,
                        const LinkOptions& options, const HeightFieldModel* model = nullptr,
                        const Outline* outline = nullptr);
