@@ -132,6 +132,8 @@ BallClearance::BallClearance(const HeightFieldModel& surface, const std::vector<
 
 BallClearance::~BallClearance() { delete impl_; }
 
+double BallClearance::spacing() const { return impl_->surface.spacing(); }
+
 BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const Eigen::Vector3d& hint) const {
   const double r = impl_->r;
   Result res;
@@ -257,6 +259,12 @@ class PassGuard {
     if (tol_ > 0) return tol_;
     return 0.25 * e_ + (x.on_surface ? chord_budget(e_, x.uncertainty).reach : 0.0);
   }
+  // How far a move may reach in between its positions: chord_tolerance when given, else the
+  // gouge budget for the surface's uncertainty where the move reaches deepest (step_size.h).
+  double move_tolerance(const BallClearance::Result& x) const {
+    if (chord_tol_ > 0) return chord_tol_;
+    return gouge_budget(e_, x.on_surface ? x.uncertainty : 0.0);
+  }
 
   // How fast raising the ball takes it out of the band where `x` measured it: the upward part of
   // the direction from the deepest witness (raising the centre by dz moves it away from a
@@ -320,7 +328,7 @@ class PassGuard {
     double at;
     BallClearance::Result there;
     const double worst = worst_along(a, b, at, there);
-    if (!(worst > chord_tol_)) return;
+    if (!(worst > move_tolerance(there))) return;
     if (depth >= max_splits_) {
       stuck.push_back(out.size() - 1);
       if (worst > t.deepest) t.deepest = worst, t.deepest_at = 0.5 * (a.contact + b.contact);
@@ -347,13 +355,13 @@ class PassGuard {
     double at, dz = 0;
     BallClearance::Result there;
     double worst = worst_along(a, b, at, there);
-    for (int it = 0; it < 8 && worst > chord_tol_; ++it) {
-      const double step = (worst - 0.5 * chord_tol_) / rise_rate(there);
+    for (int it = 0; it < 8 && worst > move_tolerance(there); ++it) {
+      const double step = (worst - 0.5 * move_tolerance(there)) / rise_rate(there);
       a.contact.z() += step, b.contact.z() += step, dz += step;
       worst = worst_along(a, b, at, there);
     }
     ++t.raised_moves;
-    if (worst > chord_tol_) ++t.unresolved;
+    if (worst > move_tolerance(there)) ++t.unresolved;
     if (dz > t.highest_lift)
       t.highest_lift = dz, t.highest_lift_at = a.contact, t.highest_lift_from = a.contact + r_ * a.normal - Eigen::Vector3d(0, 0, dz);
   }
@@ -404,7 +412,7 @@ GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearan
   path.check_passes();
   const double r = path.tool_radius, e = path.chord_error;
   const double tol = o.tolerance;  // <= 0: per position (PassGuard::position_tolerance)
-  const double chord_tol = o.chord_tolerance > 0 ? o.chord_tolerance : 0.9 * e;
+  const double chord_tol = o.chord_tolerance;  // <= 0: per move (PassGuard::move_tolerance)
   if (o.max_splits < 0) throw std::invalid_argument("max_splits must be >= 0");
 
   GougeGuardResult res;
@@ -439,7 +447,8 @@ GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearan
   nlohmann::json rep;
   rep["tolerance"] = tol > 0 ? tol : 0.25 * e;
   rep["tolerance_adds_planned_reach"] = !(tol > 0);
-  rep["chord_tolerance"] = chord_tol;
+  rep["chord_tolerance"] = chord_tol > 0 ? chord_tol : 0.9 * e;
+  rep["chord_tolerance_less_uncertainty"] = !(chord_tol > 0);
   rep["positions_checked"] = total.positions;
   rep["moves_checked"] = total.moves;
   rep["lifted_positions"] = total.lifted;

@@ -16,10 +16,10 @@
 // uncertainty δ there (0 on a clean cloud; grown beyond the cloud's edge, where the field is
 // extrapolated): the real surface may be δ higher. A position
 // reaching more than `tolerance` into that band (δ − clearance > tolerance; by default e/4 plus
-// the reach the planner's chord budget leaves there, min(δ, 0.65 e), step_size.h) is lifted along +z
+// the reach the planner's chord budget leaves there, min(δ, 0.65 e − 0.15 δ), step_size.h) is lifted along +z
 // until it clears it by δ (what post.simulate's gouge bound counts), and a move whose quarter
-// points (and points 0.5 mm apart on longer moves) reach more than chord_tolerance into it
-// gets a lifted point inserted at its worst one
+// points (and points 0.5 mm apart on longer moves) reach more than chord_tolerance into it (by
+// default the gouge budget there, 0.9 e − 0.15 δ, step_size.h) gets a lifted point inserted at its worst one
 // (and its halves are checked again, up to max_splits times); a move still too deep after that
 // is raised whole, both ends, until its probes clear. A lifted ball leaves stock: the report
 // says where and how much, so a planner's weak spot is never hidden.
@@ -75,6 +75,8 @@ class BallClearance {
   // centre  ball centre; hint  a surface point near the contact (where the foot search starts).
   // Thread-safe.
   Result operator()(const Eigen::Vector3d& centre, const Eigen::Vector3d& hint) const;
+  // The surface's sampling step (mm): HeightFieldModel::spacing.
+  double spacing() const;
 
  private:
   struct Impl;
@@ -84,7 +86,8 @@ class BallClearance {
 struct GougeGuardOptions {
   double tolerance = 0;        // mm a planned position may reach in before it is lifted;
                                // <= 0: e/4 + chord_budget(e, δ).reach
-  double chord_tolerance = 0;  // mm a move may reach in before a point is inserted; <= 0: 0.9 e (the planner's chord budget)
+  double chord_tolerance = 0;  // mm a move may reach in before a point is inserted; <= 0: the
+                               // gouge budget where it reaches deepest, 0.9 e − 0.15 δ (the planner's)
   int max_splits = 3;          // how often a move may be halved
   std::function<void(double)> progress;
 };

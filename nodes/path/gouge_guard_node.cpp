@@ -3,6 +3,7 @@
 #include <string>
 
 #include "engine/node.h"
+#include "nodes/cloud/surface_band_input.h"
 #include "nodes/geom/height_field_model.h"
 #include "nodes/path/gouge_guard.h"
 #include "nodes/types/cloud.h"
@@ -15,7 +16,7 @@ namespace scallop::path_nodes {
 NodeDecl make_gouge_guard_node() {
   NodeDecl d;
   d.type = "path.gouge_guard";
-  d.version = 10;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge; 4: a position may reach in by what the planner meant (chord budget) + e/4; 5: the height field's uncertainty counts its fit's misfit; 6: optional loops; 7: the height field solved by a fixed-size Cholesky (the same to rounding); 8: the band sampled above every cloud point within reach, not only at the foot point; 9: the foot search halves a step that ends farther from the ball (it swung off a crest tighter than the ball onto the flank), a move still too deep after its halvings is raised whole; 10: beyond the cloud's edge the band is checked around the foot too, out to 8 spacings (the uncertainty grows outward faster than the ball's distance)
+  d.version = 11;  // 2: balls clear the surface raised by its uncertainty, grown at gaps beyond the edge; 4: a position may reach in by what the planner meant (chord budget) + e/4; 5: the height field's uncertainty counts its fit's misfit; 6: optional loops; 7: the height field solved by a fixed-size Cholesky (the same to rounding); 8: the band sampled above every cloud point within reach, not only at the foot point; 9: the foot search halves a step that ends farther from the ball (it swung off a crest tighter than the ball onto the flank), a move still too deep after its halvings is raised whole; 10: beyond the cloud's edge the band is checked around the foot too, out to 8 spacings (the uncertainty grows outward faster than the ball's distance); 11: moves held to the gouge budget, 0.9 e less 0.15 of the uncertainty where they reach deepest (the certificate samples the uncertainty between the places the guard checks)
                   // 3: fails where a ball would have to be lifted by more than 3 tool radii
   d.description =
       "checks every planned ball position and the middle of every move against the cloud's "
@@ -36,11 +37,13 @@ NodeDecl make_gouge_guard_node() {
       .number("tolerance", &GougeGuardOptions::tolerance, 0, 10, "mm",
               "how far the surface (raised by its uncertainty) may come inside the ball at a planned "
               "position before it is lifted; 0: a quarter of the path's chord error plus what the planner "
-              "meant the ball to reach into that band there (min(uncertainty, 0.65 e): the stock "
+              "meant the ball to reach into that band there (min(uncertainty, 0.65 e - 0.15 uncertainty): the stock "
               "it keeps for the uncertainty covers only the rest of it)")
       .number("chord_tolerance", &GougeGuardOptions::chord_tolerance, 0, 10, "mm",
               "how far the surface (raised by its uncertainty) may come inside the ball in the middle "
-              "of a move before a lifted point is inserted; 0: 0.9 of the path's chord error (what the planner's chord budget lets the surface, raised by its uncertainty, reach in anywhere)")
+              "of a move before a lifted point is inserted; 0: the gouge budget where the move reaches deepest, 0.9 of "
+              "the path's chord error less 0.15 of the surface's uncertainty there (what the planner's chord "
+              "budget lets the surface, raised by its uncertainty, reach in anywhere)")
       .integer("max_splits", &GougeGuardOptions::max_splits, 0, 10, "", "how often a move may be halved");
   d.run = [](NodeContext& ctx) {
     auto path = ctx.input<Toolpath>("path");
@@ -52,16 +55,9 @@ NodeDecl make_gouge_guard_node() {
       const Outline outline(ctx.has_input("loops")
                                 ? loop_polygons_xy(*ctx.input<BoundaryLoops>("loops"), cloud->points)
                                 : std::vector<std::vector<Eigen::Vector2d>>{});
-      std::shared_ptr<const PointCloud> given;
+      const auto given = surface_band_input(ctx, *cloud);
       std::optional<SurfaceBandView> band;
-      if (ctx.has_input("band")) {
-        given = ctx.input<PointCloud>("band");
-        if (given->size() != cloud->size() || !given->has_uncertainty())
-          throw NodeError("the band has " + std::to_string(given->size()) + " places" +
-                          (given->has_uncertainty() ? "" : " without uncertainties") + " for a cloud of " +
-                          std::to_string(cloud->size()) + " points: give cloud.surface_band of the same cloud");
-        band.emplace(SurfaceBandView{given->points, given->uncertainty});
-      }
+      if (given) band.emplace(SurfaceBandView{given->points, given->uncertainty});
       BallClearance clearance(surface, cloud->points, path->tool_radius, outline.empty() ? nullptr : &outline,
                               band ? &*band : nullptr);
       auto res = guard_gouges(*path, clearance, o);

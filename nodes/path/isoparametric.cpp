@@ -131,18 +131,18 @@ class BallLifter {
 };
 
 // The surface the planner sees (the cloud, through the (u,v) interpolant) may lie up to
-// delta off the real one, either way: delta = the larger of the surface_error option and the
-// cloud's own per-point uncertainty there (set by cloud.denoise, a bound on noise and shape bias).
-// Then
-//   real scallop <= scallop on the estimate + stock + delta, kept <= h;
-//   real gouge   <= chord overcut + delta - stock, kept <= 0.9 e (chord_budget, step_size.h).
+// delta off the real one, either way: delta = the larger of the surface_error option and how well
+// the cloud is known there (cloud.denoise's per-point uncertainty, a bound on noise and shape bias,
+// or its height field's where that is smaller; see plan_isoparametric). Then
+//   real scallop <= scallop on the estimate + stock + delta, kept <= h - 0.15 delta;
+//   real gouge   <= chord overcut + delta - stock, kept <= 0.9 e - 0.15 delta (chord_budget, step_size.h).
 // The planner's fit is also checked against the cloud's height field, the surface the gouge guard
 // and the certificate use: where they disagree by fit_gap (see Planner::fit_gap), the scallop the
 // certificate sees may be that much higher, so it comes off the scallop limit too (up to h/4).
 // The gouge side needs no such margin: the guard lifts balls against that height field.
 struct Margins {
   double delta;     // mm, how far the estimate may be off here
-  double scallop;   // mm, the limit for the scallop on the estimate (stock included): h - delta - gap
+  double scallop;   // mm, the limit for the scallop on the estimate (stock included): h - 1.15 delta - gap
   double overcut;   // mm, the chord overcut allowed
   double stock;     // mm, how far the ball is kept above the estimate
 };
@@ -150,7 +150,9 @@ Margins margins(const IsoparametricOptions& o, double uncertainty, double fit_ga
   Margins m;
   m.delta = std::max(o.surface_error, uncertainty);
   const double h = o.scallop_height * o.safety_factor;
-  m.scallop = h - (m.delta + std::min(fit_gap, 0.25 * h));
+  // (the certificate adds its height field's uncertainty where it samples, between the places
+  // planned: kUncertaintyRoughness more of it is kept, as for the gouge, step_size.h)
+  m.scallop = h - ((1 + kUncertaintyRoughness) * m.delta + std::min(fit_gap, 0.25 * h));
   const ChordBudget b = chord_budget(o.chord_error, m.delta);
   m.overcut = b.overcut;
   m.stock = b.stock;
@@ -162,10 +164,10 @@ bool too_uncertain(const IsoparametricOptions& o, const Margins& m) {
   return m.scallop - m.stock < kLeastScallopShare * o.scallop_height * o.safety_factor;
 }
 // The smallest scallop height (mm) a surface known to +-delta can be planned for: the h that
-// leaves exactly that share, h - delta - stock (Margins) = 0.2 h, rounded up to a micron.
+// leaves exactly that share, h - 1.15 delta - stock (Margins) = 0.2 h, rounded up to a micron.
 double plannable_scallop_height(const IsoparametricOptions& o, double delta) {
   const double d = std::max(o.surface_error, delta);
-  return std::ceil(1000 * (d + chord_budget(o.chord_error, d).stock) /
+  return std::ceil(1000 * ((1 + kUncertaintyRoughness) * d + chord_budget(o.chord_error, d).stock) /
                    ((1 - kLeastScallopShare) * o.safety_factor)) / 1000;
 }
 // The planner refuses when more than 1 / this of the cloud's points are too uncertain.
@@ -210,10 +212,10 @@ class Planner {
   double fit_gap_max() const { return fit_gap_max_.load(); }
   Margins margin(const SurfaceSample& x) const { return margins(o_, x.uncertainty); }
   // How far a cloud point may reach into the ball before it is lifted: `fraction` of e, and no
-  // more than the real gouge allows when the point itself may be delta too low (0.9 e - delta
-  // as in Margins; negative, i.e. a clearance, where delta > 0.9 e).
+  // more than the real gouge allows when the point itself may be delta too low (the gouge
+  // budget less delta, as in Margins; negative, i.e. a clearance, where delta is larger).
   double lift_tolerance(double delta, double fraction) const {
-    return std::min(fraction * o_.chord_error, 0.9 * o_.chord_error - delta);
+    return std::min(fraction * o_.chord_error, gouge_budget(o_.chord_error, delta) - delta);
   }
   // The ball centre over the estimated surface, the stock above it (see Margins).
   Eigen::Vector3d centre(const SurfaceSample& x) const {
@@ -332,9 +334,12 @@ class Planner {
   // outline off by up to half a sampling step, and the passes built from it leave the corner
   // uncut). Every segment is sampled and lifted as an unchecked one (lift_segments): between
   // two outline points there is no interpolant to check the chord against, only the cloud.
-  // loop: point indices of a boundary loop, in order; uv: their uv.
+  // loop: point indices of a boundary loop, in order; uv: their uv; uncertainty: what the
+  // margins are planned with at each cloud point (null: none). Not the point's own: at a corner
+  // its one-sided denoising fit said 0.037 where the height field knows 0.015 (the bundled
+  // example), and the stock planned for 0.037 left the corner's scallop over h.
   Pass rim_pass(const PointCloud& cloud, const std::vector<int>& loop,
-                const std::vector<Eigen::Vector2d>& uv) const {
+                const std::vector<Eigen::Vector2d>& uv, const std::vector<double>* uncertainty) const {
     Pass P;
     P.closed = true;
     const std::size_t n = loop.size();
@@ -343,7 +348,7 @@ class Planner {
       SurfaceSample x;
       x.position = cloud.points[i];
       x.normal = cloud.normals[i];
-      x.uncertainty = cloud.has_uncertainty() ? cloud.uncertainty[i] : 0.0;
+      x.uncertainty = uncertainty ? (*uncertainty)[i] : 0.0;
       push_vertex(P, static_cast<double>(k), x);
       P.uv.push_back(uv[k % n]);
       if (k) P.unchecked.push_back(true);
@@ -830,7 +835,8 @@ WorkEstimate estimate_work(const PointCloud& cloud, const Neighborhoods& nb, con
 
 IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborhoods& neighbors,
                                        const UVMap& map, const IsoparametricOptions& o,
-                                       const BoundaryLoops* loops) {
+                                       const BoundaryLoops* loops,
+                                       const std::vector<double>* given_field_uncertainty) {
   // ---- input checks -------------------------------------------------------------------------
   if (o.pattern != "zigzag" && o.pattern != "contour")
     throw std::invalid_argument("unknown pattern '" + o.pattern + "' (zigzag or contour)");
@@ -876,11 +882,57 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   if (!cloud.uncertainty.empty() && !cloud.has_uncertainty())
     throw std::invalid_argument("the cloud has " + std::to_string(cloud.size()) + " points but " +
                                 std::to_string(cloud.uncertainty.size()) + " uncertainties");
-  // How well the surface is known: the planner keeps a margin of delta wherever it plans.
+  // The cloud's height field (what the gouge guard and the certificate measure against) and the
+  // ball lifter: two k-d trees over the whole cloud, built side by side.
+  std::optional<BallLifter> lifter;
+  std::optional<HeightFieldModel> model;
+  tbb::parallel_invoke([&] { lifter.emplace(cloud.points, o.tool_radius); },
+                       [&] { model.emplace(cloud.points, 20, cloud.has_uncertainty() ? &cloud.uncertainty : nullptr); });
+  // How well each point is known: the smaller of its own uncertainty and the height field's there
+  // (the band the guard keeps the ball out of and the certificate adds). At a rim or a corner a
+  // point's one-sided denoising fit may say 0.08 mm where the field over its neighbours knows
+  // 0.028 (the noisy dome; the bundled example's corner 0.037 and 0.015), and a stock planned
+  // for the larger left the rim's scallop over h. Where the field's fit misfits the points (a
+  // crest tighter than its 20 neighbours) its uncertainty counts the misfit three times and may
+  // be ten times the point's own; planning with it refused clean crests that the guard and the
+  // certificate handle (more than 1 % of their points "known too poorly").
+  if (given_field_uncertainty && given_field_uncertainty->size() != cloud.size())
+    throw std::invalid_argument("the height field's uncertainty is given at " +
+                                std::to_string(given_field_uncertainty->size()) + " places for a cloud of " +
+                                std::to_string(cloud.size()) + " points");
+  std::vector<double> field_uncertainty;
+  if (cloud.has_uncertainty() && !given_field_uncertainty) {
+    field_uncertainty.resize(cloud.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cloud.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+        double z, u = 0;
+        Eigen::Vector3d n;
+        model->eval(cloud.points[i].x(), cloud.points[i].y(), z, n, true, &u);
+        field_uncertainty[i] = u;
+      }
+    });
+  }
+  std::vector<double> known, planned;
+  if (cloud.has_uncertainty()) {
+    const std::vector<double>& field = given_field_uncertainty ? *given_field_uncertainty : field_uncertainty;
+    known.resize(cloud.size());
+    for (std::size_t i = 0; i < cloud.size(); ++i) known[i] = std::min(field[i], cloud.uncertainty[i]);
+    // The margins take the largest over the point and its nearest neighbours: the field's
+    // uncertainty is rough (a fit over another set of neighbours a tenth of a mm away may know
+    // 20 % less), and the certificate sees it between the places planned (with each point's own
+    // value the bundled example's zig-zag certificate failed: 0.0352 + 0.0163 at a place inside).
+    planned = known;
+    if (neighbors.size() == cloud.size())
+      for (std::size_t i = 0; i < cloud.size(); ++i)
+        for (int j = 0; j < neighbors.k; ++j) planned[i] = std::max(planned[i], known[neighbors.index(i, j)]);
+  }
+  const std::vector<double>* planned_uncertainty = cloud.has_uncertainty() ? &planned : nullptr;
+  // How well the surface is known (before the neighbours' are taken: a few poorly known points
+  // are not many): the planner keeps a margin of delta wherever it plans.
   std::vector<double> deltas;
   std::size_t uncertain = 0;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Margins m = margins(o, cloud.has_uncertainty() ? cloud.uncertainty[i] : 0.0);
+    const Margins m = margins(o, known.empty() ? 0.0 : known[i]);
     deltas.push_back(m.delta);
     if (too_uncertain(o, m)) ++uncertain;
   }
@@ -890,7 +942,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   if (too_uncertain(o, margins(o, delta_median)))
     throw std::invalid_argument(
         "the cloud's surface is known only to +-" + fmt(delta_median) + " mm (median; cloud.denoise's "
-        "uncertainty), too much of the scallop height " + fmt(o.scallop_height) +
+        "uncertainty or its height field's, the smaller), too much of the scallop height " + fmt(o.scallop_height) +
         " mm to promise it: denoise with more neighbours, scan more finely or raise scallop_height");
   // Where more than 1 % of the points are too uncertain, nearly every strip crosses some of
   // them and fails at every side step (measured on a noisy plane, sigma 0.02: at h 0.06, 28 % of
@@ -902,7 +954,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     throw std::invalid_argument(
         fmt(100.0 * double(uncertain) / double(deltas.size())) + " % of the cloud's points are known "
         "too poorly for the scallop height " + fmt(o.scallop_height) + " mm (99 % of them to +-" +
-        fmt(deltas[p99]) + " mm, cloud.denoise's uncertainty; more than 1 % leaves nearly every "
+        fmt(deltas[p99]) + " mm, cloud.denoise's uncertainty or its height field's, the smaller; more than 1 % leaves nearly every "
         "strip over the limit): scallop_height must be at least " +
         fmt(plannable_scallop_height(o, deltas[p99])) + " mm for them, or denoise with more "
         "neighbours or scan more finely");
@@ -915,17 +967,8 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
         " mm wide; at least " + fmt(std::round(work.points)) + " points), more than max_passes " +
         std::to_string(o.max_passes) + ": raise scallop_height or tool_radius, or max_passes if "
         "the time is worth it (planning takes roughly 0.01 to 0.2 s per pass)");
-  // Three k-d trees over the whole cloud, each built on one thread: built side by side.
   std::optional<UVInterpolator> interp;
-  std::optional<BallLifter> lifter;
-  std::optional<HeightFieldModel> model;
-  tbb::parallel_invoke(
-      [&] {
-        interp.emplace(cloud.points, cloud.normals, map.uv, domain, o.interpolation_k,
-                       cloud.has_uncertainty() ? &cloud.uncertainty : nullptr);
-      },
-      [&] { lifter.emplace(cloud.points, o.tool_radius); },
-      [&] { model.emplace(cloud.points, 20, cloud.has_uncertainty() ? &cloud.uncertainty : nullptr); });
+  interp.emplace(cloud.points, cloud.normals, map.uv, domain, o.interpolation_k, planned_uncertainty);
   // The holes: every loop after the outer one, as the polygon of its points' uv.
   std::vector<std::vector<Eigen::Vector2d>> hole_polygons;
   std::vector<const std::vector<int>*> hole_loops;
@@ -1054,7 +1097,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     bool usable = n >= 3 && map.boundary_uv.size() == n;
     for (std::size_t k = 0; usable && k < n; ++k)
       usable = map.outer_loop[k] >= 0 && static_cast<std::size_t>(map.outer_loop[k]) < cloud.size();
-    if (usable) outline.push_back(planner.rim_pass(cloud, map.outer_loop, map.boundary_uv));
+    if (usable) outline.push_back(planner.rim_pass(cloud, map.outer_loop, map.boundary_uv, planned_uncertainty));
     else
       warnings.push_back("the map has no usable outer loop (" + std::to_string(n) +
                          " points): no rim pass, the outline is cut only by the passes' ends");
@@ -1062,7 +1105,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   for (const std::vector<int>* loop : hole_loops) {  // and around every hole
     std::vector<Eigen::Vector2d> uv;
     for (int i : *loop) uv.push_back(map.uv[i]);
-    outline.push_back(planner.rim_pass(cloud, *loop, uv));
+    outline.push_back(planner.rim_pass(cloud, *loop, uv, planned_uncertainty));
   }
 
   // ---- concave places the ball cannot reach -----------------------------------------------------

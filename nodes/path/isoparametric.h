@@ -93,8 +93,12 @@ struct IsoparametricResult {
 // loops      optional: the patch's boundary loops (outer first, then holes; indices into cloud).
 //            A hole's uv polygon is not cut: passes crossing it are split into pieces on the
 //            patch (the tool lifts over the hole), and with `outline` a rim pass runs around it.
+// field_uncertainty  optional, #P: the cloud's height field's uncertainty at each point
+//            (cloud.surface_band's), what the margins are planned with where the cloud has
+//            per-point uncertainties; computed here when not given.
 IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborhoods& neighbors,
                                        const UVMap& map, const IsoparametricOptions& options,
-                                       const BoundaryLoops* loops = nullptr);
+                                       const BoundaryLoops* loops = nullptr,
+                                       const std::vector<double>* field_uncertainty = nullptr);
 
 }  // namespace scallop

@@ -1,6 +1,7 @@
 #include <stdexcept>
 
 #include "engine/node.h"
+#include "nodes/cloud/surface_band_input.h"
 #include "nodes/path/isoparametric.h"
 #include "nodes/path/part_fits_tool.h"
 #include "nodes/types/cloud.h"
@@ -13,7 +14,7 @@ namespace scallop::path_nodes {
 NodeDecl make_isoparametric_node() {
   NodeDecl d;
   d.type = "path.isoparametric";
-  d.version = 11;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field; 5: strips over the limit summarised in one warning (strips_over_limit_at), warnings said on the terminal, outline passes; 6: one rim pass through the outline's points, both patterns; holes (input loops) are not cut, a rim pass around each; 7: margins of one uncertainty (not 1.25 and 1.5), the fit gap added to it; 8: its strip checks see the height field's uncertainty with that fit's misfit (shape bias) counted; 9: the cusp found by regula falsi; 10: side steps shrunk by the secant; 11: the fits solved by a fixed-size Cholesky (the same answers to rounding)
+  d.version = 12;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field; 5: strips over the limit summarised in one warning (strips_over_limit_at), warnings said on the terminal, outline passes; 6: one rim pass through the outline's points, both patterns; holes (input loops) are not cut, a rim pass around each; 7: margins of one uncertainty (not 1.25 and 1.5), the fit gap added to it; 8: its strip checks see the height field's uncertainty with that fit's misfit (shape bias) counted; 9: the cusp found by regula falsi; 10: side steps shrunk by the secant; 11: the fits solved by a fixed-size Cholesky (the same answers to rounding); 12: margins planned with the smaller of a point's own uncertainty and its height field's (cloud.surface_band's, optional input band), the largest of that over the point's neighbours, the rim pass too; the gouge budget 0.9 e and the scallop limit h each less 0.15 of it (the certificate samples it between the places planned)
   d.description =
       "iso-parametric finishing passes from a UV-mapped cloud: zig-zag on a rectangle map, "
       "concentric on a disk map; forward step from the chord error, side step from the scallop "
@@ -25,6 +26,10 @@ NodeDecl make_isoparametric_node() {
       .input("loops", "Loops",
              "the patch's boundary loops: holes (the loops after the outer one) are not cut, "
              "passes lift over them and a rim pass runs around each",
+             false)
+      .input("band", "Cloud",
+             "cloud.surface_band of 'cloud' (its height field's uncertainty at each point: where it is "
+             "smaller than the point's own, the margins are planned with it; computed here when not given)",
              false)
       .output("toolpath", "Toolpath", "the passes: contact points, normals, uv, in cutting order")
       .output("report", "Report",
@@ -68,7 +73,8 @@ NodeDecl make_isoparametric_node() {
       if (auto m = part_narrower_than_ball(cloud->points, o.tool_radius); !m.empty()) throw std::invalid_argument(m);
       std::shared_ptr<const BoundaryLoops> loops;
       if (ctx.has_input("loops")) loops = ctx.input<BoundaryLoops>("loops");
-      res = plan_isoparametric(*cloud, *neighbors, *map, o, loops.get());
+      const auto band = surface_band_input(ctx, *cloud);
+      res = plan_isoparametric(*cloud, *neighbors, *map, o, loops.get(), band ? &band->uncertainty : nullptr);
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }

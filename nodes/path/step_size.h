@@ -46,30 +46,38 @@ double forward_interval(double chord_error, double curvature);
 // scallop checks did not see). A quarter of the chord error, at least 1 micron.
 inline double part_clearance_tolerance(double chord_error) { return std::max(0.25 * chord_error, 1e-3); }
 
-// How much of its uncertainty a check at one place keeps in reserve for the same surface's
-// uncertainty a little way off: the height field's (HeightFieldModel) is a fit over the nearest
-// points, and a fit over another set of them 0.1 mm away may differ by 7.5 % (99.9th percentile)
-// and 22 % at most (the noisy dome, 50 000 points, sigma 0.02, denoised). post.simulate samples
-// it on its own grid, between the places post.link checked.
+// How much of the chord error e (mm) a path may use where the surface estimate may lie up to
+// delta (mm) off the real surface: 0.9 e less 0.15 delta. The rest is left for the difference
+// between two fits of the same cloud: the planner and the gouge guard check the ball at the
+// places they sample (positions, their foot points, the cloud's points), the certificate
+// (post.simulate) at its own grid between them, where the height field's uncertainty is its fit
+// over another set of neighbours. That uncertainty is rough: on the noisy dome (50 000 points,
+// sigma 0.02, denoised) it differs from itself 0.1 mm away by 7.5 % at the 99.9th percentile,
+// 22 % at most; a zig-zag program the guard held to 0.9 e there had a certificate gouge bound
+// 0.0107 > e = 0.01, 0.077 delta above what the guard had seen beside it. 0.1 e alone covered
+// a clean cloud, where delta is nearly 0.
 constexpr double kUncertaintyRoughness = 0.15;
+inline double gouge_budget(double chord_error, double delta) {
+  return 0.9 * chord_error - kUncertaintyRoughness * delta;
+}
 
-// How the chord error e (mm) is shared where the surface estimate may lie up to delta (mm) off
-// the real surface, either way (cloud.denoise's uncertainty: an honest bound, noise and shape
-// bias). 90 % of e is the budget; 10 % is left for the difference between two fits of the same
-// cloud (the planner's and the certificate's). The real surface may be delta higher than the
-// estimate, so a ball touching the estimate may cut delta into it: the chord overcut shrinks first
-// (down to e/4, which only costs forward points), and what is still over 0.9 e becomes stock,
-// a lift of the ball above the estimate. Where delta <= 0.65 e: overcut 0.9 e - delta, stock 0;
-// above: overcut e/4, stock delta - 0.65 e. Either way overcut + delta - stock = 0.9 e.
+// How the gouge budget is shared where the surface estimate may lie up to delta off the real
+// surface, either way (cloud.denoise's uncertainty: an honest bound, noise and shape bias). The
+// real surface may be delta higher than the estimate, so a ball touching the estimate may cut
+// delta into it: the chord overcut shrinks first (down to e/4, which only costs forward points),
+// and what is still over the budget B becomes stock, a lift of the ball above the estimate.
+// Where delta <= B - e/4: overcut B - delta, stock 0; above: overcut e/4, stock delta + e/4 - B.
+// Either way overcut + delta - stock = B.
 struct ChordBudget {
   double overcut;  // mm the ball-centre chord may dip below the offset surface between positions
   double stock;    // mm the ball is kept above the estimate
   double reach;    // mm a planned position may reach into the estimate raised by delta: delta - stock
 };
 inline ChordBudget chord_budget(double chord_error, double delta) {
+  const double budget = gouge_budget(chord_error, delta);
   ChordBudget b;
-  b.overcut = std::max(0.25 * chord_error, 0.9 * chord_error - delta);
-  b.stock = std::max(0.0, b.overcut + delta - 0.9 * chord_error);
+  b.overcut = std::max(0.25 * chord_error, budget - delta);
+  b.stock = std::max(0.0, b.overcut + delta - budget);
   b.reach = delta - b.stock;
   return b;
 }

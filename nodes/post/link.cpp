@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 #include "nodes/geom/kd_tree.h"
+#include "nodes/path/gouge_guard.h"
 #include "nodes/path/step_size.h"
 #include "nodes/post/centre_index.h"
 
@@ -49,7 +50,7 @@ double largest_stepover(const Toolpath& path) {
 }
 
 LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>& surface_in,
-                       const LinkOptions& o, const HeightFieldModel* model, const Outline* outline) {
+                       const LinkOptions& o, const BallClearance* clearance) {
   path.check_passes();
   const double r = path.tool_radius;
   std::vector<Eigen::Vector3d> own;
@@ -108,23 +109,15 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
         if (segment_distance(q, a, b) < r - tol) return false;
       }
     }
-    if (!model) return true;
-    // The model under the ball: ball centres along the link every quarter of the cloud spacing
-    // (at most r / 16), each against its foot point on the model, looked for from below the
-    // centre (HeightFieldModel::foot_point; stepping to c - r n alone swung off a crest tighter
-    // than the ball and missed a link 0.05 mm into it), and on the patch there.
-    const double step = std::min(0.25 * model->spacing(), r / 16);
+    if (!clearance) return true;
+    // The ball every quarter of the cloud spacing along the link (at most r / 16).
+    const double step = std::min(0.25 * clearance->spacing(), r / 16);
     const int m = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step)));
     for (int i = 0; i <= m; ++i) {
       const Eigen::Vector3d c = a + (b - a) * (double(i) / m);
-      Eigen::Vector2d q;
-      double z, u = 0;
-      Eigen::Vector3d n;
-      if (!model->foot_point(c, c.head<2>(), r, q)) continue;
-      if (!model->eval(q.x(), q.y(), z, n, false, &u) &&
-          !(outline && outline->contains(q) && model->eval(q.x(), q.y(), z, n, true, &u)))
-        continue;
-      if ((c - Eigen::Vector3d(q.x(), q.y(), z)).norm() < r - (tol - kUncertaintyRoughness * u) + u) return false;
+      const BallClearance::Result res = (*clearance)(c, c - Eigen::Vector3d(0, 0, r));
+      const double u = res.on_surface ? res.uncertainty : 0.0;
+      if (res.reach() > tol - kUncertaintyRoughness * u) return false;
     }
     return true;
   };

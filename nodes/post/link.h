@@ -15,11 +15,11 @@
 #include <functional>
 #include <vector>
 
-#include "nodes/geom/height_field_model.h"
-#include "nodes/geom/outline.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
+
+class BallClearance;  // nodes/path/gouge_guard.h
 
 struct LinkOptions {
   double max_link = 0;     // mm; <= 0: twice the largest stepover between consecutive passes
@@ -40,22 +40,21 @@ struct LinkOptions {
 
 // surface  #S by 3 points of the surface (the cloud); when empty the passes' own contact points
 // stand for it.
-// model    optional: the cloud's height field (post.simulate's surface, with its uncertainty).
-//          A link is then also checked against it, the ball every quarter of the cloud spacing
-//          along it: between sparse points the ball could dip into the surface unseen (measured:
-//          0.015 mm on a 5000-point dome, a link along a hole's edge) and the certificate, which
-//          measures against the model, would fail. The ball must clear the model by its
-//          uncertainty u there, less the tolerance, less 0.15 u (the certificate samples the
-//          uncertainty between these places, where it is rough: kUncertaintyRoughness, step_size.h).
-// outline  optional: the patch's outline in xy (the boundary loops, post.simulate's): a place
-//          inside it is on the model however far from the points (a gap between rim points,
-//          where the model is extrapolated and the certificate counts it).
+// clearance  optional: the gouge guard's check of a ball against the cloud's height field with
+//          its uncertainty (post.simulate's surface; BallClearance, path/gouge_guard.h: at the
+//          foot point, above the cloud's points within reach, around the foot beyond the cloud's
+//          edge, inside the outline when it has one). A link is then also checked with it, the ball every
+//          quarter of the cloud spacing along it: between sparse points the ball could dip into
+//          the surface unseen (measured: 0.015 mm on a 5000-point dome, a link along a hole's
+//          edge) and the certificate would fail. The ball may reach into the band by the
+//          tolerance less 0.15 u (the certificate samples the uncertainty u between these
+//          places, where it is rough: kUncertaintyRoughness, step_size.h); checked at the foot
+//          alone, a zig-zag turn at the noisy bowl's rim reached 0.0115 into it.
 // Throws std::invalid_argument for r <= 0, no pass with points, a pass whose normals do not match
 // its points, or non-finite coordinates, and std::runtime_error (saying where) when a pass rises
 // more than 10 r + the surface's height range above the surface's highest point.
 LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>& surface,
-                       const LinkOptions& options, const HeightFieldModel* model = nullptr,
-                       const Outline* outline = nullptr);
+                       const LinkOptions& options, const BallClearance* clearance = nullptr);
 
 // Largest distance between consecutive passes: for each pair, the distance from the middle point
 // of the later pass to the nearest contact point of the earlier one (mm); 0 for a single pass.

@@ -1,7 +1,10 @@
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "engine/node.h"
+#include "nodes/cloud/surface_band_input.h"
+#include "nodes/path/gouge_guard.h"
 #include "nodes/post/link.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/param.h"
@@ -11,13 +14,14 @@ namespace scallop::post_nodes {
 NodeDecl make_link_node() {
   NodeDecl d;
   d.type = "post.link";
-  d.version = 10;  // 10: links cleared by the uncertainty less 0.15 of it (the certificate samples it between the places checked), and everywhere inside the loops' outline when given (gaps between rim points); 9: the model under a link is checked at the foot point HeightFieldModel::foot_point finds (stepping to c - r n alone swung off crests tighter than the ball); 7: down at rapid rate to lead_height above a start, then the plunge (was a plunge from the clearance plane); 8: the rapids stop where a ball of r + lead_height would touch the part; 2: fails where the passes rise more than 10 r + the part's height range above it; 4: the height field's uncertainty counts its fit's misfit; 5: the moves stored without their padding bytes; 6: the height field solved by a fixed-size Cholesky
+  d.version = 11;  // 11: links checked as the gouge guard checks a ball (path.gouge_guard's BallClearance: the band above the cloud's points within reach and around the foot beyond the edge too, not only at the foot; a zig-zag turn at the noisy bowl's rim reached 0.0115 into it), optional band; 10: links cleared by the uncertainty less 0.15 of it (the certificate samples it between the places checked), and everywhere inside the loops' outline when given (gaps between rim points); 9: the model under a link is checked at the foot point HeightFieldModel::foot_point finds (stepping to c - r n alone swung off crests tighter than the ball); 7: down at rapid rate to lead_height above a start, then the plunge (was a plunge from the clearance plane); 8: the rapids stop where a ball of r + lead_height would touch the part; 2: fails where the passes rise more than 10 r + the part's height range above it; 4: the height field's uncertainty counts its fit's misfit; 5: the moves stored without their padding bytes; 6: the height field solved by a fixed-size Cholesky
                   // 3: links checked against the cloud's height field too
   d.description = "joins passes in order: short feed links where the ball stays above the surface, else retract to a clearance plane";
   d.input("path", "Toolpath", "the passes, in cutting order")
       .input("cloud", "Cloud", "the surface, for link safety and the clearance plane (else the passes' contact points)", false)
       .input("loops", "Loops", "optional: the cloud's boundary loops; links are then checked against its height "
              "field everywhere inside their outline, as post.simulate does (in gaps between rim points too)", false)
+      .input("band", "Cloud", "optional: cloud.surface_band of 'cloud' (computed here when not given)", false)
       .output("linked", "LinkedPath", "tool-tip moves: rapids, plunges and feeds");
   d.options<LinkOptions>()
       .number("max_link", &LinkOptions::max_link, 0, 1e4, "mm",
@@ -34,15 +38,23 @@ NodeDecl make_link_node() {
     if (ctx.has_input("cloud")) cloud = ctx.input<PointCloud>("cloud");
     const LinkOptions o = ctx.options<LinkOptions>();
     try {
-      std::unique_ptr<HeightFieldModel> model;  // what the certificate measures against
-      if (cloud && cloud->size() >= 10)
+      // What the certificate measures against, checked as the gouge guard checks a ball.
+      std::unique_ptr<HeightFieldModel> model;
+      std::unique_ptr<Outline> outline;
+      std::shared_ptr<const PointCloud> given;
+      std::optional<SurfaceBandView> band;
+      std::unique_ptr<BallClearance> clearance;
+      if (cloud && cloud->size() >= 10) {
         model = std::make_unique<HeightFieldModel>(cloud->points, 20,
-                                              cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
-      const Outline outline(cloud && ctx.has_input("loops")
-                                ? loop_polygons_xy(*ctx.input<BoundaryLoops>("loops"), cloud->points)
-                                : std::vector<std::vector<Eigen::Vector2d>>{});
-      ctx.set("linked", link_passes(*path, cloud ? cloud->points : none, o, model.get(),
-                                    outline.empty() ? nullptr : &outline));
+                                                   cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
+        outline = std::make_unique<Outline>(ctx.has_input("loops")
+                                                ? loop_polygons_xy(*ctx.input<BoundaryLoops>("loops"), cloud->points)
+                                                : std::vector<std::vector<Eigen::Vector2d>>{});
+        if ((given = surface_band_input(ctx, *cloud))) band.emplace(SurfaceBandView{given->points, given->uncertainty});
+        clearance = std::make_unique<BallClearance>(*model, cloud->points, path->tool_radius,
+                                                    outline->empty() ? nullptr : outline.get(), band ? &*band : nullptr);
+      }
+      ctx.set("linked", link_passes(*path, cloud ? cloud->points : none, o, clearance.get()));
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }

@@ -286,13 +286,14 @@ TEST(GougeGuard, LiftedBallsClearAnUncertainSurfaceByItsUncertainty) {
   // planned touching the estimate, every ball reaches 0.01 into the band and is lifted
   EXPECT_EQ(guard_gouges(plane_pass(0.5), clearance, {}).report["lifted_positions"], 21);
 
-  // What the planner keeps for delta = e = 0.01 (chord_budget): stock 0.0035, so its balls reach
-  // 0.0065 into the band, and the rest of 0.9 e goes to the chord's overcut. The guard lets them
-  // be, and lifts a ball that reaches in more than e/4 beyond that.
+  // What the planner keeps for delta = e = 0.01 (chord_budget): the gouge budget is 0.9 e - 0.15
+  // delta = 0.0075, the overcut e/4, so the stock is 0.005 and its balls reach 0.005 into the
+  // band. The guard lets them be, and lifts a ball that reaches in more than e/4 beyond that.
+  EXPECT_NEAR(gouge_budget(0.01, 0.01), 0.0075, 1e-15);
   const ChordBudget budget = chord_budget(0.01, 0.01);
-  EXPECT_NEAR(budget.stock, 0.0035, 1e-15);
-  EXPECT_NEAR(budget.reach, 0.0065, 1e-15);
-  EXPECT_NEAR(budget.overcut + 0.01 - budget.stock, 0.009, 1e-15);
+  EXPECT_NEAR(budget.stock, 0.005, 1e-15);
+  EXPECT_NEAR(budget.reach, 0.005, 1e-15);
+  EXPECT_NEAR(budget.overcut + 0.01 - budget.stock, 0.0075, 1e-15);
   auto with_stock = [&](double stock) {
     auto path = plane_pass(0.5);
     for (auto& c : path.passes[0].contact) c += stock * kPlaneNormal;
@@ -384,7 +385,11 @@ TEST(GougeGuard, BeyondTheCloudsEdgeTheExtrapolationIsLessCertain) {
   ASSERT_TRUE(before.on_surface);
   EXPECT_NEAR(before.clearance, 0.05, 1e-6);
   EXPECT_NEAR(before.uncertainty, grown, 1e-6);
-  auto res = guard_gouges(planned, clearance, {});
+  // (the moves held to 0.9 e: the gouge budget for this uncertainty, 0.9 e - 0.15 * 0.06, is
+  // about 0, and the positions are what this is about)
+  GougeGuardOptions moves_loose;
+  moves_loose.chord_tolerance = 0.009;
+  auto res = guard_gouges(planned, clearance, moves_loose);
   EXPECT_EQ(res.report["lifted_positions"], p.contact.size());
   const auto& q = res.path.passes[0];
   const auto after = clearance(res.path.centre(q.contact[5], q.normal[5]), q.contact[5]);
@@ -467,6 +472,47 @@ TEST(GougeGuard, AMoveTheHalvingsCannotClearIsRaisedWhole) {
   EXPECT_GT(least, -0.009 - 1e-4);
   EXPECT_LT(least, 0.01);  // raised to the tolerance, not far beyond
   EXPECT_GT(res.report["highest_lift"].get<double>(), 0.2);
+}
+
+TEST(GougeGuard, AMoveOverAnUncertainSurfaceIsHeldToTheGougeBudget) {
+  // The cap's points known to +-0.02 (more than e = 0.01): the gouge budget is 0.9 e - 0.15 *
+  // 0.02 = 0.006 (what the certificate's uncertainty, sampled between the places checked, leaves
+  // of 0.9 e). A ball of radius 2 kept 0.016 above the sphere at both ends of a move 1.012 mm long
+  // reaches 0.02 - 0.016 = 0.004 into the band there (no lift: within the budget), and its centre
+  // chord, 1.08 mm long on the sphere of centres (radius 32.016), sags 1.08^2 / (8 * 32.016) =
+  // 0.0046 below it, so the middle reaches 0.0086 in: more than the budget, less than 0.9 e. A point is inserted, and then every probe
+  // clears the exact sphere raised by 0.02 to within the budget; held to 0.9 e, none is.
+  auto cloud = cap_cloud();
+  const std::vector<double> uncertainty(cloud.size(), 0.02);
+  HeightFieldModel surface(cloud, 20, &uncertainty);
+  BallClearance clearance(surface, cloud, 2.0);
+  Toolpath path;
+  path.tool_radius = 2;
+  path.chord_error = 0.01;
+  ToolpathPass p;
+  for (double x : {-0.506, 0.506}) {
+    p.normal.push_back(cap_normal(x, 0));
+    p.contact.push_back(cap_point(x, 0) + 0.016 * p.normal.back());
+  }
+  path.passes.push_back(p);
+  auto reach = [&](const Eigen::Vector3d& c) { return 0.02 - ((c - Eigen::Vector3d(0, 0, 5 - kR)).norm() - kR - 2.0); };
+  const Eigen::Vector3d a0 = path.centre(p.contact[0], p.normal[0]), b0 = path.centre(p.contact[1], p.normal[1]);
+  EXPECT_NEAR(reach(a0), 0.004, 1e-9);
+  EXPECT_NEAR(reach(0.5 * (a0 + b0)), 0.0086, 1e-4);
+  auto res = guard_gouges(path, clearance, {});
+  EXPECT_EQ(res.report["lifted_positions"], 1);  // the inserted point
+  EXPECT_EQ(res.report["inserted_positions"], 1);
+  EXPECT_DOUBLE_EQ(res.report["chord_tolerance"].get<double>(), 0.009);
+  EXPECT_EQ(res.report["chord_tolerance_less_uncertainty"], true);
+  const auto& q = res.path.passes[0];
+  for (std::size_t i = 0; i + 1 < q.contact.size(); ++i) {
+    const Eigen::Vector3d a = res.path.centre(q.contact[i], q.normal[i]);
+    const Eigen::Vector3d b = res.path.centre(q.contact[i + 1], q.normal[i + 1]);
+    for (int j = 0; j <= 100; ++j) EXPECT_LE(reach(a + (b - a) * (j / 100.0)), 0.006 + 1e-4) << i << " " << j;
+  }
+  GougeGuardOptions loose;
+  loose.chord_tolerance = 0.009;
+  EXPECT_EQ(guard_gouges(path, clearance, loose).report["inserted_positions"], 0);
 }
 
 TEST(GougeGuard, BadInputGetsClearErrors) {

@@ -287,13 +287,14 @@ TEST(Isoparametric, WorkOverTheBudgetIsRefusedBeforePlanningWithTheEstimate) {
 }
 
 // A surface known only to +-delta: on a flat patch the margins have closed forms. With r = 3,
-// h = 0.01, e = 0.005 and delta = 0.004: the chord overcut allowed is max(e/4, 0.9 e - delta) =
-// 0.00125, the ball is kept stock = 0.00125 + delta - 0.9 e = 0.00075 above the estimate (so that
-// overcut + delta - stock = 0.9 e), and the scallop on the estimate (stock included) may reach
-// h - delta = 0.006: the passes are exactly the cusp spacing of a scallop of 0.006 - 0.00075 =
-// 0.00525 apart.
+// h = 0.01, e = 0.005 and delta = 0.004: the gouge budget is 0.9 e - 0.15 delta = 0.0039, the
+// chord overcut allowed max(e/4, 0.0039 - delta) = 0.00125, the ball is kept stock = 0.00125 +
+// delta - 0.0039 = 0.00135 above the estimate (so that overcut + delta - stock = the budget), and
+// the scallop on the estimate (stock included) may reach h - 1.15 delta = 0.0054 (0.15 delta for
+// the certificate's uncertainty sampled between the planner's places): the passes are exactly
+// the cusp spacing of a scallop of 0.0054 - 0.00135 = 0.00405 apart.
 TEST(Isoparametric, SurfaceUncertaintyIsKeptAsAMargin) {
-  const double delta = 0.004, stock = 0.00075, cusp = 0.00525;
+  const double delta = 0.004, stock = 0.00135, cusp = 0.00405;
   IsoparametricOptions o = fine_options();
   Input from_cloud = flat();
   from_cloud.cloud.uncertainty.assign(from_cloud.cloud.size(), delta);
@@ -319,12 +320,12 @@ TEST(Isoparametric, SurfaceUncertaintyIsKeptAsAMargin) {
     EXPECT_GE(r["predicted"]["scallop_max"].get<double>(), 0.98 * 0.01);
     EXPECT_LE(r["predicted"]["chord_overcut_max"].get<double>(), 0.00125 + 1e-12);
   }
-  // Known to +-0.006: h - delta - stock = 0.004 - 0.00275 is under a fifth of h.
+  // Known to +-0.006: h - 1.15 delta - stock = 0.0031 - 0.00365 is under a fifth of h.
   Input vague = flat();
   vague.cloud.uncertainty.assign(vague.cloud.size(), 0.006);
   EXPECT_EQ(error_of(vague, o),
             "the cloud's surface is known only to +-0.006 mm (median; cloud.denoise's "
-            "uncertainty), too much of the scallop height 0.01 mm to promise it: denoise with "
+            "uncertainty or its height field's, the smaller), too much of the scallop height 0.01 mm to promise it: denoise with "
             "more neighbours, scan more finely or raise scallop_height");
   o2.surface_error = 0.006;
   EXPECT_EQ(error_of(flat(), o2),
@@ -335,27 +336,44 @@ TEST(Isoparametric, SurfaceUncertaintyIsKeptAsAMargin) {
   EXPECT_EQ(error_of(odd, o), "the cloud has 2501 points but 5 uncertainties");
 }
 
-// A tenth of the points too uncertain for h (the rest exact): nearly every strip would cross some
-// and fail, so the planner refuses at once, with the h that 99 % of the points need at least:
-// known to +-0.006, the stock is 0.00125 + 0.006 - 0.9 e = 0.00275 and h - 0.006 - 0.00275 >=
-// 0.2 h needs h >= 0.0109375, rounded up to 0.011. One in two hundred is planned around.
+// A stripe of the patch too uncertain for h (its last 3 mm of 30 known to +-0.006, the rest
+// exact): nearly every strip would cross it and fail, so the planner refuses at once, with the h
+// that 99 % of the points need at least. How well a point is known is the smaller of its own
+// uncertainty and its height field's (the mean of its 20 neighbours' inside the stripe: 0.006),
+// so the points too uncertain are the stripe's less those near its edge, whose fits average in
+// exact neighbours. Known to +-0.006, the stock is 0.00125 + 0.006 - (0.9 e - 0.15 * 0.006) = 0.00365
+// and h - 1.15 * 0.006 - 0.00365 >= 0.2 h needs h >= 0.0131875, rounded up to 0.014. Uncertain
+// points scattered one in ten, or one in two hundred, are averaged away by the fit.
 TEST(Isoparametric, AMostlyUncertainCloudIsRefusedWithTheScallopHeightItNeeds) {
   const IsoparametricOptions o = fine_options();
-  Input tenth = flat();
-  tenth.cloud.uncertainty.assign(tenth.cloud.size(), 0.0);
-  for (std::size_t i = 0; i < tenth.cloud.size(); i += 10) tenth.cloud.uncertainty[i] = 0.006;
-  EXPECT_EQ(error_of(tenth, o),
-            "10.036 % of the cloud's points are known too poorly for the scallop height 0.01 mm (99 % of "
-            "them to +-0.006 mm, cloud.denoise's uncertainty; more than 1 % leaves nearly every strip "
-            "over the limit): scallop_height must be at least 0.011 mm for them, or denoise with more "
-            "neighbours or scan more finely");
+  Input stripe = flat();
+  double x_max = -INFINITY;
+  for (const auto& p : stripe.cloud.points) x_max = std::max(x_max, p.x());
+  stripe.cloud.uncertainty.assign(stripe.cloud.size(), 0.0);
+  std::size_t in_stripe = 0;
+  for (std::size_t i = 0; i < stripe.cloud.size(); ++i)
+    if (stripe.cloud.points[i].x() >= x_max - 3 - 1e-9) stripe.cloud.uncertainty[i] = 0.006, ++in_stripe;
+  EXPECT_EQ(in_stripe, 7u * 41u);
+  const std::string e = error_of(stripe, o);
+  const std::string tail =
+      " % of the cloud's points are known too poorly for the scallop height 0.01 mm (99 % of them to "
+      "+-0.006 mm, cloud.denoise's uncertainty or its height field's, the smaller; more than 1 % leaves nearly every "
+      "strip over the limit): scallop_height must be at least 0.014 mm for them, or denoise with more "
+      "neighbours or scan more finely";
+  ASSERT_GT(e.size(), tail.size()) << e;
+  EXPECT_EQ(e.substr(e.find(' ')), tail) << e;
+  const double percent = std::stod(e);
+  EXPECT_GT(percent, 1.0);
+  EXPECT_LT(percent, 100.0 * in_stripe / stripe.cloud.size());
   IsoparametricOptions allowed = o;
-  allowed.scallop_height = 0.011;
-  EXPECT_EQ(error_of(tenth, allowed), "no error");
-  Input few = flat();
-  few.cloud.uncertainty.assign(few.cloud.size(), 0.0);
-  for (std::size_t i = 0; i < few.cloud.size(); i += 200) few.cloud.uncertainty[i] = 0.006;
-  EXPECT_EQ(error_of(few, o), "no error");
+  allowed.scallop_height = 0.014;
+  EXPECT_EQ(error_of(stripe, allowed), "no error");
+  for (std::size_t every : {10, 200}) {
+    Input scattered = flat();
+    scattered.cloud.uncertainty.assign(scattered.cloud.size(), 0.0);
+    for (std::size_t i = 0; i < scattered.cloud.size(); i += every) scattered.cloud.uncertainty[i] = 0.006;
+    EXPECT_EQ(error_of(scattered, o), "no error") << every;
+  }
 }
 
 TEST(Isoparametric, ForwardStepOnACylinderKeepsTheChordDeviation) {

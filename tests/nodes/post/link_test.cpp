@@ -1,6 +1,7 @@
 #include "nodes/post/link.h"
 
 #include "nodes/geom/segment.h"
+#include "nodes/path/gouge_guard.h"
 
 #include <gtest/gtest.h>
 
@@ -143,7 +144,8 @@ TEST(Link, ALinkThatDipsBetweenSparsePointsIsCaughtByTheHeightField) {
   const auto points_only = link_passes(t, cloud, {});
   EXPECT_EQ(count(points_only, MoveKind::Rapid), 3);  // over, down ... up: the link is a feed move
   const HeightFieldModel model(cloud, 20);
-  const auto checked = link_passes(t, cloud, {}, &model);
+  const BallClearance clearance(model, cloud, t.tool_radius);
+  const auto checked = link_passes(t, cloud, {}, &clearance);
   EXPECT_EQ(count(checked, MoveKind::Rapid), 6);  // over, down, up, over, down, up
 }
 
@@ -173,7 +175,8 @@ TEST(Link, ALinkBesideTheTopOfARidgeTighterThanTheBallIsCaught) {
     EXPECT_GT(segment_distance(q, t.centre(t.passes[0].contact[0], n), t.centre(t.passes[1].contact[0], n)), r - 0.005);
   EXPECT_EQ(count(link_passes(t, cloud, {}), MoveKind::Rapid), 3);  // the link a feed move
   const HeightFieldModel model(cloud, 20);
-  EXPECT_EQ(count(link_passes(t, cloud, {}, &model), MoveKind::Rapid), 6);  // over, down, up, over, down, up
+  const BallClearance clearance(model, cloud, r);
+  EXPECT_EQ(count(link_passes(t, cloud, {}, &clearance), MoveKind::Rapid), 6);  // over, down, up, over, down, up
 }
 
 TEST(Link, LinksOverABumpOrTooLongRetract) {
@@ -285,7 +288,8 @@ TEST(Link, ALinkOverAnUncertainSurfaceKeepsTheGougeBudget) {
   for (const auto& [reach, rapids] : {std::pair{0.0015, 3}, std::pair{0.003, 6}}) {
     const UncertainPlaneLink at(0, 0.02 - reach);
     const HeightFieldModel model(at.cloud, 20, &at.uncertainty);
-    EXPECT_EQ(count(link_passes(at.path, at.cloud, {}, &model), MoveKind::Rapid), rapids) << reach;
+    const BallClearance clearance(model, at.cloud, at.path.tool_radius);
+    EXPECT_EQ(count(link_passes(at.path, at.cloud, {}, &clearance), MoveKind::Rapid), rapids) << reach;
   }
 }
 
@@ -301,9 +305,33 @@ TEST(Link, ALinkOverAGapBetweenRimPointsIsCheckedInsideTheOutline) {
   Eigen::Vector3d n;
   EXPECT_FALSE(model.eval(9.5, 0, z, n, false, &u));
   EXPECT_GT(u, 0.03);
-  EXPECT_EQ(count(link_passes(at.path, at.cloud, {}, &model), MoveKind::Rapid), 3);
+  const BallClearance without(model, at.cloud, at.path.tool_radius);
+  EXPECT_EQ(count(link_passes(at.path, at.cloud, {}, &without), MoveKind::Rapid), 3);
   const Outline square({{{-10, -10}, {10, -10}, {10, 10}, {-10, 10}}});
-  EXPECT_EQ(count(link_passes(at.path, at.cloud, {}, &model, &square), MoveKind::Rapid), 6);
+  const BallClearance inside(model, at.cloud, at.path.tool_radius, &square);
+  EXPECT_EQ(count(link_passes(at.path, at.cloud, {}, &inside), MoveKind::Rapid), 6);
+}
+
+// In the same gap (no points within 1.2 mm of (10, 0)), a link along x = 9.6 whose ball clears
+// the band at every foot point by 0.002 more than the uncertainty there (e = 0.005: a check at the
+// foot alone lets it through, reach <= -0.002 < e - 0.15 u) reaches deeper a few tenths of a mm
+// outward, where the field's uncertainty grows faster than the ball's distance from the plane.
+// The certificate samples there; the link is checked as the gouge guard checks a ball, and
+// refused (a zig-zag turn at the noisy bowl's rim, checked at its feet alone, reached 0.0115
+// into the band).
+TEST(Link, ALinkInAGapAtTheRimIsCheckedAroundItsFeet) {
+  const UncertainPlaneLink probe(9.6, 0, 1.2);
+  const HeightFieldModel model(probe.cloud, 20, &probe.uncertainty);
+  double above = 0;  // the largest uncertainty along the link, + 0.002
+  for (double y = -1; y <= 1 + 1e-9; y += 0.01) above = std::max(above, model.uncertainty(9.6, y) + 0.002);
+  for (double y = -1; y <= 1 + 1e-9; y += 0.01) {
+    const double u = model.uncertainty(9.6, y);
+    EXPECT_LT(u - above, 0.005 - 0.15 * u) << y;  // the foot alone: clear
+  }
+  const UncertainPlaneLink at(9.6, above, 1.2);
+  const Outline square({{{-10, -10}, {10, -10}, {10, 10}, {-10, 10}}});
+  const BallClearance clearance(model, at.cloud, at.path.tool_radius, &square);
+  EXPECT_EQ(count(link_passes(at.path, at.cloud, {}, &clearance), MoveKind::Rapid), 6);
 }
 
 }  // namespace
