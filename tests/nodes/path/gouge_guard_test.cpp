@@ -398,20 +398,23 @@ TEST(GougeGuard, BeyondTheCloudsEdgeTheExtrapolationIsLessCertain) {
   EXPECT_NEAR(after.clearance, grown, 5e-4);
 }
 
-// One move of a ball of radius 2 between contacts 8 mm apart on the cap (x = -4 and 4, y = 0):
-// its straight centre move sags about 8^2 / (8 (30 + 2)) = 0.25 mm into the sphere.
-Toolpath cap_move_8mm() {
+// One move of a ball of radius 2 (e = 0.01) on the cap between contacts at x = -half and half
+// (y = 0), each raised `above` along its normal.
+Toolpath cap_move(double half, double above = 0) {
   Toolpath path;
   path.tool_radius = 2;
   path.chord_error = 0.01;
   ToolpathPass p;
-  for (double x : {-4.0, 4.0}) {
-    p.contact.push_back(cap_point(x, 0));
+  for (double x : {-half, half}) {
     p.normal.push_back(cap_normal(x, 0));
+    p.contact.push_back(cap_point(x, 0) + above * p.normal.back());
   }
   path.passes.push_back(p);
   return path;
 }
+
+// Contacts 8 mm apart: the straight centre move sags about 8^2 / (8 (30 + 2)) = 0.25 mm into the sphere.
+Toolpath cap_move_8mm() { return cap_move(4.0); }
 
 TEST(GougeGuard, SplitsAMoveWhoseMiddleCutsIn) {
   // Two contacts 8 mm apart on a sphere of radius 30: the straight centre move sags by about
@@ -486,15 +489,8 @@ TEST(GougeGuard, AMoveOverAnUncertainSurfaceIsHeldToTheGougeBudget) {
   const std::vector<double> uncertainty(cloud.size(), 0.02);
   HeightFieldModel surface(cloud, 20, &uncertainty);
   BallClearance clearance(surface, cloud, 2.0);
-  Toolpath path;
-  path.tool_radius = 2;
-  path.chord_error = 0.01;
-  ToolpathPass p;
-  for (double x : {-0.506, 0.506}) {
-    p.normal.push_back(cap_normal(x, 0));
-    p.contact.push_back(cap_point(x, 0) + 0.016 * p.normal.back());
-  }
-  path.passes.push_back(p);
+  const Toolpath path = cap_move(0.506, 0.016);
+  const ToolpathPass& p = path.passes[0];
   auto reach = [&](const Eigen::Vector3d& c) { return 0.02 - ((c - Eigen::Vector3d(0, 0, 5 - kR)).norm() - kR - 2.0); };
   const Eigen::Vector3d a0 = path.centre(p.contact[0], p.normal[0]), b0 = path.centre(p.contact[1], p.normal[1]);
   EXPECT_NEAR(reach(a0), 0.004, 1e-9);
