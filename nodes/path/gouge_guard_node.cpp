@@ -1,10 +1,8 @@
-#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "engine/node.h"
-#include "nodes/cloud/surface_band_input.h"
-#include "nodes/geom/height_field_model.h"
+#include "nodes/path/ball_clearance_inputs.h"
 #include "nodes/path/gouge_guard.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
@@ -51,16 +49,8 @@ NodeDecl make_gouge_guard_node() {
     GougeGuardOptions o = ctx.options<GougeGuardOptions>();
     o.progress = [&ctx](double f) { ctx.progress(f, "checking the ball against the surface"); };
     try {
-      HeightFieldModel surface(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
-      const Outline outline(ctx.has_input("loops")
-                                ? loop_polygons_xy(*ctx.input<BoundaryLoops>("loops"), cloud->points)
-                                : std::vector<std::vector<Eigen::Vector2d>>{});
-      const auto given = surface_band_input(ctx, *cloud);
-      std::optional<SurfaceBandView> band;
-      if (given) band.emplace(SurfaceBandView{given->points, given->uncertainty});
-      BallClearance clearance(surface, cloud->points, path->tool_radius, outline.empty() ? nullptr : &outline,
-                              band ? &*band : nullptr);
-      auto res = guard_gouges(*path, clearance, o);
+      const BallClearanceInputs check(ctx, *cloud, path->tool_radius);
+      auto res = guard_gouges(*path, *check.clearance, o);
       for (const auto& w : res.report["warnings"]) ctx.warn(w.get<std::string>());  // lifts, in one line each
       Report report;
       report.data = std::move(res.report);

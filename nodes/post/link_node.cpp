@@ -1,10 +1,8 @@
 #include <memory>
-#include <optional>
 #include <stdexcept>
 
 #include "engine/node.h"
-#include "nodes/cloud/surface_band_input.h"
-#include "nodes/path/gouge_guard.h"
+#include "nodes/path/ball_clearance_inputs.h"
 #include "nodes/post/link.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/param.h"
@@ -39,22 +37,9 @@ NodeDecl make_link_node() {
     const LinkOptions o = ctx.options<LinkOptions>();
     try {
       // What the certificate measures against, checked as the gouge guard checks a ball.
-      std::unique_ptr<HeightFieldModel> model;
-      std::unique_ptr<Outline> outline;
-      std::shared_ptr<const PointCloud> given;
-      std::optional<SurfaceBandView> band;
-      std::unique_ptr<BallClearance> clearance;
-      if (cloud && cloud->size() >= 10) {
-        model = std::make_unique<HeightFieldModel>(cloud->points, 20,
-                                                   cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
-        outline = std::make_unique<Outline>(ctx.has_input("loops")
-                                                ? loop_polygons_xy(*ctx.input<BoundaryLoops>("loops"), cloud->points)
-                                                : std::vector<std::vector<Eigen::Vector2d>>{});
-        if ((given = surface_band_input(ctx, *cloud))) band.emplace(SurfaceBandView{given->points, given->uncertainty});
-        clearance = std::make_unique<BallClearance>(*model, cloud->points, path->tool_radius,
-                                                    outline->empty() ? nullptr : outline.get(), band ? &*band : nullptr);
-      }
-      ctx.set("linked", link_passes(*path, cloud ? cloud->points : none, o, clearance.get()));
+      std::unique_ptr<BallClearanceInputs> check;
+      if (cloud && cloud->size() >= 10) check = std::make_unique<BallClearanceInputs>(ctx, *cloud, path->tool_radius);
+      ctx.set("linked", link_passes(*path, cloud ? cloud->points : none, o, check ? &*check->clearance : nullptr));
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }
