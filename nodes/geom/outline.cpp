@@ -1,5 +1,12 @@
 #include "nodes/geom/outline.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "nodes/geom/kd_tree.h"
+
 namespace scallop {
 
 bool polygon_contains(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& q) {
@@ -11,6 +18,13 @@ bool polygon_contains(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vec
   return in;
 }
 
+struct Outline::EdgeIndex {
+  std::vector<Eigen::Vector2d> at;  // points along the edges, at most a median edge apart
+  std::vector<std::uint32_t> edge;  // the edge each lies on (from polygon[k] to polygon[k + 1])
+  PointsAdaptor<Eigen::Vector2d> adaptor{at};
+  std::unique_ptr<KdTree<Eigen::Vector2d, 2>> tree;
+};
+
 Outline::Outline(std::vector<std::vector<Eigen::Vector2d>> loops) {
   for (auto& polygon : loops) {
     if (polygon.size() < 3) continue;
@@ -18,6 +32,51 @@ Outline::Outline(std::vector<std::vector<Eigen::Vector2d>> loops) {
     for (const auto& q : polygon) box.extend(q);
     loops_.push_back({std::move(polygon), box});
   }
+  if (loops_.empty()) return;
+  const auto& P = loops_[0].polygon;
+  const std::size_t n = P.size();
+  std::vector<double> length(n);
+  for (std::size_t k = 0; k < n; ++k) length[k] = (P[(k + 1) % n] - P[k]).norm();
+  std::vector<double> sorted = length;
+  std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
+  const double step = std::max(sorted[n / 2], 1e-12);
+  auto index = std::make_shared<EdgeIndex>();
+  for (std::size_t k = 0; k < n; ++k) {
+    const int m = std::max(1, static_cast<int>(std::ceil(length[k] / step)));
+    for (int t = 0; t < m; ++t) {
+      index->at.push_back(P[k] + (P[(k + 1) % n] - P[k]) * (double(t) / m));
+      index->edge.push_back(static_cast<std::uint32_t>(k));
+    }
+  }
+  index->tree = std::make_unique<KdTree<Eigen::Vector2d, 2>>(2, index->adaptor,
+                                                              nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  index->tree->buildIndex();
+  outer_edges_ = std::move(index);
+}
+
+double Outline::beyond_outer(const Eigen::Vector2d& q) const {
+  if (!loops_.empty() && loops_[0].box.contains(q) && polygon_contains(loops_[0].polygon, q)) return 0;
+  return distance_to_outer(q);
+}
+
+double Outline::distance_to_outer(const Eigen::Vector2d& q) const {
+  if (loops_.empty()) return std::numeric_limits<double>::infinity();
+  const auto& P = loops_[0].polygon;
+  // The nearest edge is among those of the 8 nearest edge points (they are at most a median
+  // edge apart along every edge).
+  constexpr std::size_t kNear = 8;
+  std::uint32_t near[kNear];
+  double d2[kNear];
+  const double at[2] = {q.x(), q.y()};
+  const std::size_t got = outer_edges_->tree->knnSearch(at, kNear, near, d2);
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < got; ++i) {
+    const std::uint32_t k = outer_edges_->edge[near[i]];
+    const Eigen::Vector2d a = P[k], ab = P[(k + 1) % P.size()] - a;
+    const double t = ab.squaredNorm() > 0 ? std::clamp((q - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+    best = std::min(best, (a + t * ab - q).norm());
+  }
+  return best;
 }
 
 bool Outline::contains(const Eigen::Vector2d& q) const {

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <memory>
 #include <vector>
 
 namespace scallop {
@@ -23,13 +24,21 @@ class Outline {
   bool contains(const Eigen::Vector2d& q) const;
   // inside any one of the loops (their union: e.g. a set of holes)
   bool any_contains(const Eigen::Vector2d& q) const;
+  // How far q lies outside the first loop (the outer one, as the boundary loops come), in xy:
+  // 0 inside it; +infinity without loops. The band beyond it is what path.isoparametric's band
+  // passes cut and post.simulate counts (rim_band_width, nodes/path/step_size.h).
+  double beyond_outer(const Eigen::Vector2d& q) const;
+  // The distance from q to the first loop's edges, inside or out (+infinity without loops).
+  double distance_to_outer(const Eigen::Vector2d& q) const;
 
  private:
   struct Loop {
     std::vector<Eigen::Vector2d> polygon;
     Eigen::AlignedBox2d box;
   };
+  struct EdgeIndex;  // the outer loop's edges, sampled, in a k-d tree
   std::vector<Loop> loops_;
+  std::shared_ptr<const EdgeIndex> outer_edges_;
 };
 
 }  // namespace scallop

@@ -1,6 +1,8 @@
 // The gouge guard's check of a ball (BallClearance) built from a node's inputs: the height field
 // of its cloud, the outline of its optional input "loops" and its optional input "band"
-// (cloud.surface_band). path.gouge_guard and post.link check balls alike.
+// (cloud.surface_band). path.gouge_guard and post.link check balls alike, the rim band beyond
+// the outline included (rim_band_width: what the planner's band passes cut by default and the
+// certificate counts).
 #pragma once
 
 #include <memory>
@@ -12,6 +14,7 @@
 #include "nodes/geom/height_field_model.h"
 #include "nodes/geom/outline.h"
 #include "nodes/path/gouge_guard.h"
+#include "nodes/path/step_size.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/param.h"
 
@@ -26,7 +29,10 @@ struct BallClearanceInputs {
                                        : std::vector<std::vector<Eigen::Vector2d>>{}),
         band_cloud(surface_band_input(ctx, cloud)) {
     if (band_cloud) band.emplace(SurfaceBandView{band_cloud->points, band_cloud->uncertainty});
-    clearance.emplace(surface, cloud.points, r, outline.empty() ? nullptr : &outline, band ? &*band : nullptr);
+    // (a spacing wider than the certificate's band: the outermost band pass runs along its edge,
+    // and its balls reach past it)
+    clearance.emplace(surface, cloud.points, r, outline.empty() ? nullptr : &outline, band ? &*band : nullptr,
+                      rim_band_width(surface.spacing()) + surface.spacing());
   }
   BallClearanceInputs(const BallClearanceInputs&) = delete;
   BallClearanceInputs& operator=(const BallClearanceInputs&) = delete;

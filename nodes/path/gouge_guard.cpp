@@ -24,6 +24,7 @@ struct BallClearance::Impl {
   const std::vector<Eigen::Vector3d>& points;
   double r;
   const Outline* outline;
+  double rim_band = 0;  // mm beyond the outline's outer loop still on the surface
   PointsAdaptor<Eigen::Vector3d> adaptor{points};
   KdTree<Eigen::Vector3d, 2> tree{2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};   // by xy
   KdTree<Eigen::Vector3d, 3> tree3{3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};  // in 3-D
@@ -123,11 +124,12 @@ struct DeepestIntoBand {
 }  // namespace
 
 BallClearance::BallClearance(const HeightFieldModel& surface, const std::vector<Eigen::Vector3d>& points,
-                             double r, const Outline* outline, const SurfaceBandView* band)
+                             double r, const Outline* outline, const SurfaceBandView* band, double rim_band)
     : impl_(nullptr) {
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
   if (points.empty()) throw std::invalid_argument("the cloud has no points");
   impl_ = new Impl(surface, points, r, outline, band);
+  impl_->rim_band = rim_band;
 }
 
 BallClearance::~BallClearance() { delete impl_; }
@@ -148,7 +150,8 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
   // away in a gap the sample left between the points of a rim (no farther out than half a
   // spacing past them). The field's extrapolation there, with its grown uncertainty, is the
   // best estimate of the part.
-  // Given the outline, everywhere inside it as well (no point search needed there).
+  // Given the outline, everywhere inside it as well (no point search needed there), and in the
+  // rim band beyond it.
   const double sp = impl_->surface.spacing();
   auto nearest_point_d2 = [&](const Eigen::Vector2d& q) {
     std::uint32_t j;
@@ -160,7 +163,9 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     return d2;
   };
   auto in_band = [&](const Eigen::Vector2d& q) {
-    if (impl_->outline && impl_->outline->contains(q)) return true;
+    if (impl_->outline && (impl_->outline->contains(q) ||
+                           (impl_->rim_band > 0 && impl_->outline->beyond_outer(q) <= impl_->rim_band)))
+      return true;
     const double d2 = nearest_point_d2(q);
     return d2 <= sp * sp || (d2 <= 4 * sp * sp && impl_->surface.reach_beyond(q.x(), q.y()) <= 0.5 * sp);
   };

@@ -14,7 +14,7 @@ namespace scallop::path_nodes {
 NodeDecl make_isoparametric_node() {
   NodeDecl d;
   d.type = "path.isoparametric";
-  d.version = 12;  // 3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field; 5: strips over the limit summarised in one warning (strips_over_limit_at), warnings said on the terminal, outline passes; 6: one rim pass through the outline's points, both patterns; holes (input loops) are not cut, a rim pass around each; 7: margins of one uncertainty (not 1.25 and 1.5), the fit gap added to it; 8: its strip checks see the height field's uncertainty with that fit's misfit (shape bias) counted; 9: the cusp found by regula falsi; 10: side steps shrunk by the secant; 11: the fits solved by a fixed-size Cholesky (the same answers to rounding); 12: margins planned with the smaller of a point's own uncertainty and its height field's (cloud.surface_band's, optional input band), the largest of that over the point's neighbours, the rim pass too; the gouge budget 0.9 e and the scallop limit h each less 0.15 of it (the certificate samples it between the places planned)
+  d.version = 13;  // 13: closed passes cut a band beyond the outer loop (rim_band, three spacings);  3: margins for the cloud's uncertainty (surface_error); 4: and for the gap between its fit and the cloud's height field; 5: strips over the limit summarised in one warning (strips_over_limit_at), warnings said on the terminal, outline passes; 6: one rim pass through the outline's points, both patterns; holes (input loops) are not cut, a rim pass around each; 7: margins of one uncertainty (not 1.25 and 1.5), the fit gap added to it; 8: its strip checks see the height field's uncertainty with that fit's misfit (shape bias) counted; 9: the cusp found by regula falsi; 10: side steps shrunk by the secant; 11: the fits solved by a fixed-size Cholesky (the same answers to rounding); 12: margins planned with the smaller of a point's own uncertainty and its height field's (cloud.surface_band's, optional input band), the largest of that over the point's neighbours, the rim pass too; the gouge budget 0.9 e and the scallop limit h each less 0.15 of it (the certificate samples it between the places planned)
   d.description =
       "iso-parametric finishing passes from a UV-mapped cloud: zig-zag on a rectangle map, "
       "concentric on a disk map; forward step from the chord error, side step from the scallop "
@@ -61,7 +61,11 @@ NodeDecl make_isoparametric_node() {
                "while planning), refuse with the estimate")
       .flag("outline", &IsoparametricOptions::outline, 
             "a last closed pass through the outline's own points, so the rim between pass "
-            "ends and the outline's corners are cut");
+            "ends and the outline's corners are cut")
+      .number("rim_band", &IsoparametricOptions::rim_band, -1, 100, "mm",
+              "with outline, closed passes offset outward from the outer loop cut this band beyond "
+              "it, along the surface (the real outline lies beyond the cloud's outermost points, "
+              "by up to 2.7 spacings on the catalog's clouds); -1: three of the cloud's spacings; 0: none");
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");
     auto neighbors = ctx.input<Neighborhoods>("neighbors");

@@ -61,6 +61,19 @@ inline double gouge_budget(double chord_error, double delta) {
   return 0.9 * chord_error - kUncertaintyRoughness * delta;
 }
 
+// How far beyond a cloud's outer loop (mm, along the surface) the real outline may lie: the loop
+// runs through the outermost points, and a random sample leaves gaps at its edge. On the
+// catalog's 50 000-point clouds the true outline lies up to 2.7 mean spacings beyond the loop
+// (the freeform's spike: 1.35 mm at a spacing of 0.50; bench/outline_gap.py); three spacings.
+// cloud_spacing  the cloud's mean spacing in xy (HeightFieldModel::spacing).
+inline double rim_band_width(double cloud_spacing) { return 3 * cloud_spacing; }
+// How far beyond the outer loop post.simulate certifies by default: the cloud's support, a
+// spacing past its outermost points (they sit about half a spacing inside the edge). The band
+// passes cut three; beyond one the field is extrapolated, its uncertainty grown (on the canopy's
+// 68 degree rim to 0.026 mm 1.7 mm out), and the part is seldom there (the true outline lies a
+// median 0.2 mm beyond the loop).
+inline double certified_rim_band(double cloud_spacing) { return cloud_spacing; }
+
 // How the gouge budget is shared where the surface estimate may lie up to delta off the real
 // surface, either way (cloud.denoise's uncertainty: an honest bound, noise and shape bias). The
 // real surface may be delta higher than the estimate, so a ball touching the estimate may cut

@@ -15,7 +15,9 @@
 #include <stdexcept>
 #include "nodes/geom/kd_tree.h"
 #include "nodes/post/centre_index.h"
+#include "nodes/geom/outline.h"
 #include "nodes/post/clearance_march.h"
+#include "nodes/path/step_size.h"
 
 namespace scallop {
 namespace {
@@ -137,6 +139,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
     Eigen::Vector3d p, n;
     double w;
     double u;  // the surface's uncertainty there (mm)
+    bool beyond = false;  // in the rim band beyond the outer loop
   };
   // Which grid nodes fall on the patch; holes in the cloud (not connected to the outside of the
   // grid through other missing nodes) are part of the patch too.
@@ -200,14 +203,37 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
   }
   }
 
+  // With loops the margin is measured from their edges, resampled every quarter spacing (the
+  // nearest resampled point is at most an eighth of a spacing farther than the edge).
+  std::vector<Eigen::Vector2d> edge_points;
+  if (use_loops)
+    for (const auto& L : o.loops)
+      for (std::size_t k = 0; k < L.size(); ++k) {
+        const Eigen::Vector2d a = L[k], b = L[(k + 1) % L.size()];
+        const int m = std::max(1, static_cast<int>(std::ceil((b - a).norm() / (0.25 * spacing))));
+        for (int t = 0; t < m; ++t) edge_points.push_back(a + (b - a) * (double(t) / m));
+      }
+  const double rim_band = !use_loops ? 0.0 : o.rim_band >= 0 ? o.rim_band : certified_rim_band(surf.spacing());
+  const Outline outline_polygons(rim_band > 0 ? o.loops : std::vector<std::vector<Eigen::Vector2d>>{});
   std::vector<std::vector<Raw>> rows(nu);
   tbb::parallel_for(tbb::blocked_range<int>(0, nu), [&](const tbb::blocked_range<int>& rg) {
     for (int j = rg.begin(); j < rg.end(); ++j) {
       for (int i = 0; i < nu; ++i) {
-        if (!inside[std::size_t(j) * nu + i]) continue;
         Eigen::Vector2d q = to_xy(grid_u(i), grid_v(j));
         double z, u;
         Eigen::Vector3d n;
+        if (!inside[std::size_t(j) * nu + i]) {
+          // the rim band: within rim_band along the surface of the outer loop
+          if (rim_band <= 0) continue;
+          // (the edges first: the polygon test only for the few places near them)
+          const double d = outline_polygons.distance_to_outer(q);
+          if (!(d <= rim_band) || outline_polygons.beyond_outer(q) == 0 ||
+              !surf.eval(q.x(), q.y(), z, n, true, &u) || d > rim_band * n.z())
+            continue;
+          inside[std::size_t(j) * nu + i] = 2;
+          rows[j].push_back({{q.x(), q.y(), z}, n, spacing * spacing / n.z(), u, true});
+          continue;
+        }
         if (!surf.eval(q.x(), q.y(), z, n, true, &u)) continue;
         // Steep cells are split k×k so the spacing along the surface stays near `spacing`.
         int k = std::clamp(static_cast<int>(std::lround(1.0 / n.z())), 1, 4);
@@ -252,16 +278,6 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
         }
       if (near) outline.push_back(to_xy(grid_u(i), grid_v(j)));
     }
-  // With loops the margin is measured from their edges, resampled every quarter spacing (the
-  // nearest resampled point is at most an eighth of a spacing farther than the edge).
-  std::vector<Eigen::Vector2d> edge_points;
-  if (use_loops)
-    for (const auto& L : o.loops)
-      for (std::size_t k = 0; k < L.size(); ++k) {
-        const Eigen::Vector2d a = L[k], b = L[(k + 1) % L.size()];
-        const int m = std::max(1, static_cast<int>(std::ceil((b - a).norm() / (0.25 * spacing))));
-        for (int t = 0; t < m; ++t) edge_points.push_back(a + (b - a) * (double(t) / m));
-      }
   const std::vector<Eigen::Vector2d>& edge_set = use_loops ? edge_points : outline;
   PointsAdaptor<Eigen::Vector2d> outline_adaptor{edge_set};
   KdTree<Eigen::Vector2d, 2> outline_tree(2, outline_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
@@ -292,12 +308,15 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
     last.at = {x, y}, last.lo = last.hi = std::sqrt(d2);
     return std::sqrt(d2) - edge_offset > margin;
   };
-  // With loops, a refinement sample is on the patch when its nearest grid node is.
-  auto on_patch_grid = [&](double x, double y) {
+  // With loops, a refinement sample is on the patch when its nearest grid node is, and in the
+  // rim band when that node is.
+  auto nearest_node = [&](double x, double y) -> std::uint8_t {
     const double dx = x - cx, dy = y - cy, u = ca * dx + sa * dy, v = -sa * dx + ca * dy;
     const long i = std::lround((u + Rg) / spacing - kPhaseU), j = std::lround((v + Rg) / spacing - kPhaseV);
-    return i >= 0 && j >= 0 && i < nu && j < nu && inside[std::size_t(j) * nu + std::size_t(i)];
+    return i >= 0 && j >= 0 && i < nu && j < nu ? inside[std::size_t(j) * nu + std::size_t(i)] : 0;
   };
+  auto on_patch_grid = [&](double x, double y) { return nearest_node(x, y) != 0; };
+  auto in_band = [&](double x, double y) { return use_loops && nearest_node(x, y) == 2; };
 
   double cut_length = 0;
   for (const auto& s : feed) cut_length += (s.b - s.a).norm();
@@ -319,7 +338,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
         SimSample& out = res.samples[row_start[j] + i];
         out.x = s.p.x(), out.y = s.p.y(), out.z = s.p.z(), out.weight = s.w;
         index.trace(s.p, s.n, r, T, s.u, out.gouge, out.scallop, cand, &hint);
-        out.interior = is_interior(s.p.x(), s.p.y(), outline_distance);
+        out.interior = !s.beyond && is_interior(s.p.x(), s.p.y(), outline_distance);
       }
       std::vector<Raw>().swap(rows[j]);
       const std::size_t d = done.fetch_add(row_start[j + 1] - row_start[j]) + row_start[j + 1] - row_start[j];
@@ -374,10 +393,15 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
             if (use_loops ? !(on_patch_grid(x, y) && surf.eval(x, y, z, n, true, &u))
                           : !surf.eval(x, y, z, n, false, &u))
               continue;
+            // in the rim band, no farther out than the band (as its grid samples)
+            if (in_band(x, y)) {
+              const double d = outline_polygons.beyond_outer({x, y});
+              if (d > rim_band * n.z()) continue;
+            }
             SimSample& out = extra[slot];
             out.x = x, out.y = y, out.z = z, out.weight = 0;
             index.trace({x, y, z}, n, r, T, u, out.gouge, out.scallop, cand, &hint);
-            out.interior = no_interior || is_interior(x, y, outline_distance);
+            out.interior = no_interior || (!in_band(x, y) && is_interior(x, y, outline_distance));
             valid[slot] = 1;
           }
       }
@@ -392,7 +416,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
   double area = 0, area_i = 0, uncut = 0, uncut_i = 0, gouge_max = 0;
   std::vector<std::pair<double, double>> all, inner;
   double max_all = -INFINITY, max_inner = -INFINITY;
-  std::size_t n_interior = 0, gouge_at = 0, scallop_at = 0;
+  std::size_t n_interior = 0, n_beyond = 0, gouge_at = 0, scallop_at = 0;
   for (std::size_t i = 0; i < res.samples.size(); ++i) {
     const SimSample& s = res.samples[i];
     if (s.gouge > gouge_max) gouge_max = s.gouge, gouge_at = i;
@@ -405,6 +429,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
     if (i >= n_grid) continue;
     area += s.weight;
     if (s.interior) area_i += s.weight, ++n_interior;
+    if (nearest_node(s.x, s.y) == 2) ++n_beyond;
     if (!cut) {
       uncut += s.weight;
       if (s.interior) uncut_i += s.weight;
@@ -421,8 +446,10 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
   rep["chord_limit"] = o.chord;
   rep["spacing"] = spacing;
   rep["margin"] = margin;
+  rep["rim_band"] = rim_band;
   rep["samples"] = n_grid;
   rep["samples_interior"] = n_interior;
+  rep["samples_beyond_outline"] = n_beyond;
   rep["samples_refined"] = res.samples.size() - n_grid;
   rep["surface_area"] = area;
   report_scallop(rep, max_all, max_inner, st, sti);

@@ -66,6 +66,15 @@ struct SimulateOptions {
   // and the interior margin is measured from the polygons' edges. Empty: the outline is guessed
   // from the cloud (HeightFieldModel::inside), which on sparse clouds reaches past the real rim.
   std::vector<std::vector<Eigen::Vector2d>> loops;
+  // With loops: the band beyond the outer loop also counted as the patch, its width along the
+  // surface (mm; a sample beyond the loop is on the patch within rim_band × n_z of the loop in
+  // xy, and never interior): part of what path.isoparametric's band passes cut (the real
+  // outline lies beyond a cloud's outermost points). < 0: certified_rim_band of the cloud's
+  // spacing (nodes/path/step_size.h), one spacing; 0: none (the default: measured on the clean
+  // canopy's 68 degree rim, one spacing out the extrapolation's uncertainty changes faster than
+  // the guard samples it, and the contour program's gouge bound came out 0.0137 > e there while
+  // verify.py passed it).
+  double rim_band = 0;
 };
 
 // Simulates the feed polyline `feed` (ball centres) over the surface `surface`: the samples
@@ -73,7 +82,8 @@ struct SimulateOptions {
 // (scallop_limit = h, gouge_tolerance = max(e, 0.001)) and the report.
 // Report keys: scallop_max, scallop_max_interior, scallop_p99, scallop_p99_interior,
 // scallop_mean, scallop_mean_interior, gouge_max, uncut_fraction, uncut_fraction_interior,
-// cut_length, rapid_length, samples, samples_interior, samples_refined, spacing, margin,
+// cut_length, rapid_length, samples, samples_interior, samples_refined, samples_beyond_outline
+// (grid samples in the rim band), rim_band, spacing, margin,
 // surface_area, surface_uncertainty_max (the cloud points' largest uncertainty),
 // surface_uncertainty_max_sampled (the largest the bounds used at a grid sample: the
 // HeightFieldModel's, its fit's misfit counted), tool_radius, scallop_limit, chord_limit, pass,

@@ -189,6 +189,13 @@ TEST(BallClearance, WithAnOutlineCoversEveryGapInsideIt) {
   ASSERT_TRUE(in_gap.on_surface);
   EXPECT_NEAR(in_gap.clearance, -0.05, 1e-6);  // the plane, extrapolated exactly
   EXPECT_FALSE(probe(with, 10.4, 0).on_surface);
+  // With a rim band (what the planner's band passes cut and the certificate counts) the field
+  // is checked out to its width beyond the outline.
+  BallClearance with_band(surface, cloud, 2.0, &outline, nullptr, 0.5);
+  const auto in_band = probe(with_band, 10.4, 0);
+  ASSERT_TRUE(in_band.on_surface);
+  EXPECT_NEAR(in_band.clearance, -0.05, 1e-6);
+  EXPECT_FALSE(probe(with_band, 10.6, 0).on_surface);
 }
 
 TEST(BallClearance, InAGapAtTheRimTheBandIsCheckedAroundTheFoot) {

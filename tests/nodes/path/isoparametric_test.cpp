@@ -98,15 +98,18 @@ std::string error_of(const Input& in, const IsoparametricOptions& o) {
 }
 
 // r = 3, h = 0.01, e = 0.005: the limits most tests plan for.
+// No band beyond the outline (its own test: ABandBeyondTheOutlineIsCutWhereTheCloudStopsShort).
 IsoparametricOptions fine_options() {
   IsoparametricOptions o;
   o.tool_radius = 3;
   o.scallop_height = 0.01;
   o.chord_error = 0.005;
+  o.rim_band = 0;
   return o;
 }
 
-// The product's simulation of a path planned with fine_options(), on a 0.05 mm grid over loops.
+// The product's simulation of a path planned with fine_options(), on a 0.05 mm grid over loops
+// (the exact outline: no band beyond it).
 nlohmann::json simulate_fine(const std::vector<Eigen::Vector3d>& points, const Toolpath& tp,
                              std::vector<std::vector<Eigen::Vector2d>> loops) {
   const HeightFieldModel surface(points);
@@ -116,6 +119,7 @@ nlohmann::json simulate_fine(const std::vector<Eigen::Vector3d>& points, const T
   so.chord = 0.005;
   so.spacing = 0.05;
   so.loops = std::move(loops);
+  so.rim_band = 0;
   return simulate_cut(surface, feed_centres(tp), 0, so).report;
 }
 
@@ -192,6 +196,43 @@ TEST(Isoparametric, OutlinePassesCutTheRimTheWholePatchStaysUnderTheLimit) {
   const auto sim = simulate_fine(in.cloud.points, tp, {{{0, 0}, {30, 0}, {30, 20}, {0, 20}}});
   EXPECT_LE(sim["scallop_max"].get<double>(), 1.01 * 0.01);
   EXPECT_GE(sim["scallop_max"].get<double>(), 0.95 * 0.01);  // the cusps are there
+  EXPECT_EQ(sim["uncut_fraction"].get<double>(), 0.0);
+  EXPECT_LT(sim["gouge_max"].get<double>(), 1e-9);
+}
+
+// The cloud of a flat rectangle [0, 30] x [0, 20] whose part runs 1 mm farther on every side
+// (the sampling stopped short of the real outline). Without the band the rim pass alone leaves
+// the strip beyond it over h; with a 1.5 mm band the whole part, out to its real outline, stays
+// within h (the product's simulation, the plane extrapolated exactly). Each band pass lies its
+// offset beyond the rectangle (on a plane the offset in xy is the offset along the surface; at a
+// corner the mitre takes it out diagonally, as far on both axes).
+TEST(Isoparametric, ABandBeyondTheOutlineIsCutWhereTheCloudStopsShort) {
+  const Input in = flat();
+  const std::vector<std::vector<Eigen::Vector2d>> part = {{{-1, -1}, {31, -1}, {31, 21}, {-1, 21}}};
+  IsoparametricOptions o = fine_options();
+  const IsoparametricResult without = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  EXPECT_EQ(without.report["rim_band"]["passes"], 0);
+  EXPECT_GT(simulate_fine(in.cloud.points, without.toolpath, part)["scallop_max"].get<double>(), 2 * 0.01);
+
+  o.rim_band = 1.5;
+  const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  const Toolpath& tp = res.toolpath;
+  // steps of at most 0.55 of the nominal interval sqrt(8 r h)
+  const auto steps = static_cast<std::size_t>(std::ceil(1.5 / (0.55 * std::sqrt(8 * 3 * 0.01))));
+  ASSERT_EQ(res.report["rim_band"]["passes"], steps);
+  EXPECT_EQ(res.report["rim_band"]["width"], 1.5);
+  ASSERT_GE(tp.passes.size(), steps + 1);
+  for (std::size_t k = 1; k <= steps; ++k) {
+    const ToolpathPass& p = tp.passes[tp.passes.size() - steps - 1 + k];
+    ASSERT_EQ(p.contact.size(), in.map.outer_loop.size() + 1);
+    for (const Eigen::Vector3d& c : p.contact) {
+      const double beyond = std::max({-c.x(), c.x() - 30, -c.y(), c.y() - 20});
+      EXPECT_NEAR(beyond, 1.5 * double(k) / double(steps), 1e-9) << k;
+      EXPECT_NEAR(c.z(), 0, 1e-9);
+    }
+  }
+  const auto sim = simulate_fine(in.cloud.points, tp, part);
+  EXPECT_LE(sim["scallop_max"].get<double>(), 1.01 * 0.01);
   EXPECT_EQ(sim["uncut_fraction"].get<double>(), 0.0);
   EXPECT_LT(sim["gouge_max"].get<double>(), 1e-9);
 }
@@ -421,6 +462,7 @@ TEST(Isoparametric, ContourOnADomeIsConcentricCirclesToTheCentre) {
   o.tool_radius = r;
   o.scallop_height = h;
   o.chord_error = 0.01;
+  o.rim_band = 0;  // (the band beyond the outline: its own test)
   const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
   // the rim pass through the outline's points comes first; the circles follow
   ASSERT_EQ(res.report["outline_passes"], 1);
@@ -587,7 +629,8 @@ TEST(Isoparametric, NodeRunsAndReportsErrors) {
                            {"safety_factor", 1.0},     {"surface_error", 0.0},
                            {"conformal_tolerance", 5.0},
                            {"max_segment", 5.0},       {"interpolation_k", 20},
-                           {"max_passes", 5000},       {"outline", true}};
+                           {"max_passes", 5000},       {"outline", true},
+                           {"rim_band", 0.0}};
   auto in = std::make_shared<Input>(flat(6, 4));
   std::map<std::string, ValuePtr> inputs = {
       {"cloud", std::make_shared<PointCloud>(in->cloud)},

@@ -405,7 +405,8 @@ SparsePatch sparse_patch() {
   return p;
 }
 
-Simulation run_sparse(double r, double s) {
+// rim_band  the band beyond the loop also counted (mm); 0: the loop's inside only.
+Simulation run_sparse(double r, double s, double rim_band = 0) {
   static const SparsePatch patch = sparse_patch();
   HeightFieldModel surf(patch.cloud);
   Toolpath t;
@@ -424,6 +425,7 @@ Simulation run_sparse(double r, double s) {
   o.scallop = 0.05;
   o.spacing = 0.1;
   o.loops = {patch.outline};
+  o.rim_band = rim_band;
   return simulate_cut(surf, feed_centres(t), 0.0, o);
 }
 
@@ -451,6 +453,38 @@ TEST(Simulate, LoopsBoundTheSparsePatch) {
   // overreaches on curved sparse rims such as a hemisphere's, not here.)
 }
 
+// The band beyond the loop (what the planner's band passes cut; the real outline lies beyond a
+// cloud's outermost points) is counted: the square dilated by 1 mm, its corners rounded; the
+// samples there are never interior. The passes stop at the loop, so the band's rim is left
+// over h (1 mm out, midway between two passes, the balls of radius 4 leave 0.19) and the patch fails.
+TEST(Simulate, TheRimBandBeyondTheLoopIsCounted) {
+  const double r = 4;
+  const auto res = run_sparse(r, 1.25, 1.0);
+  const auto& j = res.report;
+  EXPECT_EQ(j["rim_band"], 1.0);
+  EXPECT_NEAR(j["surface_area"].get<double>(), 42 * 32 - (4 - M_PI), 0.005 * 1340);
+  EXPECT_GT(j["samples_beyond_outline"].get<std::size_t>(), 0u);
+  std::size_t beyond = 0;
+  for (const auto& q : res.samples) {
+    const double dx = std::max({-q.x, q.x - 40, 0.0}), dy = std::max({-q.y, q.y - 30, 0.0});
+    // (a refinement sample, weight 0, is on the patch where its nearest grid node is)
+    EXPECT_LE(std::hypot(dx, dy), 1.0 + (q.weight > 0 ? 1e-9 : 0.75 * 0.1)) << q.x << " " << q.y;
+    if (dx > 0 || dy > 0) {
+      ++beyond;
+      EXPECT_FALSE(q.interior) << q.x << " " << q.y;
+    }
+  }
+  EXPECT_GT(beyond, 0u);
+  // the band's edge midway between two passes 1.25 apart, up to the refinement's overshoot
+  const auto left = [&](double d) { return r - std::sqrt(r * r - d * d); };
+  EXPECT_GE(j["scallop_max"].get<double>(), left(std::hypot(1.0, 0.625)) - 1e-3);
+  EXPECT_LE(j["scallop_max"].get<double>(), left(std::hypot(1.0 + 0.75 * 0.1, 0.625)));
+  EXPECT_FALSE(j["pass"].get<bool>());
+  // the interior is as without the band
+  const auto without = run_sparse(r, 1.25);
+  EXPECT_NEAR(j["scallop_max_interior"].get<double>(), without.report["scallop_max_interior"].get<double>(), 1e-12);
+}
+
 TEST(Simulate, LoopsWithAHoleLeaveItOut) {
   auto patch = sparse_patch();
   HeightFieldModel surf(patch.cloud);
@@ -466,8 +500,14 @@ TEST(Simulate, LoopsWithAHoleLeaveItOut) {
   o.scallop = 0.05;
   o.spacing = 0.1;
   o.loops = {patch.outline, {{10, 10}, {10, 20}, {20, 20}, {20, 10}}};  // a 10 × 10 hole
+  o.rim_band = 0;
   auto res = simulate_cut(surf, feed_centres(t), 0.0, o);
   EXPECT_NEAR(res.report["surface_area"].get<double>(), 40 * 30 - 100, 0.01 * 1100);
+  for (const auto& q : res.samples) EXPECT_FALSE(q.x > 10.05 && q.x < 19.95 && q.y > 10.05 && q.y < 19.95);
+  // The rim band lies beyond the outer loop only: the hole stays out of it.
+  o.rim_band = 1;
+  res = simulate_cut(surf, feed_centres(t), 0.0, o);
+  EXPECT_NEAR(res.report["surface_area"].get<double>(), 42 * 32 - (4 - M_PI) - 100, 0.01 * 1200);
   for (const auto& q : res.samples) EXPECT_FALSE(q.x > 10.05 && q.x < 19.95 && q.y > 10.05 && q.y < 19.95);
   o.loops = {{{0, 0}, {1, 1}}};
   try {

@@ -1,0 +1,46 @@
+#include "nodes/geom/outline.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace scallop;
+
+namespace {
+
+// The square [0, 10]² traced by points 0.5 apart (as a cloud's boundary loop comes), with a
+// hole [4, 6]².
+Outline square_with_hole() {
+  std::vector<Eigen::Vector2d> outer;
+  for (int i = 0; i < 20; ++i) outer.emplace_back(0.5 * i, 0);
+  for (int i = 0; i < 20; ++i) outer.emplace_back(10, 0.5 * i);
+  for (int i = 20; i > 0; --i) outer.emplace_back(0.5 * i, 10);
+  for (int i = 20; i > 0; --i) outer.emplace_back(0, 0.5 * i);
+  return Outline({outer, {{4, 4}, {6, 4}, {6, 6}, {4, 6}}});
+}
+
+}  // namespace
+
+TEST(Outline, ContainsByTheEvenOddRule) {
+  const Outline o = square_with_hole();
+  EXPECT_TRUE(o.contains({1, 1}));
+  EXPECT_FALSE(o.contains({5, 5}));  // in the hole
+  EXPECT_FALSE(o.contains({11, 5}));
+  EXPECT_TRUE(o.any_contains({5, 5}));
+}
+
+// How far a place lies beyond the outer loop: 0 inside it (the hole included), else the exact
+// distance to its edges (beside an edge, and from a corner).
+TEST(Outline, BeyondTheOuterLoopIsTheDistanceToItsEdges) {
+  const Outline o = square_with_hole();
+  EXPECT_EQ(o.beyond_outer({1, 1}), 0.0);
+  EXPECT_EQ(o.beyond_outer({5, 5}), 0.0);
+  EXPECT_NEAR(o.beyond_outer({10.7, 3.25}), 0.7, 1e-12);
+  EXPECT_NEAR(o.beyond_outer({4.1, -1.5}), 1.5, 1e-12);
+  EXPECT_NEAR(o.beyond_outer({-0.3, 10.4}), std::hypot(0.3, 0.4), 1e-12);
+  EXPECT_NEAR(o.beyond_outer({13, 14}), 5.0, 1e-12);
+  EXPECT_NEAR(o.distance_to_outer({9, 5}), 1.0, 1e-12);  // inside too
+  EXPECT_NEAR(o.distance_to_outer({5, 5}), 5.0, 1e-12);
+  const Outline none;
+  EXPECT_TRUE(std::isinf(none.beyond_outer({0, 0})));
+}
