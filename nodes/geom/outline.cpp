@@ -52,16 +52,24 @@ Outline::Outline(std::vector<std::vector<Eigen::Vector2d>> loops) {
                                                               nanoflann::KDTreeSingleIndexAdaptorParams(16));
   index->tree->buildIndex();
   outer_edges_ = std::move(index);
+  double area2 = 0;
+  for (std::size_t k = 0; k < n; ++k) area2 += P[k].x() * P[(k + 1) % n].y() - P[(k + 1) % n].x() * P[k].y();
+  outer_orientation_ = area2 >= 0 ? 1.0 : -1.0;
 }
 
 double Outline::beyond_outer(const Eigen::Vector2d& q) const {
-  if (!loops_.empty() && loops_[0].box.contains(q) && polygon_contains(loops_[0].polygon, q)) return 0;
-  return distance_to_outer(q);
+  if (loops_.empty()) return std::numeric_limits<double>::infinity();
+  bool inside = false;
+  const double d = nearest_on_outer(q, &inside);
+  return inside ? 0.0 : d;
 }
 
-double Outline::distance_to_outer(const Eigen::Vector2d& q) const {
+double Outline::distance_to_outer(const Eigen::Vector2d& q) const { return nearest_on_outer(q, nullptr); }
+
+double Outline::nearest_on_outer(const Eigen::Vector2d& q, bool* inside) const {
   if (loops_.empty()) return std::numeric_limits<double>::infinity();
   const auto& P = loops_[0].polygon;
+  const std::size_t n = P.size();
   // The nearest edge is among those of the 8 nearest edge points (they are at most a median
   // edge apart along every edge).
   constexpr std::size_t kNear = 8;
@@ -69,12 +77,31 @@ double Outline::distance_to_outer(const Eigen::Vector2d& q) const {
   double d2[kNear];
   const double at[2] = {q.x(), q.y()};
   const std::size_t got = outer_edges_->tree->knnSearch(at, kNear, near, d2);
-  double best = std::numeric_limits<double>::infinity();
+  double best = std::numeric_limits<double>::infinity(), best_t = 0;
+  std::uint32_t best_k = 0;
   for (std::size_t i = 0; i < got; ++i) {
     const std::uint32_t k = outer_edges_->edge[near[i]];
-    const Eigen::Vector2d a = P[k], ab = P[(k + 1) % P.size()] - a;
+    const Eigen::Vector2d a = P[k], ab = P[(k + 1) % n] - a;
     const double t = ab.squaredNorm() > 0 ? std::clamp((q - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-    best = std::min(best, (a + t * ab - q).norm());
+    const double d = (a + t * ab - q).norm();
+    if (d < best) best = d, best_t = t, best_k = k;
+  }
+  if (inside) {
+    // Which side of the nearest edge q lies on (the inside is to the left of a counter-clockwise
+    // loop); nearest a corner, of both its edges: inside a convex corner is left of both, inside
+    // a reflex one left of either. Exact for a simple polygon, without walking its edges.
+    auto left_of = [&](std::size_t k) {
+      const Eigen::Vector2d a = P[k], ab = P[(k + 1) % n] - a, aq = q - a;
+      return outer_orientation_ * (ab.x() * aq.y() - ab.y() * aq.x()) > 0;
+    };
+    if (best_t > 0 && best_t < 1) {
+      *inside = left_of(best_k);
+    } else {
+      const std::size_t v = best_t >= 1 ? (best_k + 1) % n : best_k, before = (v + n - 1) % n;
+      const Eigen::Vector2d e0 = P[v] - P[before], e1 = P[(v + 1) % n] - P[v];
+      const bool convex = outer_orientation_ * (e0.x() * e1.y() - e0.y() * e1.x()) >= 0;
+      *inside = convex ? left_of(before) && left_of(v) : left_of(before) || left_of(v);
+    }
   }
   return best;
 }

@@ -25,7 +25,8 @@ class Outline {
   // inside any one of the loops (their union: e.g. a set of holes)
   bool any_contains(const Eigen::Vector2d& q) const;
   // How far q lies outside the first loop (the outer one, as the boundary loops come), in xy:
-  // 0 inside it; +infinity without loops. The band beyond it is what path.isoparametric's band
+  // 0 inside it; +infinity without loops. Found from the nearest edge (a k-d tree search), not
+  // by walking the loop: the guard asks it for every foot beyond the outline. The band beyond it is what path.isoparametric's band
   // passes cut and post.simulate counts (rim_band_width, nodes/path/step_size.h).
   double beyond_outer(const Eigen::Vector2d& q) const;
   // The distance from q to the first loop's edges, inside or out (+infinity without loops).
@@ -37,8 +38,12 @@ class Outline {
     Eigen::AlignedBox2d box;
   };
   struct EdgeIndex;  // the outer loop's edges, sampled, in a k-d tree
+  // The distance from q to the outer loop's nearest edge, and (given inside) whether q lies
+  // inside the loop, from the side of that edge.
+  double nearest_on_outer(const Eigen::Vector2d& q, bool* inside) const;
   std::vector<Loop> loops_;
   std::shared_ptr<const EdgeIndex> outer_edges_;
+  double outer_orientation_ = 1;  // +1 counter-clockwise, -1 clockwise
 };
 
 }  // namespace scallop

@@ -44,3 +44,19 @@ TEST(Outline, BeyondTheOuterLoopIsTheDistanceToItsEdges) {
   const Outline none;
   EXPECT_TRUE(std::isinf(none.beyond_outer({0, 0})));
 }
+
+// Inside or out from the nearest edge's side, at a reflex corner and a convex one too: an L of
+// [0, 10]² less [5, 10]², clockwise (the side follows the loop's orientation).
+TEST(Outline, BeyondAnLShapedLoopAtItsReflexCorner) {
+  const Outline o({{{0, 0}, {0, 10}, {5, 10}, {5, 5}, {10, 5}, {10, 0}}});
+  EXPECT_EQ(o.beyond_outer({4.9, 4.9}), 0.0);   // inside, nearest the reflex corner (5, 5)
+  EXPECT_EQ(o.beyond_outer({4.5, 5.5}), 0.0);   // inside, nearest the edge x = 5
+  EXPECT_NEAR(o.beyond_outer({5.3, 5.4}), 0.3, 1e-12);  // in the notch, beside the edge x = 5
+  EXPECT_EQ(o.beyond_outer({5.3, 4.9}), 0.0);  // below the notch: inside
+  EXPECT_NEAR(o.beyond_outer({7, 5.2}), 0.2, 1e-12);
+  EXPECT_NEAR(o.beyond_outer({10.3, -0.4}), 0.5, 1e-12);  // beyond the convex corner (10, 0)
+  EXPECT_EQ(o.beyond_outer({9.9, 0.1}), 0.0);
+  for (double x = 0.25; x < 10; x += 0.5)
+    for (double y = 0.25; y < 10; y += 0.5)
+      EXPECT_EQ(o.beyond_outer({x, y}) == 0.0, o.contains({x, y})) << x << " " << y;
+}
