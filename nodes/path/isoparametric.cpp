@@ -1162,9 +1162,8 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   // interval (a wider step left the steep canopy rim's scallop over h between them).
   std::vector<Pass> band;
   const double rim_band = o.rim_band >= 0 ? o.rim_band : rim_band_width(model->spacing());
-  std::size_t band_steps = 0;
   if (o.outline && outer_usable && rim_band > 0) {
-    band_steps = static_cast<std::size_t>(std::ceil(rim_band / (0.55 * planner.nominal_interval()) - 1e-9));
+    const auto band_steps = static_cast<std::size_t>(std::ceil(rim_band / (0.55 * planner.nominal_interval()) - 1e-9));
     for (std::size_t k = 1; k <= band_steps; ++k)
       band.push_back(planner.rim_pass(cloud, map.outer_loop, map.boundary_uv, planned_uncertainty,
                                       rim_band * double(k) / double(band_steps)));

@@ -225,10 +225,9 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
         if (!inside[std::size_t(j) * nu + i]) {
           // the rim band: within rim_band along the surface of the outer loop
           if (rim_band <= 0) continue;
-          // (the edges first: the polygon test only for the few places near them)
-          const double d = outline_polygons.distance_to_outer(q);
-          if (!(d <= rim_band) || outline_polygons.beyond_outer(q) == 0 ||
-              !surf.eval(q.x(), q.y(), z, n, true, &u) || d > rim_band * n.z())
+          // (0: inside the outer loop, in a hole)
+          const double d = outline_polygons.beyond_outer(q);
+          if (!(d > 0 && d <= rim_band) || !surf.eval(q.x(), q.y(), z, n, true, &u) || d > rim_band * n.z())
             continue;
           inside[std::size_t(j) * nu + i] = 2;
           rows[j].push_back({{q.x(), q.y(), z}, n, spacing * spacing / n.z(), u, true});
