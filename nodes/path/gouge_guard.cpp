@@ -188,10 +188,13 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
   // field's uncertainty grows with the distance from the points faster than the ball's distance
   // from the surface does: a place a few tenths of a mm outward is reached deeper than the foot
   // (the noisy dome's contour program: 0.0107 into the band 0.19 mm beyond the foot, where the
-  // uncertainty was 0.048 and at the foot 0.034). Places around the foot out to 8 spacings, on
-  // the patch as the certificate counts it, are checked too.
+  // uncertainty was 0.048 and at the foot 0.034). Places around the foot half a spacing and one
+  // spacing away, on the patch as the certificate counts it, are checked too. (Rings at 2, 4 and
+  // 8 spacings as well took the bundled example's guard from 1.6 to 2.9 s and never came within
+  // 0.02 mm of deciding on it or on the noisy dome, canopy and freeform patch: the same programs;
+  // they lifted balls only beyond the clean 3 mm crest's rim, where the certificate does not look.)
   if (res.on_surface && nearest_point_d2(s) > 0.25 * sp * sp) {
-    for (double rho : {0.5, 1.0, 2.0, 4.0, 8.0})
+    for (double rho : {0.5, 1.0})
       for (int k = 0; k < 8; ++k) {
         const double a = k * (kPi / 4);
         const Eigen::Vector2d q = s + rho * sp * Eigen::Vector2d(std::cos(a), std::sin(a));
