@@ -4,7 +4,7 @@ measured by the independent ../shared/tools/verify.py and by the product's own p
 
   bench/acceptance.py [--surfaces plane,dome,...] [--graphs zigzag,contour] [--noise 0,0.02]
                       [--n 50000] [--work /tmp/scallop-acceptance] [--docs docs/catalog]
-                      [--set NAME=VALUE]...
+                      [--set NAME=VALUE]... [--build DIR]
 
 Surfaces are the shared catalog's and bench/extra_surfaces.py's (the crest family). Prints a
 Markdown table and writes it (plus every JSON report) under --work. Columns: verify.py's scallop
@@ -50,6 +50,8 @@ def main():
     ap.add_argument("--work", default="/tmp/scallop-acceptance")
     ap.add_argument("--docs", default="", help="copy preview and scallop map PNGs here")
     ap.add_argument("--set", action="append", default=[], help="extra --set for scallop run")
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"),
+                    help="where scallop and height_field_error are (a copy lets the build go on meanwhile)")
     args = ap.parse_args()
     os.makedirs(args.work, exist_ok=True)
     rows, lines = [], []
@@ -82,7 +84,7 @@ def main():
                 out = os.path.join(args.work, f"{tag}_{graph}")
                 shutil.rmtree(out, ignore_errors=True)
                 t0 = time.time()
-                cmd = [os.path.join(ROOT, "build", "scallop"), "run", graph_with_denoised(graph, args.work),
+                cmd = [os.path.join(args.build, "scallop"), "run", graph_with_denoised(graph, args.work),
                        "--input", f"cloud={cloud}", "--no-cache", "-q", "-o", out, "--set", f"tool_radius={r}",
                        "--set", f"scallop_height={h}", "--set", f"chord_error={e}"]
                 for s in args.set:
@@ -92,7 +94,8 @@ def main():
                 gcode = os.path.join(out, "gcode.ngc")
                 denoised = os.path.join(out, "denoised.ply")
                 def error_ratio(kind="error"):
-                    e = run([PY, EXTRA, kind, surface, denoised]) if os.path.exists(denoised) else None
+                    binary = ["--bin", os.path.join(args.build, "height_field_error")] if kind == "model-error" else []
+                    e = run([PY, EXTRA, kind, surface, denoised] + binary) if os.path.exists(denoised) else None
                     return json.loads(e.stdout) if e and e.returncode == 0 and e.stdout.strip() else {}
                 def ratios():
                     """|error| / uncertainty at the points and between them (the certificate's model)"""
