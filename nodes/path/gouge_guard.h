@@ -10,8 +10,9 @@
 // (HeightFieldModel, what post.simulate certifies against), via the foot point of c on it, and
 // sampled with its uncertainty above every cloud point near c (the foot search finds one nearest
 // place; the uncertainty may peak at another: a crest's top beside the flank the ball touches);
-// beyond the cloud's edge, where the uncertainty grows outward faster than the ball's distance,
-// also around the foot out to 8 spacings; and the cloud's points themselves within r of c.
+// where the foot lies more than half a spacing from its nearest point (beyond the cloud's edge the
+// uncertainty grows outward faster than the ball's distance), also around the foot, half a
+// spacing and one spacing away; and the cloud's points themselves within r of c.
 // clearance(c) = distance to the surface − r, and the ball must clear the surface by its
 // uncertainty δ there (0 on a clean cloud; grown beyond the cloud's edge, where the field is
 // extrapolated): the real surface may be δ higher. A position
