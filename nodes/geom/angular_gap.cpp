@@ -59,6 +59,25 @@ bool every_octant_occupied(const Eigen::Vector2d* d, std::size_t count) {
   return occupied == 0xffu;
 }
 
+int longest_empty_bin_run(const Eigen::Vector2d* d, std::size_t count) {
+  unsigned occupied = 0;
+  for (std::size_t j = 0; j < count && occupied != 0xffffu; ++j) {
+    if (d[j].isZero()) continue;
+    const int bin = std::min(15, static_cast<int>(4 * pseudo_angle(d[j].x(), d[j].y())));
+    occupied |= 1u << bin;
+  }
+  if (occupied == 0) return 16;
+  // the runs of zero bits, around the circle: start just after an occupied bin
+  int start = 0;
+  while (!(occupied & (1u << start))) ++start;
+  int longest = 0, run = 0;
+  for (int k = 1; k <= 16; ++k) {
+    if (occupied & (1u << ((start + k) % 16))) run = 0;
+    else longest = std::max(longest, ++run);
+  }
+  return longest;
+}
+
 bool angular_gap_exceeds(const Eigen::Vector2d* d, std::size_t count, double angle) {
   if (angle >= (1 - 1e-12) * std::numbers::pi / 2 && every_octant_occupied(d, count)) return false;
   return largest_angular_gap(d, count) > angle;

@@ -32,6 +32,13 @@ double largest_angular_gap(const Eigen::Vector2d* d, std::size_t count);
 // that answers "is the widest gap over a threshold >= pi/2?" for most points inside a cloud.
 bool every_octant_occupied(const Eigen::Vector2d* d, std::size_t count);
 
+// The longest circular run of empty bins when the directions d[0..count) are sorted into 16 bins
+// by pseudo_angle (a quarter of its unit each: 18.4 or 26.6 degrees wide; zero vectors skipped).
+// Bounds the widest gap without sorting: a gap wider than 106.3 degrees (two of the widest bins
+// beside the run) leaves at least 3 bins empty in a row, and 9 empty in a row make a gap of at
+// least 198.4 degrees (5 of the narrow bins and 4 of the wide ones).
+int longest_empty_bin_run(const Eigen::Vector2d* d, std::size_t count);
+
 // Whether largest_angular_gap(d, count) exceeds `angle`; for angle >= pi/2 (to 1e-12: 90 degrees
 // converted) answered by every_octant_occupied where that holds, without sorting.
 bool angular_gap_exceeds(const Eigen::Vector2d* d, std::size_t count, double angle);

@@ -125,6 +125,54 @@ TEST(AngularGap, EveryOctantOccupiedOnlyWhenNoGapReachesAQuarterTurn) {
   EXPECT_GT(occupied, 500);  // the test saw both answers
 }
 
+TEST(AngularGap, EmptyBinRunsBoundTheWidestGap) {
+  // pseudo_angle's bins start at 0, 18.43, 45, 71.57, 90 ... degrees (atan(1/3), a quarter turn's
+  // bins mirrored): a direction in the middle of each fills all 16.
+  constexpr double kDeg = kPi / 180;
+  const double edges[5] = {0, std::atan(1.0 / 3), kPi / 4, kPi / 2 - std::atan(1.0 / 3), kPi / 2};
+  std::vector<Eigen::Vector2d> mids;
+  for (int q = 0; q < 4; ++q)
+    for (int b = 0; b < 4; ++b) mids.push_back(at(q * kPi / 2 + 0.5 * (edges[b] + edges[b + 1])));
+  EXPECT_EQ(longest_empty_bin_run(mids.data(), mids.size()), 0);
+  // the upper half plane only, 0 to 179 degrees: the 8 bins below the x axis are empty
+  std::vector<Eigen::Vector2d> half;
+  for (int a = 0; a < 180; ++a) half.push_back(at(a * kDeg, 1 + a));
+  EXPECT_EQ(longest_empty_bin_run(half.data(), half.size()), 8);
+  // a run that wraps around past 360 degrees: directions from 100 to 200 degrees only
+  std::vector<Eigen::Vector2d> wrap = {at(100 * kDeg), at(150 * kDeg), at(200 * kDeg)};
+  EXPECT_EQ(longest_empty_bin_run(wrap.data(), wrap.size()), 10);  // bins 4, 6, 9 hold them; 10 to 3 are empty
+  // no direction: all empty; zero vectors have none
+  std::vector<Eigen::Vector2d> zeros(3, Eigen::Vector2d::Zero());
+  EXPECT_EQ(longest_empty_bin_run(zeros.data(), 0), 16);
+  EXPECT_EQ(longest_empty_bin_run(zeros.data(), zeros.size()), 16);
+  zeros.push_back(at(1.0));
+  EXPECT_EQ(longest_empty_bin_run(zeros.data(), zeros.size()), 15);
+  // What height_field_model.cpp rests on, on random sets: fewer than 3 empty in a row, the widest
+  // gap is below 106.3 degrees; 9 or more, it is at least 198.4.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int few = 0, many = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    std::vector<Eigen::Vector2d> d(2 + trial % 40);
+    for (auto& v : d) v = Eigen::Vector2d(u(rng), u(rng));
+    if (trial % 3 == 0)  // crowd them into a half plane or less
+      for (auto& v : d) v = at(std::atan2(v.y(), v.x()) * (0.2 + 0.3 * (trial % 4)));
+    const double gap = largest_angular_gap(d.data(), d.size());
+    const int run = longest_empty_bin_run(d.data(), d.size());
+    if (run < 3) {
+      ++few;
+      EXPECT_LT(gap, 106.3 * kDeg) << trial;
+    }
+    if (run >= 9) {
+      ++many;
+      EXPECT_GE(gap, 198.4 * kDeg) << trial;
+    }
+    if (gap > 106.4 * kDeg) EXPECT_GE(run, 3) << trial;
+  }
+  EXPECT_GT(few, 500);
+  EXPECT_GT(many, 200);
+}
+
 TEST(AngularGap, ExceedsAgreesWithTheGapItself) {
   // The sector shortcut answers only what the widest gap would, at thresholds below, at and
   // above a quarter turn (90 degrees converted as the boundary node converts it).
