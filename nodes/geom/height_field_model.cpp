@@ -92,7 +92,7 @@ struct HeightFieldModel::Impl {
   // lie to one side; idx[0..got) its nearest points (a first look).
   double beyond_edge(double x, double y, const std::uint32_t* idx, std::size_t got) const;
   // The fits: z and normal at (x, y), and their misfit (mm; see kMisfitFactor).
-  bool local_fit(double x, double y, const std::uint32_t* idx, std::size_t got, int k, double& z,
+  bool local_fit(double x, double y, const std::uint32_t* idx, const double* d2, std::size_t got, int k, double& z,
                  Eigen::Vector3d& normal, double& misfit) const;
   bool xy_fit(double x, double y, const std::uint32_t* idx, const double* d2, std::size_t got,
               double& z, Eigen::Vector3d& normal, double& misfit) const;
@@ -139,12 +139,12 @@ bool local_plane(const std::vector<Eigen::Vector3d>& P, const std::uint32_t* idx
 // above (x, y) found by Newton's method. Unlike a fit of z over (x, y), it stays accurate where
 // the surface is steep and the neighbours crowd together in xy (rings of a sphere near its rim
 // project onto nearly the same xy lines, and a quadratic in (x, y) through them is ill-posed).
-bool HeightFieldModel::Impl::local_fit(double x, double y, const std::uint32_t* idx_xy, std::size_t got_xy,
+bool HeightFieldModel::Impl::local_fit(double x, double y, const std::uint32_t* idx_xy, const double* d2_xy, std::size_t got_xy,
                                   int k, double& z_out, Eigen::Vector3d& n_out, double& misfit) const {
   Eigen::Vector3d m;
   Eigen::Matrix3d F;
-  double hxy = 0;
-  for (std::size_t j = 0; j < got_xy; ++j) hxy = std::max(hxy, (xy(idx_xy[j]) - Eigen::Vector2d(x, y)).norm());
+  // (d2_xy: the squared xy distances, ascending, as the search computed them)
+  const double hxy = std::sqrt(d2_xy[got_xy - 1]);
   // First estimate: the plane through the points nearest to the vertical line at (x, y).
   Eigen::Vector3d o(x, y, 0);
   {
@@ -154,7 +154,7 @@ bool HeightFieldModel::Impl::local_fit(double x, double y, const std::uint32_t* 
     Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
     std::array<double, 64> w;  // got_xy <= 64
     for (std::size_t j = 0; j < got_xy; ++j) {
-      w[j] = std::exp(-2.0 * (xy(idx_xy[j]) - Eigen::Vector2d(x, y)).squaredNorm() / (hxy * hxy + 1e-300));
+      w[j] = std::exp(-2.0 * d2_xy[j] / (hxy * hxy + 1e-300));
       c += w[j] * p[idx_xy[j]];
       wsum += w[j];
     }
@@ -430,7 +430,7 @@ bool HeightFieldModel::eval(double x, double y, double& z, Eigen::Vector3d& norm
   double zf;
   Eigen::Vector3d nf;
   double misfit = 0;
-  const bool fitted = impl_->local_fit(x, y, idx, got, k, zf, nf, misfit) ||
+  const bool fitted = impl_->local_fit(x, y, idx, d2, got, k, zf, nf, misfit) ||
                       impl_->xy_fit(x, y, idx, d2, got, zf, nf, misfit);
   if (fitted && uncertainty) *uncertainty = (points_uncertainty + kMisfitFactor * misfit) * growth;
   if (!fitted || outside) return false;
@@ -448,14 +448,11 @@ bool HeightFieldModel::Impl::xy_fit(double x, double y, const std::uint32_t* idx
   const double h = std::sqrt(d2[got - 1]) + 1e-12;
   Eigen::Matrix<double, 6, 6> M = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
-  auto basis = [&](std::size_t j) {
-    const double u = (xy(idx[j]).x() - x) / h, v = (xy(idx[j]).y() - y) / h;
-    Eigen::Matrix<double, 6, 1> b;
-    b << 1, u, v, u * u, u * v, v * v;
-    return b;
-  };
+  std::array<Eigen::Matrix<double, 6, 1>, 64> basis;  // got <= 64; kept for the misfit below
   for (std::size_t j = 0; j < got; ++j) {
-    const Eigen::Matrix<double, 6, 1> b = basis(j);
+    const double u = (xy(idx[j]).x() - x) / h, v = (xy(idx[j]).y() - y) / h;
+    Eigen::Matrix<double, 6, 1>& b = basis[j];
+    b << 1, u, v, u * u, u * v, v * v;
     const double w = std::exp(-2.0 * (b[3] + b[5]));
     add_weighted_outer_lower(M, b, w);
     rhs += w * p[idx[j]].z() * b;
@@ -471,7 +468,7 @@ bool HeightFieldModel::Impl::xy_fit(double x, double y, const std::uint32_t* idx
   }
   misfit = 0;
   for (std::size_t j = 0; j < got; ++j)
-    misfit = std::max(misfit, std::abs(p[idx[j]].z() - basis(j).dot(c)) - point_uncertainty(idx[j]));
+    misfit = std::max(misfit, std::abs(p[idx[j]].z() - basis[j].dot(c)) - point_uncertainty(idx[j]));
   z_out = c[0];
   n_out = Eigen::Vector3d(-c[1] / h, -c[2] / h, 1.0).normalized();
   return true;
