@@ -91,9 +91,10 @@ struct HeightFieldModel::Impl {
   // How surely (x, y) lies beyond the cloud's edge: 0 inside, 1 where the points around it all
   // lie to one side; idx[0..got) its nearest points (a first look).
   double beyond_edge(double x, double y, const std::uint32_t* idx, std::size_t got) const;
-  // The fits: z and normal at (x, y), and their misfit (mm; see kMisfitFactor).
-  bool local_fit(double x, double y, const std::uint32_t* idx, const double* d2, std::size_t got, int k, double& z,
-                 Eigen::Vector3d& normal, double& misfit) const;
+  // The fits: z and normal at (x, y), and their misfit (mm; see kMisfitFactor); idx, d2 the
+  // nearest points in xy and their squared distances, ascending, as the search gave them.
+  bool local_fit(double x, double y, const std::uint32_t* idx, const double* d2, std::size_t got, int k,
+                 double& z, Eigen::Vector3d& normal, double& misfit) const;
   bool xy_fit(double x, double y, const std::uint32_t* idx, const double* d2, std::size_t got,
               double& z, Eigen::Vector3d& normal, double& misfit) const;
 };
@@ -139,12 +140,12 @@ bool local_plane(const std::vector<Eigen::Vector3d>& P, const std::uint32_t* idx
 // above (x, y) found by Newton's method. Unlike a fit of z over (x, y), it stays accurate where
 // the surface is steep and the neighbours crowd together in xy (rings of a sphere near its rim
 // project onto nearly the same xy lines, and a quadratic in (x, y) through them is ill-posed).
-bool HeightFieldModel::Impl::local_fit(double x, double y, const std::uint32_t* idx_xy, const double* d2_xy, std::size_t got_xy,
-                                  int k, double& z_out, Eigen::Vector3d& n_out, double& misfit) const {
+bool HeightFieldModel::Impl::local_fit(double x, double y, const std::uint32_t* idx_xy, const double* d2_xy,
+                                       std::size_t got_xy, int k, double& z_out, Eigen::Vector3d& n_out,
+                                       double& misfit) const {
   Eigen::Vector3d m;
   Eigen::Matrix3d F;
-  // (d2_xy: the squared xy distances, ascending, as the search computed them)
-  const double hxy = std::sqrt(d2_xy[got_xy - 1]);
+  const double hxy = std::sqrt(d2_xy[got_xy - 1]);  // the farthest neighbour in xy
   // First estimate: the plane through the points nearest to the vertical line at (x, y).
   Eigen::Vector3d o(x, y, 0);
   {
