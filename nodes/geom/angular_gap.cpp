@@ -80,6 +80,7 @@ int longest_empty_bin_run(const Eigen::Vector2d* d, std::size_t count) {
 
 bool angular_gap_exceeds(const Eigen::Vector2d* d, std::size_t count, double angle) {
   if (angle >= (1 - 1e-12) * std::numbers::pi / 2 && every_octant_occupied(d, count)) return false;
+  if (angle >= kNoThreeEmptyBinsBelow && longest_empty_bin_run(d, count) < 3) return false;
   return largest_angular_gap(d, count) > angle;
 }
 

@@ -38,9 +38,13 @@ bool every_octant_occupied(const Eigen::Vector2d* d, std::size_t count);
 // beside the run) leaves at least 3 bins empty in a row, and 9 empty in a row make a gap of at
 // least 198.4 degrees (5 of the narrow bins and 4 of the wide ones).
 int longest_empty_bin_run(const Eigen::Vector2d* d, std::size_t count);
+// Fewer than 3 empty bins in a row: the widest gap is below this (radians; 4 of the widest bins,
+// 106.26 degrees, rounded up).
+constexpr double kNoThreeEmptyBinsBelow = 1.8553;
 
 // Whether largest_angular_gap(d, count) exceeds `angle`; for angle >= pi/2 (to 1e-12: 90 degrees
-// converted) answered by every_octant_occupied where that holds, without sorting.
+// converted) answered by every_octant_occupied where that holds, and for angle >=
+// kNoThreeEmptyBinsBelow by longest_empty_bin_run, without sorting.
 bool angular_gap_exceeds(const Eigen::Vector2d* d, std::size_t count, double angle);
 
 }  // namespace scallop

@@ -318,14 +318,13 @@ double HeightFieldModel::Impl::beyond_edge(double x, double y, const std::uint32
   // freeform patch's denoised 50k-point cloud, in 1808 holes whose nearest point was 0.6 to
   // 0.9 mm away (with the 20 nearest points, up to pi: too few to tell a hole from an edge).
   constexpr double kFrom = 0.6 * kPi, kTo = 0.9 * kPi;
-  // (Bins of the directions settle most places without sorting them: no 3 empty in a row, no gap
-  // reaches kFrom; 9 in a row, the gap is wider than kTo. angular_gap.h.)
   // fewer points cannot close a wide gap
-  const auto near = directions(x, y, idx, got);
-  if (longest_empty_bin_run(near.data(), got) < 3 || !angular_gap_exceeds(near.data(), got, kFrom)) return 0;
+  if (!angular_gap_exceeds(directions(x, y, idx, got).data(), got, kFrom)) return 0;
   std::uint32_t wide[64];
   double d2[64];
   const std::size_t got_wide = nearest_xy(x, y, 64, wide, d2);
+  // (Bins of the directions settle most places without sorting them: no 3 empty in a row, no gap
+  // reaches kFrom; 9 in a row, the gap is wider than kTo. angular_gap.h.)
   const auto around = directions(x, y, wide, got_wide);
   const int empty_run = longest_empty_bin_run(around.data(), got_wide);
   if (empty_run < 3) return 0;

@@ -40,9 +40,10 @@ class HeightFieldModel {
   bool inside(double x, double y) const;
   // The foot point of c: the place (x, y) of the field nearest c, looked for from `start` by steps
   // to the projection of c onto the tangent plane (at most max_step long), a step that ends
-  // farther from c halved back, to 1e-4 mm (where the surface curves tighter than its distance from c the
-  // projection overshoots, and undamped the search swings off a crest onto its flanks). The
-  // field evaluated as eval(force = true) does; false when it cannot be at `start`.
+  // farther from c halved back, down to 1e-4 mm (where the surface curves tighter than its
+  // distance from c the projection overshoots, and undamped the search swings off a crest onto
+  // its flanks). The field evaluated as eval(force = true) does; false when it cannot be at
+  // `start`.
   bool foot_point(const Eigen::Vector3d& c, const Eigen::Vector2d& start, double max_step, Eigen::Vector2d& at) const;
   // How far (x, y) lies beyond the outermost of its 64 nearest points, seen from their centroid
   // (mm; <= 0 among them, e.g. in a gap between the points of a rim).
