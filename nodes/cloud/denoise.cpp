@@ -16,6 +16,7 @@
 #include <string>
 
 #include "nodes/cloud/knn.h"
+#include "nodes/geom/normal_equations.h"
 
 namespace scallop {
 
@@ -97,8 +98,8 @@ bool fit_quadric(const Vector3d* X, const double* d2, int m, double h2, const Ve
   for (int j = 0; j < m; ++j) {
     const Vector3d r = X[j] - X[0];
     const Vector6d phi = quadric_basis(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h);
-    A.selfadjointView<Eigen::Lower>().rankUpdate(phi, w[j]);
-    f.B.selfadjointView<Eigen::Lower>().rankUpdate(phi, w[j] * w[j]);
+    add_weighted_outer_lower(A, phi, w[j]);
+    add_weighted_outer_lower(f.B, phi, w[j] * w[j]);
     rhs += (w[j] * r.dot(f.n)) * phi;
   }
   A = A.selfadjointView<Eigen::Lower>();
@@ -339,6 +340,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
   std::vector<double> reach(n);  // distance from each point to its k-th neighbour (mm)
+  std::vector<double> reach2(n);  // its square, as the search gave it
   std::vector<double> bias(n, 0.0);  // bound on the kept fit's shape bias (mm)
   std::vector<int> chosen(n, 0);     // scales below the widest the kept fit is (0: the widest)
   if (o.scales > 1 && res.noise_sigma < 0) res.noise_sigma = estimate_noise_sigma(P);
@@ -356,7 +358,9 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
     if (!nbrs) index = std::make_unique<KnnIndex>(X);
     // The k neighbours of point i into s.idx / s.d2 (squared distances at the current positions).
     auto neighbours = [&](std::size_t i, Scratch& s) {
-      if (index) {
+      if (index && r2 == 0) {  // the radius is known: reach2[i]
+        index->query_within(X[i], reach2[i], k, s.idx, s.d2, static_cast<int>(i));
+      } else if (index) {
         index->query(X[i], k, s.idx, s.d2, static_cast<int>(i));
       } else {
         const auto first = nbrs->indices.begin() + i * nbrs->k;
@@ -383,6 +387,11 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const auto& range) {
         Scratch& s = scratch.local();
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          if (index) {
+            reach2[i] = index->kth_sq_distance(X[i], k, static_cast<int>(i));
+            reach[i] = std::sqrt(reach2[i]);
+            continue;
+          }
           neighbours(i, s);
           reach[i] = s.d2.empty() ? 0.0 : std::sqrt(*std::max_element(s.d2.begin(), s.d2.end()));
         }

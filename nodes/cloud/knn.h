@@ -43,6 +43,16 @@ class KnnIndex {
   void query(const Eigen::Vector3d& q, int k, std::vector<int>& idx, std::vector<double>& sq_dist,
              int skip = -1) const;
 
+  // The points of P (minus `skip`) within squared distance sq_radius of q, the k nearest of them
+  // when there are more, in query()'s order. With sq_radius = kth_sq_distance(q, k, skip) it
+  // gives what query(q, k, ...) gives, in less time (the search knows its radius from the start).
+  void query_within(const Eigen::Vector3d& q, double sq_radius, int k, std::vector<int>& idx,
+                    std::vector<double>& sq_dist, int skip = -1) const;
+
+  // The squared distance from q to the k-th nearest point of P (minus `skip`), as query() would
+  // give it last, without putting the k in order; 0 when there are none.
+  double kth_sq_distance(const Eigen::Vector3d& q, int k, int skip = -1) const;
+
   // Index of the point of P nearest to q (ties: lowest index).
   int nearest(const Eigen::Vector3d& q) const;
 

@@ -87,6 +87,17 @@ TEST(Knn, TiesOnAGridAreOrderedByIndex) {
   for (int k : {4, 6, 18, 26}) expect_same(compute_knn(P, k), brute_force(P, k));
 }
 
+TEST(Knn, ManyNeighboursAsTheDenoiserAsks) {
+  // k in the hundreds: the k best are kept in a heap and put in order at the end.
+  expect_same(compute_knn(random_cloud(900, 4), 300), brute_force(random_cloud(900, 4), 300));
+  std::vector<Eigen::Vector3d> grid;
+  for (int x = 0; x < 14; ++x)
+    for (int y = 0; y < 14; ++y)
+      for (int z = 0; z < 4; ++z) grid.emplace_back(x, y, z);
+  std::shuffle(grid.begin(), grid.end(), std::mt19937(6));
+  for (int k : {100, 257}) expect_same(compute_knn(grid, k), brute_force(grid, k));
+}
+
 TEST(Knn, ADuplicateIsItsTwinsNearestNeighbour) {
   std::vector<Eigen::Vector3d> P = {{0, 0, 0}, {1, 0, 0}, {0, 0, 0}, {0, 2, 0}};
   const Neighborhoods nb = compute_knn(P, 2);
@@ -158,6 +169,34 @@ TEST(KnnIndex, QueriesEqualBruteForce) {
   index.query(P[17], 1000, idx, d);
   EXPECT_EQ(idx.size(), 500u);
   EXPECT_EQ(idx[0], 17);
+}
+
+TEST(KnnIndex, TheKthDistanceAndTheSearchWithinItGiveWhatTheQueryGives) {
+  // On random points and on a grid, where many distances tie at the k-th: query_within must then
+  // keep the lowest indices, as query does.
+  std::vector<Eigen::Vector3d> grid;
+  for (int x = 0; x < 10; ++x)
+    for (int y = 0; y < 10; ++y)
+      for (int z = 0; z < 3; ++z) grid.emplace_back(x, y, z);
+  std::shuffle(grid.begin(), grid.end(), std::mt19937(8));
+  for (const auto& P : {random_cloud(600, 12), grid}) {
+    const KnnIndex index(P);
+    std::vector<int> idx, idx_within;
+    std::vector<double> d, d_within;
+    for (int i = 0; i < static_cast<int>(P.size()); i += 7)
+      for (int k : {1, 6, 40, 250}) {
+        index.query(P[i], k, idx, d, i);
+        const double kth = index.kth_sq_distance(P[i], k, i);
+        ASSERT_EQ(kth, d.back()) << "point " << i << ", k = " << k;
+        index.query_within(P[i], kth, k, idx_within, d_within, i);
+        ASSERT_EQ(idx_within, idx) << "point " << i << ", k = " << k;
+        ASSERT_EQ(d_within, d) << "point " << i << ", k = " << k;
+      }
+    // Fewer points than k: every one, the farthest last.
+    index.query(P[0], 5000, idx, d, 0);
+    EXPECT_EQ(idx.size(), P.size() - 1);
+    EXPECT_EQ(index.kth_sq_distance(P[0], 5000, 0), d.back());
+  }
 }
 
 TEST(KnnIndex, EmptyCloudIsAnError) {
