@@ -18,7 +18,9 @@
 // extrapolated): the real surface may be δ higher. A position
 // reaching more than `tolerance` into that band (δ − clearance > tolerance; by default e/4 plus
 // the reach the planner's chord budget leaves there, min(δ, 0.65 e − 0.15 δ), step_size.h) is lifted along +z
-// until it clears it by δ (what post.simulate's gouge bound counts), and a move whose quarter
+// until it clears it by δ (what post.simulate's gouge bound counts; where the surface is known
+// worse than 6 e the gouge budget 0.9 e − 0.15 δ is itself a clearance, and the ball clears the
+// band by 1.5 times that), and a move whose quarter
 // points (and points 0.5 mm apart on longer moves) reach more than chord_tolerance into it (by
 // default the gouge budget there, 0.9 e − 0.15 δ, step_size.h) gets a lifted point inserted at its worst one
 // (and its halves are checked again, up to max_splits times); a move still too deep after that

@@ -518,6 +518,46 @@ TEST(GougeGuard, AMoveOverAnUncertainSurfaceIsHeldToTheGougeBudget) {
   EXPECT_EQ(guard_gouges(path, clearance, loose).report["inserted_positions"], 0);
 }
 
+TEST(GougeGuard, WhereTheSurfaceIsKnownWorseThanSixEBallsAndMovesAreHeldClearOfIt) {
+  // The cap's points known to +-0.08: the gouge budget 0.9 e - 0.15 * 0.08 = -0.003 is a
+  // clearance. Balls planned touching the band (0.08 above the sphere), contacts 1.2 mm apart
+  // (the centre chord sags 1.2^2 / (8 * 32.08) = 0.0056 more): every position is lifted clear of
+  // the band by 1.5 times that clearance, and every move, halved or raised whole, ends up
+  // clearing it by at least 0.003 along its whole length; nothing left unresolved. (Lifted and
+  // raised only to the clearance itself, the moves were halved to the end and raised forever.)
+  auto cloud = cap_cloud();
+  const std::vector<double> uncertainty(cloud.size(), 0.08);
+  HeightFieldModel surface(cloud, 20, &uncertainty);
+  BallClearance clearance(surface, cloud, 2.0);
+  const double budget = gouge_budget(0.01, 0.08);
+  ASSERT_NEAR(budget, -0.003, 1e-12);
+  Toolpath path;
+  path.tool_radius = 2;
+  path.chord_error = 0.01;
+  ToolpathPass p;
+  for (double x = -3; x <= 3 + 1e-9; x += 1.2) {
+    p.normal.push_back(cap_normal(x, 0));
+    p.contact.push_back(cap_point(x, 0) + 0.08 * p.normal.back());
+  }
+  path.passes.push_back(p);
+  auto reach = [&](const Eigen::Vector3d& c) { return 0.08 - ((c - Eigen::Vector3d(0, 0, 5 - kR)).norm() - kR - 2.0); };
+  for (int splits : {3, 0}) {
+    GougeGuardOptions o;
+    o.max_splits = splits;
+    auto res = guard_gouges(path, clearance, o);
+    EXPECT_EQ(res.report["unresolved"], 0) << splits;
+    EXPECT_GE(res.report["lifted_positions"].get<std::size_t>(), p.contact.size()) << splits;
+    EXPECT_LT(res.report["highest_lift"].get<double>(), 0.02) << splits;  // no more than it needs
+    const auto& q = res.path.passes[0];
+    for (std::size_t i = 0; i + 1 < q.contact.size(); ++i) {
+      const Eigen::Vector3d a = res.path.centre(q.contact[i], q.normal[i]);
+      const Eigen::Vector3d b = res.path.centre(q.contact[i + 1], q.normal[i + 1]);
+      for (int j = 0; j <= 100; ++j)
+        EXPECT_LE(reach(a + (b - a) * (j / 100.0)), budget + 2e-4) << splits << " " << i << " " << j;
+    }
+  }
+}
+
 TEST(GougeGuard, BadInputGetsClearErrors) {
   auto cloud = plane_cloud();
   HeightFieldModel surface(cloud);
