@@ -388,7 +388,10 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
         Scratch& s = scratch.local();
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
           if (index) {
-            reach2[i] = index->kth_sq_distance(X[i], k, static_cast<int>(i));
+            // the previous point's reach, a little wider, as the guess: the points come in
+            // space-filling order (cloud.clean), so it is a neighbour's
+            const double guess = i > range.begin() ? 1.3 * reach2[i - 1] : 0.0;
+            reach2[i] = index->kth_sq_distance(X[i], k, static_cast<int>(i), guess);
             reach[i] = std::sqrt(reach2[i]);
             continue;
           }

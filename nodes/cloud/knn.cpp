@@ -200,10 +200,22 @@ void KnnIndex::query_within(const Eigen::Vector3d& q, double sq_radius, int k, s
   }
 }
 
-double KnnIndex::kth_sq_distance(const Eigen::Vector3d& q, int k, int skip) const {
+double KnnIndex::kth_sq_distance(const Eigen::Vector3d& q, int k, int skip, double guess) const {
   const std::size_t available = size() - (skip >= 0 && static_cast<std::size_t>(skip) < size());
   const int want = static_cast<int>(std::min<std::size_t>(std::max(k, 0), available));
   if (want == 0) return 0;
+  if (guess > 0) {
+    // Every point within the guess: when there are k or more, the k-th of them by (distance,
+    // index) is the k-th of all. A search of known radius prunes from the start and keeps no order.
+    thread_local std::vector<std::pair<double, int>> found;
+    found.clear();
+    WithinResult within(guess, skip, found);
+    impl_->tree.findNeighbors(within, q.data(), nanoflann::SearchParams());
+    if (found.size() >= static_cast<std::size_t>(want)) {
+      std::nth_element(found.begin(), found.begin() + (want - 1), found.end());
+      return found[want - 1].first;
+    }
+  }
   thread_local std::vector<int> idx;
   thread_local std::vector<double> sq_dist;
   idx.resize(want);

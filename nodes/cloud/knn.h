@@ -50,8 +50,10 @@ class KnnIndex {
                     std::vector<double>& sq_dist, int skip = -1) const;
 
   // The squared distance from q to the k-th nearest point of P (minus `skip`), as query() would
-  // give it last, without putting the k in order; 0 when there are none.
-  double kth_sq_distance(const Eigen::Vector3d& q, int k, int skip = -1) const;
+  // give it last, without putting the k in order; 0 when there are none. guess > 0: a squared
+  // distance the k-th is likely within (a neighbour's: the points within it are searched first,
+  // and the k nearest only when fewer are found); the same answer either way.
+  double kth_sq_distance(const Eigen::Vector3d& q, int k, int skip = -1, double guess = 0) const;
 
   // Index of the point of P nearest to q (ties: lowest index).
   int nearest(const Eigen::Vector3d& q) const;

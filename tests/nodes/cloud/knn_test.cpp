@@ -188,6 +188,9 @@ TEST(KnnIndex, TheKthDistanceAndTheSearchWithinItGiveWhatTheQueryGives) {
         index.query(P[i], k, idx, d, i);
         const double kth = index.kth_sq_distance(P[i], k, i);
         ASSERT_EQ(kth, d.back()) << "point " << i << ", k = " << k;
+        // a guess too small (fewer than k within it), exact (ties at it) or wide: the same
+        for (double guess : {0.5 * kth, kth, 2 * kth + 1})
+          ASSERT_EQ(index.kth_sq_distance(P[i], k, i, guess), kth) << "point " << i << ", k = " << k << ", guess " << guess;
         index.query_within(P[i], kth, k, idx_within, d_within, i);
         ASSERT_EQ(idx_within, idx) << "point " << i << ", k = " << k;
         ASSERT_EQ(d_within, d) << "point " << i << ", k = " << k;
@@ -196,6 +199,7 @@ TEST(KnnIndex, TheKthDistanceAndTheSearchWithinItGiveWhatTheQueryGives) {
     index.query(P[0], 5000, idx, d, 0);
     EXPECT_EQ(idx.size(), P.size() - 1);
     EXPECT_EQ(index.kth_sq_distance(P[0], 5000, 0), d.back());
+    EXPECT_EQ(index.kth_sq_distance(P[0], 5000, 0, 1e9), d.back());
   }
 }
 
