@@ -83,10 +83,11 @@ struct QuadricFit {
   Vector6d coef;
 };
 
-// Fits X[0..m) (squared distances d2[0..m) from X[0], Gaussian weights exp(-d2 / h2) into w).
+// Fits X[0..m) (squared distances d2[0..m) from X[0], Gaussian weights exp(-d2 / h2) into w,
+// the points' frame coordinates (s, t, offset along n) into local, for residual_variance).
 // False for a degenerate neighbourhood (coincident or collinear points, a singular system).
 bool fit_quadric(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up,
-                 std::vector<double>& w, QuadricFit& f) {
+                 std::vector<double>& w, std::vector<Vector3d>& local, QuadricFit& f) {
   // Step 1: reference plane.
   if (!weighted_frame(X, d2, m, h2, up, w, f.n, f.t1, f.t2)) return false;
   // Step 2: weighted least squares, with the frame coordinates scaled by h so that the 6x6
@@ -95,12 +96,14 @@ bool fit_quadric(const Vector3d* X, const double* d2, int m, double h2, const Ve
   Matrix6d A = Matrix6d::Zero();
   f.B = Matrix6d::Zero();
   Vector6d rhs = Vector6d::Zero();
+  local.resize(m);
   for (int j = 0; j < m; ++j) {
     const Vector3d r = X[j] - X[0];
-    const Vector6d phi = quadric_basis(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h);
+    local[j] = Vector3d(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h, r.dot(f.n));
+    const Vector6d phi = quadric_basis(local[j].x(), local[j].y());
     add_weighted_outer_lower(A, phi, w[j]);
     add_weighted_outer_lower(f.B, phi, w[j] * w[j]);
-    rhs += (w[j] * r.dot(f.n)) * phi;
+    rhs += (w[j] * local[j].z()) * phi;
   }
   A = A.selfadjointView<Eigen::Lower>();
   f.B = f.B.selfadjointView<Eigen::Lower>();
@@ -110,18 +113,18 @@ bool fit_quadric(const Vector3d* X, const double* d2, int m, double h2, const Ve
   return f.coef.allFinite();
 }
 
-// The residual variance of the weighted quadric fit f to X[0..m) (weights w), an estimate of
-// sigma^2 when the quadric follows the surface, and its effective degrees of freedom. False when
-// they are not defined (too few points for the weights).
-bool residual_variance(const Vector3d* X, int m, const QuadricFit& f, const std::vector<double>& w,
-                       double& var, double& dof) {
+// The residual variance of the weighted quadric fit f to m points (weights w, frame coordinates
+// local, as fit_quadric gave them), an estimate of sigma^2 when the quadric follows the surface,
+// and its effective degrees of freedom. False when they are not defined (too few points for the
+// weights).
+bool residual_variance(int m, const QuadricFit& f, const std::vector<double>& w,
+                       const std::vector<Vector3d>& local, double& var, double& dof) {
   double sw = 0, sw2 = 0, ssr = 0;
   for (int j = 0; j < m; ++j) {
-    const Vector3d r = X[j] - X[0];
-    const Vector6d phi = quadric_basis(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h);
+    const Vector6d phi = quadric_basis(local[j].x(), local[j].y());
     sw += w[j];
     sw2 += w[j] * w[j];
-    ssr += w[j] * std::pow(r.dot(f.n) - phi.dot(f.coef), 2);
+    ssr += w[j] * std::pow(local[j].z() - phi.dot(f.coef), 2);
   }
   // E[sum w r^2] = sigma^2 tr(W (I - H)) with the hat matrix H = Phi A^-1 Phi^T W, and
   // tr(W H) = tr(A^-1 Phi^T W^2 Phi) = tr(A^-1 B).
@@ -142,13 +145,14 @@ Projection project(const Vector3d* X, const double* d2, int m, double h2, const 
   out.normal = up;
   if (m < 6 || !(h2 > 0)) return out;
   thread_local std::vector<double> w;
+  thread_local std::vector<Vector3d> local;
   QuadricFit f;
-  if (!fit_quadric(X, d2, m, h2, up, w, f)) return out;
+  if (!fit_quadric(X, d2, m, h2, up, w, local, f)) return out;
   // The fitted offset a = e0^T A^-1 Phi^T W z: for independent noise of sigma along n its
   // variance is sigma^2 e0^T A^-1 B A^-1 e0 with B = Phi^T W^2 Phi.
   const Vector6d g = f.ldlt.solve(Vector6d::Unit(0));
   out.spread = std::sqrt(std::max(0.0, g.dot(f.B * g)));
-  if (with_variance && !residual_variance(X, m, f, w, out.residual_variance, out.dof))
+  if (with_variance && !residual_variance(m, f, w, local, out.residual_variance, out.dof))
     out.residual_variance = -1;
 
   // Step 3: the quadric point above q, and the quadric's normal there (gradient (b, c) / h).
@@ -165,9 +169,10 @@ bool fit_variance(const Vector3d* X, const double* d2, int m, double h2, double&
                   double& dof) {
   if (m < 10 || !(h2 > 0)) return false;
   thread_local std::vector<double> w;
+  thread_local std::vector<Vector3d> local;
   QuadricFit f;
-  if (!fit_quadric(X, d2, m, h2, Vector3d::UnitZ(), w, f)) return false;
-  return residual_variance(X, m, f, w, var, dof);
+  if (!fit_quadric(X, d2, m, h2, Vector3d::UnitZ(), w, local, f)) return false;
+  return residual_variance(m, f, w, local, var, dof);
 }
 
 void check_points(const std::vector<Vector3d>& P) {
