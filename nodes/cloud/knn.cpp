@@ -23,6 +23,10 @@ namespace {
 using CloudAdaptor = PointsAdaptor<Eigen::Vector3d>;
 using Tree = KdTree<Eigen::Vector3d, 3>;
 
+// The next double above a finite d >= 0 (std::nextafter, without the library call): a result
+// set's worstDist() one ulp above its bound lets points at the bound itself in.
+double next_up(double d) { return std::bit_cast<double>(std::bit_cast<std::uint64_t>(d) + 1); }
+
 // A k-best result set ordered by (distance, index), which skips one index (the query point
 // itself). nanoflann's own KNNResultSet orders only by distance and rejects a candidate whose
 // distance equals the current worst, so equal distances would come out in tree order; reporting
@@ -85,10 +89,6 @@ class OrderedKnnResult {
   }
 
  private:
-  // The next double above a finite d >= 0 (std::nextafter, without the library call).
-  static double next_up(double d) {
-    return std::bit_cast<double>(std::bit_cast<std::uint64_t>(d) + 1);
-  }
   static bool before(double d1, int i1, double d2, int i2) {
     return d1 < d2 || (d1 == d2 && i1 < i2);
   }
@@ -124,7 +124,7 @@ class WithinResult {
   using CountType = std::size_t;
 
   WithinResult(double sq_radius, std::int64_t skip, std::vector<std::pair<double, int>>& found)
-      : worst_(std::bit_cast<double>(std::bit_cast<std::uint64_t>(sq_radius) + 1)), skip_(skip), found_(found) {}
+      : worst_(next_up(sq_radius)), skip_(skip), found_(found) {}
   std::size_t size() const { return found_.size(); }
   bool full() const { return true; }
   bool addPoint(double d, IndexType index) {
@@ -134,7 +134,7 @@ class WithinResult {
   double worstDist() const { return worst_; }
 
  private:
-  double worst_;  // one ulp above the radius: the tree takes only what is nearer than this
+  double worst_;  // next_up(the radius): the tree takes only what is nearer than this
   std::int64_t skip_;
   std::vector<std::pair<double, int>>& found_;
 };
