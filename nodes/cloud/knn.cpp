@@ -139,6 +139,17 @@ class WithinResult {
   std::vector<std::pair<double, int>>& found_;
 };
 
+// Every point of the tree (but `skip`) within squared distance sq_radius of q, in no order, as
+// (squared distance, index) in a vector of the calling thread's, kept until its next call.
+std::vector<std::pair<double, int>>& points_within(const Tree& tree, const Eigen::Vector3d& q, double sq_radius,
+                                                   int skip) {
+  thread_local std::vector<std::pair<double, int>> found;
+  found.clear();
+  WithinResult result(sq_radius, skip, found);
+  tree.findNeighbors(result, q.data(), nanoflann::SearchParams());
+  return found;
+}
+
 void check_points(const std::vector<Eigen::Vector3d>& P) {
   if (P.size() >= static_cast<std::size_t>(std::numeric_limits<int>::max()))
     throw std::invalid_argument("the cloud has " + std::to_string(P.size()) +
@@ -184,10 +195,7 @@ void KnnIndex::query(const Eigen::Vector3d& q, int k, std::vector<int>& idx,
 
 void KnnIndex::query_within(const Eigen::Vector3d& q, double sq_radius, int k, std::vector<int>& idx,
                             std::vector<double>& sq_dist, int skip) const {
-  thread_local std::vector<std::pair<double, int>> found;
-  found.clear();
-  WithinResult result(sq_radius, skip, found);
-  impl_->tree.findNeighbors(result, q.data(), nanoflann::SearchParams());
+  std::vector<std::pair<double, int>>& found = points_within(impl_->tree, q, sq_radius, skip);
   const std::size_t want = std::min<std::size_t>(std::max(k, 0), found.size());
   // by (distance, index); more than k only where distances tie at the radius
   if (want < found.size()) std::nth_element(found.begin(), found.begin() + want, found.end());
@@ -207,10 +215,7 @@ double KnnIndex::kth_sq_distance(const Eigen::Vector3d& q, int k, int skip, doub
   if (guess > 0) {
     // Every point within the guess: when there are k or more, the k-th of them by (distance,
     // index) is the k-th of all. A search of known radius prunes from the start and keeps no order.
-    thread_local std::vector<std::pair<double, int>> found;
-    found.clear();
-    WithinResult within(guess, skip, found);
-    impl_->tree.findNeighbors(within, q.data(), nanoflann::SearchParams());
+    std::vector<std::pair<double, int>>& found = points_within(impl_->tree, q, guess, skip);
     if (found.size() >= static_cast<std::size_t>(want)) {
       std::nth_element(found.begin(), found.begin() + (want - 1), found.end());
       return found[want - 1].first;
