@@ -346,6 +346,19 @@ double HeightFieldModel::reach_beyond(double x, double y) const {
   return out.norm() - farthest;
 }
 
+bool HeightFieldModel::uncertainty_may_grow(double x, double y, double misfit_floor) const {
+  std::uint32_t idx[64];
+  double d2[64];
+  const std::size_t got = impl_->nearest_xy(x, y, std::min(k_, 64), idx, d2);
+  if (got == 0) return true;
+  if (std::sqrt(d2[0]) > 0.5 * spacing_ && impl_->beyond_edge(x, y, idx, got) > 0) return true;
+  double z, misfit = 0;
+  Eigen::Vector3d n;
+  if (!(impl_->local_fit(x, y, idx, d2, got, k_, z, n, misfit) || impl_->xy_fit(x, y, idx, d2, got, z, n, misfit)))
+    return true;
+  return kMisfitFactor * misfit > misfit_floor;
+}
+
 double HeightFieldModel::uncertainty(double x, double y) const {
   double z, u = 0;
   Eigen::Vector3d n;

@@ -48,6 +48,13 @@ class HeightFieldModel {
   // How far (x, y) lies beyond the outermost of its 64 nearest points, seen from their centroid
   // (mm; <= 0 among them, e.g. in a gap between the points of a rim).
   double reach_beyond(double x, double y) const;
+  // Whether eval's uncertainty may be larger near (x, y) than at it: (x, y) lies beyond the
+  // cloud's edge (its nearest point farther than half a spacing and its neighbours leaving a gap
+  // wider than 0.6 pi: there the uncertainty grows with the distance from the points), or the fit
+  // there misfits its points by more than `misfit_floor` mm (kMisfitFactor times the misfit, as
+  // eval counts it: across a crest it changes within a spacing). Elsewhere the uncertainty is
+  // the mean of the nearest points' own, which a step of a spacing changes little.
+  bool uncertainty_may_grow(double x, double y, double misfit_floor) const;
   // How far the surface at (x, y) may be off the real one (mm), as eval gives it (without
   // per-point uncertainties, the misfit alone).
   double uncertainty(double x, double y) const;

@@ -153,6 +153,25 @@ TEST(HeightFieldModel, UncertaintyBoundsTheFitsErrorOnAnExactCrest) {
   EXPECT_NEAR(m.uncertainty(7.013, 0.0), 1e-4, 2e-4);  // barely on a flank
 }
 
+TEST(HeightFieldModel, UncertaintyMayGrowBeyondTheEdgeAndOnACrestNotInsideASmoothPatch) {
+  // A paraboloid (a quadric: the fit follows it) and the 1 mm crest above (it does not).
+  const std::vector<double> u(41 * 41, 1e-4);
+  const auto bowl = grid([](double x, double y) { return 0.01 * x * x + 0.02 * y * y; });
+  const HeightFieldModel smooth(bowl, 20, &u);
+  const double s = smooth.spacing();
+  for (const auto& q : kProbes) EXPECT_FALSE(smooth.uncertainty_may_grow(q[0], q[1], 1e-4)) << q[0] << ", " << q[1];
+  // beyond the edge x = 10: the uncertainty grows with the distance from the points
+  EXPECT_TRUE(smooth.uncertainty_may_grow(10 + 0.6 * s, 1.3, 1e-4));
+  EXPECT_TRUE(smooth.uncertainty_may_grow(10 + 2 * s, 1.3, 1e-4));
+  // within half a spacing of a point it does not grow, even beyond the edge
+  EXPECT_FALSE(smooth.uncertainty_may_grow(10 + 0.4 * s, 1.5, 1e-4));
+  const double a = 0.7, c = 0.7;
+  const HeightFieldModel crest(grid([&](double x, double) { return 20 - a * std::sqrt(x * x + c * c); }), 20, &u);
+  EXPECT_TRUE(crest.uncertainty_may_grow(0.13, -0.27, 1e-4));   // at its top: misfit
+  EXPECT_FALSE(crest.uncertainty_may_grow(0.13, -0.27, 1.0));   // under a floor of 1 mm, not
+  EXPECT_FALSE(crest.uncertainty_may_grow(8.13, -0.27, 1e-4));  // far down a flank, a plane
+}
+
 TEST(HeightFieldModel, KeepsATemporaryCloudAndReadsAGivenOneInPlace) {
   // A model reads the caller's cloud where it is (no copy); given a temporary it keeps it: the
   // same surface either way, also after the temporary's expression has ended.
