@@ -7,8 +7,71 @@
 
 namespace scallop {
 
+namespace {
+
+// Measures, by atan2 of their cross and dot products, the gaps between circularly consecutive
+// directions whose pseudo_angle difference is at least half the widest such difference:
+// pseudo_angle grows at 1/2 to 1 times the angle's rate (1 / (|sin| + |cos|)^2), so the others are
+// narrower than the gap with that widest difference. `gap(j)` is the key difference from the
+// j-th direction of `next` pairs to its successor, `pair(j)` those two directions.
+template <class Gap, class Pair>
+double widest_measured(std::size_t pairs, Gap gap, Pair pair) {
+  constexpr double kTwoPi = 2 * std::numbers::pi;
+  double widest_key = 0;
+  for (std::size_t j = 0; j < pairs; ++j) widest_key = std::max(widest_key, gap(j));
+  double widest = 0;
+  for (std::size_t j = 0; j < pairs; ++j) {
+    if (gap(j) < 0.5 * widest_key - 1e-12) continue;
+    const auto [a, b] = pair(j);
+    const double angle = std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+    widest = std::max(widest, angle < 0 ? angle + kTwoPi : angle);
+  }
+  return widest;
+}
+
+}  // namespace
+
 double largest_angular_gap(const Eigen::Vector2d* d, std::size_t count) {
   constexpr double kTwoPi = 2 * std::numbers::pi;
+  // First without sorting: the directions in 64 buckets of pseudo_angle (a 16th of its unit
+  // each), each bucket's first and last. Where two consecutive non-empty buckets leave a gap of
+  // two buckets' width or more, no gap inside a bucket (less than one wide) is half the widest,
+  // and the gaps between buckets are all that widest_measured looks at: the same answer as
+  // sorting them all, in one pass (where the widest gap is narrower, they are sorted).
+  constexpr int kBuckets = 64;
+  struct Bucket {
+    double lo = INFINITY, hi = -INFINITY;
+    const Eigen::Vector2d* lo_at = nullptr;
+    const Eigen::Vector2d* hi_at = nullptr;
+  };
+  Bucket bucket[kBuckets];
+  std::size_t m = 0;
+  for (std::size_t j = 0; j < count; ++j) {
+    if (d[j].isZero()) continue;
+    const double key = pseudo_angle(d[j].x(), d[j].y());
+    Bucket& b = bucket[std::min(kBuckets - 1, static_cast<int>(kBuckets / 4 * key))];
+    if (key < b.lo) b.lo = key, b.lo_at = &d[j];
+    if (key > b.hi) b.hi = key, b.hi_at = &d[j];
+    ++m;
+  }
+  if (m < 2) return kTwoPi;
+  int used[kBuckets], n_used = 0;
+  for (int k = 0; k < kBuckets; ++k)
+    if (bucket[k].lo_at) used[n_used++] = k;
+  // Every direction within 1e-9 of one another (in pseudo_angle, below 2e-9 rad): the gap from
+  // the last round to the first is the whole turn, which the cross product's sign cannot tell.
+  if (bucket[used[n_used - 1]].hi - bucket[used[0]].lo < 1e-9) return kTwoPi;
+  auto bucket_gap = [&](std::size_t j) {
+    const Bucket &a = bucket[used[j]], &b = bucket[used[(j + 1) % n_used]];
+    return j + 1 < std::size_t(n_used) ? b.lo - a.hi : 4 - a.hi + b.lo;
+  };
+  double widest_between = 0;
+  for (int j = 0; j < n_used; ++j) widest_between = std::max(widest_between, bucket_gap(j));
+  if (n_used > 1 && widest_between >= 2.0 / (kBuckets / 4) + 4e-12)
+    return widest_measured(n_used, bucket_gap, [&](std::size_t j) {
+      return std::pair<const Eigen::Vector2d&, const Eigen::Vector2d&>(*bucket[used[j]].hi_at,
+                                                                       *bucket[used[(j + 1) % n_used]].lo_at);
+    });
   struct Direction {
     double key;
     Eigen::Vector2d v;
@@ -17,28 +80,12 @@ double largest_angular_gap(const Eigen::Vector2d* d, std::size_t count) {
   dir.clear();
   for (std::size_t j = 0; j < count; ++j)
     if (!d[j].isZero()) dir.push_back({pseudo_angle(d[j].x(), d[j].y()), d[j]});
-  const std::size_t m = dir.size();
-  if (m < 2) return kTwoPi;
   std::sort(dir.begin(), dir.end(), [](const Direction& a, const Direction& b) { return a.key < b.key; });
-  // Every direction within 1e-9 of one another (in pseudo_angle, below 2e-9 rad): the gap from
-  // the last round to the first is the whole turn, which the cross product's sign cannot tell.
-  if (dir[m - 1].key - dir[0].key < 1e-9) return kTwoPi;
-  // pseudo_angle grows at 1/2 to 1 times the angle's rate (1 / (|sin| + |cos|)^2), so a gap whose
-  // pseudo_angle difference is below half the largest difference is narrower than the gap with
-  // that largest difference: only the others are measured, by atan2 of their cross and dot
-  // products (exact also where rounding gave nearly equal directions the same pseudo_angle).
-  auto key_gap = [&](std::size_t j) { return j + 1 < m ? dir[j + 1].key - dir[j].key : 4 - dir[j].key + dir[0].key; };
-  double widest_key = 0;
-  for (std::size_t j = 0; j < m; ++j) widest_key = std::max(widest_key, key_gap(j));
-  double widest = 0;
-  for (std::size_t j = 0; j < m; ++j) {
-    if (key_gap(j) < 0.5 * widest_key - 1e-12) continue;
-    const Eigen::Vector2d& a = dir[j].v;
-    const Eigen::Vector2d& b = dir[(j + 1) % m].v;
-    const double angle = std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
-    widest = std::max(widest, angle < 0 ? angle + kTwoPi : angle);
-  }
-  return widest;
+  return widest_measured(
+      m, [&](std::size_t j) { return j + 1 < m ? dir[j + 1].key - dir[j].key : 4 - dir[j].key + dir[0].key; },
+      [&](std::size_t j) {
+        return std::pair<const Eigen::Vector2d&, const Eigen::Vector2d&>(dir[j].v, dir[(j + 1) % m].v);
+      });
 }
 
 bool every_octant_occupied(const Eigen::Vector2d* d, std::size_t count) {
