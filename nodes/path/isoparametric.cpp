@@ -654,11 +654,8 @@ class Planner {
         };
         // Coarse scan across the strip; the cusp is where the first hit passes from A's balls
         // to B's, a root of hit_A - hit_B (smooth across the strip) found by regula falsi with
-        // the Illinois modification (superlinear, and the root stays bracketed). Three places
-        // bracket it: with seven the bundled example's strip checks asked the surface 735 000
-        // times (4.7 regula falsi steps after the scan), with three 491 000 (5.0 after it), the
-        // planner 1.05 -> 0.86 s; the program's scallop max 0.04979 -> 0.04935, the same passes.
-        constexpr int kScan = 4;
+        // the Illinois modification (superlinear, and the root stays bracketed).
+        constexpr int kScan = 8;
         double gmax = 0;
         SurfaceSample w, x;
         double f_lo = -1, f_hi = -1, d_lo = 0, d_hi = 0;
