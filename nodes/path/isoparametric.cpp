@@ -1068,6 +1068,9 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     bool accepted = false;
     Pass B;
     StripCheck chk;
+    // The first try is at the formula's step: kept for a strip no step keeps (below).
+    Pass B_formula;
+    StripCheck chk_formula;
     double ds_prev = 0, scallop_prev = 0;
     int no_gain = 0;  // tries in a row whose smaller step did not lower the scallop
     int above_at_zero = 0;  // tries in a row whose secant stays above the limit at a zero step
@@ -1082,7 +1085,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
         accepted = true;
         break;
       }
-      if (iter == 0) ++shrunk;
+      if (iter == 0) ++shrunk, B_formula = B, chk_formula = chk;
       // A strip that no step down to a 32nd of the formula's keeps under the limit is not kept
       // by creeping the passes over it either (that took up to 30 tries a strip, each a pass
       // built and checked): it is reported, below.
@@ -1127,12 +1130,10 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     }
     if (!accepted) {
       // No step keeps the limit here (a concave place the ball cannot reach, a kink): take the
-      // formula's step rather than creep on with vanishing ones, and say so.
-      const double s_next = s + ds0 >= co.S * (1 - 1e-12) ? co.S : s + ds0;
-      B = planner.build_pass(s_next);
-      chk = planner.check_strip(A, B);
-      ++strip_checks;
-      strips_over.push_back({{"s_from", s}, {"s_to", s_next}, {"scallop", chk.scallop_max}});
+      // formula's step, the first try, rather than creep on with vanishing ones, and say so.
+      B = std::move(B_formula);
+      chk = chk_formula;
+      strips_over.push_back({{"s_from", s}, {"s_to", B.s}, {"scallop", chk.scallop_max}});
       if (chk.scallop_max > strip_over_worst) strip_over_worst = chk.scallop_max, strip_over_where = chk.where;
     }
     ds_min = std::min(ds_min, B.s - s);
