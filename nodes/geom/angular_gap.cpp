@@ -12,8 +12,8 @@ namespace {
 // Measures, by atan2 of their cross and dot products, the gaps between circularly consecutive
 // directions whose pseudo_angle difference is at least half the widest such difference:
 // pseudo_angle grows at 1/2 to 1 times the angle's rate (1 / (|sin| + |cos|)^2), so the others are
-// narrower than the gap with that widest difference. `gap(j)` is the key difference from the
-// j-th direction of `next` pairs to its successor, `pair(j)` those two directions.
+// narrower than the gap with that widest difference. Of the `pairs` consecutive pairs, gap(j) is
+// the j-th one's pseudo_angle difference and pair(j) its two directions, in turning order.
 template <class Gap, class Pair>
 double widest_measured(std::size_t pairs, Gap gap, Pair pair) {
   constexpr double kTwoPi = 2 * std::numbers::pi;
