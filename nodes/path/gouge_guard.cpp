@@ -196,9 +196,10 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
   // Where the uncertainty cannot grow within a spacing (inside the edge, the fit following its
   // points: there it is the mean of the nearest points' own) the ring is not looked at: on the
   // bundled example and 11 catalog and crest clouds, clean and noisy, the same programs, and the
-  // guard 0.61 to 1.0 times as long (the example 1.19 -> 0.92 s). With a misfit floor of
-  // 1e-3 mm instead of the points' least uncertainty, one ball of the clean freeform patch and
-  // several of the 3 mm crest were lifted less (the crest's gouge bound 0.04924 -> 0.04979).
+  // guard 0.61 to 1.0 times as long (the example 1.19 -> 0.92 s). With the ring only beyond the
+  // edge, one ball of the clean freeform patch and several of the 3 mm crest were lifted less
+  // (the crest's gouge bound 0.04924 -> 0.04979); with a misfit floor of 1e-3 mm instead of the
+  // points' least uncertainty, some of the crest's.
   constexpr double kRingMisfitFloor = 1e-4;  // mm: the least uncertainty of any point (cloud.denoise)
   if (res.on_surface && nearest_point_d2(s) > 0.25 * sp * sp &&
       impl_->surface.uncertainty_may_grow(s.x(), s.y(), kRingMisfitFloor)) {
