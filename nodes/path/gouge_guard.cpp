@@ -195,7 +195,7 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
   // they lifted balls only beyond the clean 3 mm crest's rim, where the certificate does not look.)
   // Where the uncertainty cannot grow within a spacing (inside the edge, the fit following its
   // points: there it is the mean of the nearest points' own) the ring is not looked at: on the
-  // bundled example and 11 catalog and crest clouds, clean and noisy, the same programs, and the
+  // bundled example and 10 catalog and crest clouds, clean and noisy, the same programs, and the
   // guard 0.61 to 1.0 times as long (the example 1.19 -> 0.92 s). With the ring only beyond the
   // edge, one ball of the clean freeform patch and several of the 3 mm crest were lifted less
   // (the crest's gouge bound 0.04924 -> 0.04979); with a misfit floor of 1e-3 mm instead of the
