@@ -91,6 +91,18 @@ struct HeightFieldModel::Impl {
   // How surely (x, y) lies beyond the cloud's edge: 0 inside, 1 where the points around it all
   // lie to one side; idx[0..got) its nearest points (a first look).
   double beyond_edge(double x, double y, const std::uint32_t* idx, std::size_t got) const;
+  // The factor eval's uncertainty grows by at (x, y) beyond the edge (1 elsewhere; see eval);
+  // idx, d2 its nearest points, ascending.
+  double edge_growth(double x, double y, const std::uint32_t* idx, const double* d2, std::size_t got,
+                     double spacing) const {
+    const double gap = std::sqrt(d2[0]) - 0.5 * spacing;
+    return gap > 0 ? 1 + beyond_edge(x, y, idx, got) * gap / (2 * spacing) : 1.0;
+  }
+  // The local fit where the surface is steep, else the fit of z over (x, y).
+  bool fit(double x, double y, const std::uint32_t* idx, const double* d2, std::size_t got, int k, double& z,
+           Eigen::Vector3d& normal, double& misfit) const {
+    return local_fit(x, y, idx, d2, got, k, z, normal, misfit) || xy_fit(x, y, idx, d2, got, z, normal, misfit);
+  }
   // The fits: z and normal at (x, y), and their misfit (mm; see kMisfitFactor); idx, d2 the
   // nearest points in xy and their squared distances, ascending, as the search gave them.
   bool local_fit(double x, double y, const std::uint32_t* idx, const double* d2, std::size_t got, int k,
@@ -351,11 +363,10 @@ bool HeightFieldModel::uncertainty_may_grow(double x, double y, double misfit_fl
   double d2[64];
   const std::size_t got = impl_->nearest_xy(x, y, std::min(k_, 64), idx, d2);
   if (got == 0) return true;
-  if (std::sqrt(d2[0]) > 0.5 * spacing_ && impl_->beyond_edge(x, y, idx, got) > 0) return true;
+  if (impl_->edge_growth(x, y, idx, d2, got, spacing_) > 1) return true;
   double z, misfit = 0;
   Eigen::Vector3d n;
-  if (!(impl_->local_fit(x, y, idx, d2, got, k_, z, n, misfit) || impl_->xy_fit(x, y, idx, d2, got, z, n, misfit)))
-    return true;
+  if (!impl_->fit(x, y, idx, d2, got, k_, z, n, misfit)) return true;
   return kMisfitFactor * misfit > misfit_floor;
 }
 
@@ -428,8 +439,7 @@ bool HeightFieldModel::eval(double x, double y, double& z, Eigen::Vector3d& norm
   double points_uncertainty = 0, growth = 1;
   if (uncertainty) {
     points_uncertainty = impl_->mean_uncertainty(idx, got);
-    const double gap = std::sqrt(d2[0]) - 0.5 * spacing_;
-    if (gap > 0) growth = 1 + impl_->beyond_edge(x, y, idx, got) * gap / (2 * spacing_);
+    growth = impl_->edge_growth(x, y, idx, d2, got, spacing_);
     *uncertainty = points_uncertainty * growth;
   }
   // Beyond the edge of the cloud the neighbours are all on one side: their centroid moves off
@@ -443,8 +453,7 @@ bool HeightFieldModel::eval(double x, double y, double& z, Eigen::Vector3d& norm
   double zf;
   Eigen::Vector3d nf;
   double misfit = 0;
-  const bool fitted = impl_->local_fit(x, y, idx, d2, got, k, zf, nf, misfit) ||
-                      impl_->xy_fit(x, y, idx, d2, got, zf, nf, misfit);
+  const bool fitted = impl_->fit(x, y, idx, d2, got, k, zf, nf, misfit);
   if (fitted && uncertainty) *uncertainty = (points_uncertainty + kMisfitFactor * misfit) * growth;
   if (!fitted || outside) return false;
   z = zf;

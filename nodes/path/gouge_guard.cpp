@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "nodes/cloud/denoise.h"
 #include "nodes/geom/kd_tree.h"
 #include "nodes/path/step_size.h"
 
@@ -200,9 +201,8 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
   // edge, one ball of the clean freeform patch and several of the 3 mm crest were lifted less
   // (the crest's gouge bound 0.04924 -> 0.04979); with a misfit floor of 1e-3 mm instead of the
   // points' least uncertainty, some of the crest's.
-  constexpr double kRingMisfitFloor = 1e-4;  // mm: the least uncertainty of any point (cloud.denoise)
   if (res.on_surface && nearest_point_d2(s) > 0.25 * sp * sp &&
-      impl_->surface.uncertainty_may_grow(s.x(), s.y(), kRingMisfitFloor)) {
+      impl_->surface.uncertainty_may_grow(s.x(), s.y(), kUncertaintyFloor)) {
     for (double rho : {0.5, 1.0})
       for (int k = 0; k < 8; ++k) {
         const double a = k * (kPi / 4);

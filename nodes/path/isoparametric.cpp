@@ -1085,7 +1085,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
         accepted = true;
         break;
       }
-      if (iter == 0) ++shrunk, B_formula = B, chk_formula = chk;
+      if (iter == 0) ++shrunk, B_formula = std::move(B), chk_formula = chk;  // (B is built anew below)
       // A strip that no step down to a 32nd of the formula's keeps under the limit is not kept
       // by creeping the passes over it either (that took up to 30 tries a strip, each a pass
       // built and checked): it is reported, below.
