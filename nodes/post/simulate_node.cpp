@@ -14,7 +14,7 @@ namespace scallop::post_nodes {
 NodeDecl make_simulate_node() {
   NodeDecl d;
   d.type = "post.simulate";
-  d.version = 12;  // 12: rim_band, the band beyond the outer loop counted too when asked (samples_beyond_outline);  11: a gouge bound below the uncertainty says the ball stays clear of the surface by less than it; 10: a failing bound says how much of it is the surface's uncertainty, and the worst places carry it; 9: the rapids checked against the cloud (rapid_min_clearance, rapids_through_part); 3: scallop and gouge are bounds that include the cloud's uncertainty; 7: and the height field's misfit; 8: the height field solved by a fixed-size Cholesky (the same to rounding)
+  d.version = 13;  // 13: the height field's quartic where its quadratic misfits (HeightFieldModel, kQuarticFrom); 12: rim_band, the band beyond the outer loop counted too when asked (samples_beyond_outline);  11: a gouge bound below the uncertainty says the ball stays clear of the surface by less than it; 10: a failing bound says how much of it is the surface's uncertainty, and the worst places carry it; 9: the rapids checked against the cloud (rapid_min_clearance, rapids_through_part); 3: scallop and gouge are bounds that include the cloud's uncertainty; 7: and the height field's misfit; 8: the height field solved by a fixed-size Cholesky (the same to rounding)
                   // 4: the uncertainty grows at gaps beyond the cloud's edge
                   // 5: pass asks the whole patch, rim included, not the interior only
                   // 6: outputs the simulation (post.render draws it), no heat map of its own
