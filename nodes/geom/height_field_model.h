@@ -12,7 +12,9 @@ namespace scallop {
 // Height-field model of a cloud seen from +z: z(x, y) and the upward normal from a weighted
 // quadratic least-squares fit of the k nearest cloud points in xy; where the surface is steeper
 // than ~37 degrees, from a quadratic fitted in the local tangent frame to the k nearest points
-// in 3-D (a fit of z over xy is ill-posed there when the points crowd together in xy).
+// in 3-D (a fit of z over xy is ill-posed there when the points crowd together in xy). Where the
+// quadratic misfits its points (a crest, a crease), a quartic over the 2k nearest in its place
+// when it fits them better and agrees with it (kQuarticFrom, height_field_model.cpp).
 class HeightFieldModel {
  public:
   // P  #P by 3 cloud points (mm), at least 10. k  neighbours per fit.
@@ -31,7 +33,8 @@ class HeightFieldModel {
   // uncertainty, when given, gets how far z may be off the real surface: the neighbours'
   // uncertainties carried through the fit (at least their mean) plus 3 times the fit's misfit
   // (the largest residual beyond a neighbour's own uncertainty: the quadratic's shape bias,
-  // all of the error on a clean cloud), grown at the edge where the nearest point is
+  // all of the error on a clean cloud; for a quartic, its misfit plus a third of its difference
+  // from the quadratic), grown at the edge where the nearest point is
   // d > spacing / 2 away (a gap z is extrapolated across): by the factor
   // 1 + (d − spacing / 2) / (2 spacing) beyond the edge, fading to 1 inside it. It is set also
   // when eval returns false for a place outside the patch (the fit there, extrapolated).

@@ -205,6 +205,26 @@ TEST(HeightFieldModel, OnA3mmCrestTheQuarticKnowsTheTopTenTimesBetter) {
   EXPECT_LT(r.top_error_max, 0.0015);
 }
 
+TEST(HeightFieldModel, OnASteep3mmCrestTheLocalQuarticKnowsTheTopTenTimesBetter) {
+  // The same ridge on a ramp of slope 1 along it: 45 degrees at its top, where the fit is
+  // local, in the tangent frame. The quadratic alone: uncertainty 0.089 mm at most over the
+  // top, 0.041 on average, error 0.0026 at most; the quartic in the frame: 0.0091, 0.0045 and
+  // 0.00066.
+  const auto crest = ridge(0.7, 2.1);
+  auto f = [&](double x, double y) { return crest(x, y) + y; };
+  const auto P = grid(f);
+  const std::vector<double> u(P.size(), 1e-4);
+  const HeightFieldModel m(P, 20, &u);
+  double z;
+  Eigen::Vector3d n;
+  ASSERT_TRUE(m.eval(0.013, 0.27, z, n));
+  EXPECT_LT(n.z(), 0.8);  // steep: the local fit
+  const RidgeScan r = scan_ridge(m, f);
+  EXPECT_LT(r.ratio_max, 1.0);
+  EXPECT_LT(r.top_uncertainty_max, 0.02);
+  EXPECT_LT(r.top_error_max, 0.0015);
+}
+
 TEST(HeightFieldModel, UncertaintyMayGrowBeyondTheEdgeAndOnACrestNotInsideASmoothPatch) {
   // A paraboloid (a quadric: the fit follows it) and the 1 mm crest above (it does not).
   const std::vector<double> u(41 * 41, 1e-4);
