@@ -56,9 +56,10 @@ constexpr double kMisfitFactor = 3.0;
 // quartic over twice its neighbours is fitted too (of z over (x, y), or of w(a, b) in the local
 // fit's tangent frame where the surface is steep), and kept when it misfits the quadratic's
 // points less and agrees with it (Impl::keep_better); its bound is kMisfitFactor times that
-// misfit plus its difference from the quadratic. A crest of radius 3 mm bent the quadratic's far points away by 0.01 mm while its
-// value at the centre was 0.001 mm off: held off the top by that bound, the ball left 0.068 mm
-// of scallop where h was 0.05 (the catalog's 3 mm crest, stop 77). (bench/extra_surfaces.py
+// misfit plus its difference from the quadratic. A crest of radius 3 mm bent the quadratic's far
+// points away by 0.01 mm while its value at the centre was 0.001 mm off: held off the top by
+// that bound, the ball left 0.068 mm of scallop where h was 0.05 (the catalog's 3 mm crest, stop
+// 77). (bench/extra_surfaces.py
 // model-error, the 24 clouds above, clean and noisy; stop 78.) With the quartic, the largest
 // |error| / uncertainty is unchanged on 23 clouds and 0.48 -> 0.57 on the clean 1 mm crest;
 // the 99th percentile of the uncertainty falls 0.0265 -> 0.0022 mm on the clean 3 mm crest,
@@ -142,8 +143,8 @@ struct HeightFieldModel::Impl {
   // and frame) over twice the quadratic's `got` nearest points in 3-D, its point above (x, y).
   void local_quartic_fit(double x, double y, const Eigen::Vector3d& o, const Eigen::Matrix3d& F, std::size_t got,
                          double& z, Eigen::Vector3d& normal, double& misfit) const;
-  // Whether the quartic (z, normal, its misfit over the quadratic's points) is kept in place of
-  // the quadratic (z, normal, misfit), which it then replaces: see quartic_fit.
+  // Puts the quartic (its z, normal and misfit over the quadratic's points) in place of the
+  // quadratic's (z, normal, misfit) where it fits better and agrees with it; see quartic_fit.
   static void keep_better(double quartic_z, const Eigen::Vector3d& quartic_normal, double quartic_misfit, double& z,
                           Eigen::Vector3d& normal, double& misfit);
 };
