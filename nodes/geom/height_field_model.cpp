@@ -183,6 +183,37 @@ bool local_plane(const std::vector<Eigen::Vector3d>& P, const std::uint32_t* idx
   return true;
 }
 
+// The point P = o + h (a t1 + b t2 + w(a, b) n) of a graph w over the frame F about o (t1, t2, n
+// its columns) that lies above (x, y), found by Newton's method on (a, b) from 0, and its upward
+// unit normal. `w_at(a, b, wa, wb)` returns w and sets its partial derivatives. False where the
+// Jacobian is singular, Newton does not converge in 20 steps or (a, b) leaves |a|, |b| <= reach.
+template <class Graph>
+bool point_above(double x, double y, const Eigen::Vector3d& o, const Eigen::Matrix3d& F, double h, double reach,
+                 const Graph& w_at, Eigen::Vector3d& P, Eigen::Vector3d& normal) {
+  double a = 0, b = 0;
+  for (int it = 0; it < 20; ++it) {
+    double wa, wb;
+    const double w = w_at(a, b, wa, wb);
+    P = o + h * (a * F.col(0) + b * F.col(1) + w * F.col(2));
+    const Eigen::Vector3d ta = F.col(0) + wa * F.col(2), tb = F.col(1) + wb * F.col(2);
+    const Eigen::Vector2d res(P.x() - x, P.y() - y);
+    if (res.norm() < 1e-12 * (1 + h)) {
+      normal = ta.cross(tb).normalized();
+      if (normal.z() < 0) normal = -normal;
+      return true;
+    }
+    Eigen::Matrix2d J;
+    J << ta.x(), tb.x(), ta.y(), tb.y();
+    J *= h;
+    if (!(std::abs(J.determinant()) > 1e-12 * h * h)) return false;
+    const Eigen::Vector2d step = J.inverse() * res;
+    a -= step.x();
+    b -= step.y();
+    if (std::abs(a) > reach || std::abs(b) > reach) return false;  // left the neighbourhood
+  }
+  return false;
+}
+
 }  // namespace
 
 // Moving least squares in a local frame (tangent plane of the neighbours, normal w): w(a, b) a
@@ -250,33 +281,13 @@ bool HeightFieldModel::Impl::local_fit(double x, double y, const std::uint32_t* 
     }
     Eigen::Matrix<double, 6, 1> c;
     if (!solve_positive_definite(M, rhs, c, 1e-8)) return false;
-    // Newton on (a, b): the xy of o + h (a t1 + b t2 + w(a, b) n) must be (x, y).
-    double a = 0, b = 0;
-    Eigen::Vector3d P, ta, tb;
-    bool conv = false;
-    for (int it = 0; it < 20; ++it) {
-      const double w = c[0] + c[1] * a + c[2] * b + c[3] * a * a + c[4] * a * b + c[5] * b * b;
-      const double wa = c[1] + 2 * c[3] * a + c[4] * b, wb = c[2] + c[4] * a + 2 * c[5] * b;
-      P = o + h * (a * F.col(0) + b * F.col(1) + w * F.col(2));
-      ta = F.col(0) + wa * F.col(2);
-      tb = F.col(1) + wb * F.col(2);
-      const Eigen::Vector2d res(P.x() - x, P.y() - y);
-      if (res.norm() < 1e-12 * (1 + h)) {
-        conv = true;
-        break;
-      }
-      Eigen::Matrix2d J;
-      J << ta.x(), tb.x(), ta.y(), tb.y();
-      J *= h;
-      if (!(std::abs(J.determinant()) > 1e-12 * h * h)) return false;
-      const Eigen::Vector2d step = J.inverse() * res;
-      a -= step.x();
-      b -= step.y();
-      if (std::abs(a) > 3 || std::abs(b) > 3) return false;  // left the neighbourhood
-    }
-    if (!conv) return false;
-    Eigen::Vector3d n = ta.cross(tb).normalized();
-    if (n.z() < 0) n = -n;
+    const auto quadratic = [&c](double a, double b, double& wa, double& wb) {
+      wa = c[1] + 2 * c[3] * a + c[4] * b;
+      wb = c[2] + c[4] * a + 2 * c[5] * b;
+      return c[0] + c[1] * a + c[2] * b + c[3] * a * a + c[4] * a * b + c[5] * b * b;
+    };
+    Eigen::Vector3d P, n;
+    if (!point_above(x, y, o, F, h, 3.0, quadratic, P, n)) return false;
     misfit = 0;
     for (std::size_t j = 0; j < got; ++j) {
       const Eigen::Vector3d l = F.transpose() * (p[idx[j]] - o) / h;
@@ -586,31 +597,9 @@ void HeightFieldModel::Impl::local_quartic_fit(double x, double y, const Eigen::
   for (std::size_t j = 0; j < got; ++j) uvw[j] = F.transpose() * (p[idx[j]] - o) / h;
   QuarticBasis c;
   if (!fit_quartic(uvw, got, c)) return;
-  // Newton on (a, b): the xy of o + h (a t1 + b t2 + w(a, b) n) must be (x, y), as local_fit's.
-  double a = 0, b = 0, wa = 0, wb = 0;
-  Eigen::Vector3d P;
-  bool converged = false;
-  for (int it = 0; it < 20 && !converged; ++it) {
-    const double w = quartic_at(c, a, b, wa, wb);
-    P = o + h * (a * F.col(0) + b * F.col(1) + w * F.col(2));
-    const Eigen::Vector2d res(P.x() - x, P.y() - y);
-    if (res.norm() < 1e-12 * (1 + h)) {
-      converged = true;
-      break;
-    }
-    const Eigen::Vector3d ta = F.col(0) + wa * F.col(2), tb = F.col(1) + wb * F.col(2);
-    Eigen::Matrix2d J;
-    J << ta.x(), tb.x(), ta.y(), tb.y();
-    J *= h;
-    if (!(std::abs(J.determinant()) > 1e-12 * h * h)) return;
-    const Eigen::Vector2d step = J.inverse() * res;
-    a -= step.x();
-    b -= step.y();
-    if (std::abs(a) > 1 || std::abs(b) > 1) return;  // left the neighbourhood
-  }
-  if (!converged) return;
-  Eigen::Vector3d n = (F.col(0) + wa * F.col(2)).cross(F.col(1) + wb * F.col(2)).normalized();
-  if (n.z() < 0) n = -n;
+  const auto quartic = [&c](double a, double b, double& wa, double& wb) { return quartic_at(c, a, b, wa, wb); };
+  Eigen::Vector3d P, n;
+  if (!point_above(x, y, o, F, h, 1.0, quartic, P, n)) return;
   double quartic_misfit = 0;
   for (std::size_t j = 0; j < got_quadratic; ++j)
     quartic_misfit = std::max(quartic_misfit, h * std::abs(uvw[j].z() - quartic_basis(uvw[j].x(), uvw[j].y()).dot(c)) -
