@@ -22,8 +22,9 @@
 // worse than 6 e the gouge budget 0.9 e − 0.15 δ is itself a clearance, and the ball clears the
 // band by 1.5 times that), and a move whose quarter
 // points (and points 0.5 mm apart on longer moves) reach more than chord_tolerance into it (by
-// default the gouge budget there, 0.9 e − 0.15 δ, step_size.h) gets a lifted point inserted at its worst one
-// (and its halves are checked again, up to max_splits times); a move still too deep after that
+// default the gouge budget there, 0.9 e − 0.15 δ, step_size.h) gets a point inserted at its worst one,
+// raised until it reaches in by 3/4 of that (and its halves are checked again, up to max_splits
+// times); a move still too deep after that
 // is raised whole, both ends, until its probes clear. A lifted ball leaves stock: the report
 // says where and how much, so a planner's weak spot is never hidden.
 #pragma once

@@ -471,6 +471,33 @@ TEST(GougeGuard, SplitsAMoveWhoseMiddleCutsIn) {
   }
 }
 
+TEST(GougeGuard, APointInsertedIntoAMoveIsRaisedOnlyToThreeQuartersOfTheTolerance) {
+  // A move on the clean cap whose straight centre chord sags 0.0095 mm into the sphere in its
+  // middle (centres on the sphere of radius 32 at angles +-acos(1 - 0.0095 / 32)): just over the
+  // chord tolerance 0.9 e = 0.009. One point is inserted there, raised until it reaches in by
+  // 0.75 * 0.009 = 0.00675, not to touch the sphere (0.0095 higher: the cusps beside such a point
+  // then rose by about half that, more than the planner had planned for).
+  auto cloud = cap_cloud();
+  HeightFieldModel surface(cloud);
+  BallClearance clearance(surface, cloud, 2.0);
+  const double half = kR * std::sin(std::acos(1 - 0.0095 / 32));
+  const Toolpath path = cap_move(half);
+  const ToolpathPass& p = path.passes[0];
+  const Eigen::Vector3d a0 = path.centre(p.contact[0], p.normal[0]), b0 = path.centre(p.contact[1], p.normal[1]);
+  EXPECT_NEAR(cap_band_reach(0.5 * (a0 + b0), 0), 0.0095, 1e-9);
+  auto res = guard_gouges(path, clearance, {});
+  EXPECT_EQ(res.report["inserted_positions"], 1);
+  EXPECT_EQ(res.report["lifted_positions"], 1);
+  EXPECT_EQ(res.report["unresolved"], 0);
+  const auto& q = res.path.passes[0];
+  ASSERT_EQ(q.contact.size(), 3u);
+  const Eigen::Vector3d m = res.path.centre(q.contact[1], q.normal[1]);
+  EXPECT_NEAR(cap_band_reach(m, 0), 0.00675, 1e-4);
+  EXPECT_NEAR(m.z() - 0.5 * (a0.z() + b0.z()), 0.0095 - 0.00675, 1e-4);
+  EXPECT_NEAR((m - 0.5 * (a0 + b0)).head<2>().norm(), 0, 1e-9);
+  EXPECT_LE(deepest_along_moves(res.path, 0), 0.009);
+}
+
 TEST(GougeGuard, AMoveTheHalvingsCannotClearIsRaisedWhole) {
   // The move of SplitsAMoveWhoseMiddleCutsIn with no halving allowed: its middle sags about
   // 0.25 mm into the sphere; both ends are raised until every probe is within the chord
