@@ -88,8 +88,11 @@ constexpr double kMisfitFactor = 3.0;
 // certificates passed (gouge bounds 0.0096 / 0.0097, verify.py 0.0495 / 0.0498 whole patch,
 // gouge 0.0086 / 0.0084), but on the tests' sparser 3 mm crest of slope 0.3 (5000 points) the
 // guard lifted balls where the planner had not planned for it: the exact whole-patch scallop
-// 0.049 -> 0.071 (0.056 with half a spacing). The planner would have to plan with that
-// uncertainty too.
+// 0.049 -> 0.071 (0.056 with half a spacing). With the planner's strip margins held to the
+// largest uncertainty within a spacing as well: 0.069, the interior 0.045. The excess is at the
+// rim: the band's samples half a spacing out from the outermost points take the uncertainty
+// grown beyond the edge, and the guard lifts the rim's balls. The catalog crest's contour
+// program needed exactly that (its gouge bound was over e at the rim).
 constexpr double kQuarticFrom = 1e-3;
 
 struct HeightFieldModel::Impl {
