@@ -307,7 +307,7 @@ class PassGuard {
   // reach in by about 3/8 of it plus a quarter of the move's sag. Lifted to touch the band, a
   // point inserted into a chord that sagged just over the tolerance rose by the whole sag: on
   // the clean canopy 0.012 mm, and the cusp beside it by 0.006 mm more than planned.
-  static double inserted_target(double tolerance) { return tolerance > 0 ? 0.75 * tolerance : 1.5 * tolerance; }
+  static double inserted_target(double tolerance) { return tolerance > 0 ? 0.75 * tolerance : lift_target(tolerance); }
 
   // Lifts the sample's ball when it reaches into that band more than position_tolerance (a
   // planned position; then until it only touches it, lift_target) or inserted_target (a point
@@ -317,8 +317,13 @@ class PassGuard {
     auto res = clearance_(c, s.contact);
     auto tolerance = [&] { return planned_position ? position_tolerance(res) : move_tolerance(res); };
     auto target = [&] { return planned_position ? lift_target(tolerance()) : inserted_target(tolerance()); };
-    // (an inserted point in a clearance, as a planned position, only when it reaches past it)
-    if (!(res.reach() > (planned_position || tolerance() <= 0 ? tolerance() : target()))) return false;
+    // lifted when it reaches past its tolerance, or an inserted point past its target (in a
+    // clearance, as a planned position, past the tolerance)
+    auto threshold = [&] {
+      const double tol = tolerance();
+      return planned_position || tol <= 0 ? tol : inserted_target(tol);
+    };
+    if (!(res.reach() > threshold())) return false;
     if (res.reach() > t.deepest) t.deepest = res.reach(), t.deepest_at = s.contact;
     const Eigen::Vector3d planned = c;
     const double z0 = c.z();
