@@ -30,6 +30,13 @@ HarmonicSolver parse_harmonic_solver(const std::string& name) {
 
 namespace {
 
+// Points the fixed ones are not reached from through the rows of L (their rows name only each
+// other): the system is singular there. what(): the node's message for them.
+struct UnreachedPoints : std::runtime_error {
+  UnreachedPoints(const std::string& what, std::vector<int> p) : std::runtime_error(what), points(std::move(p)) {}
+  std::vector<int> points;
+};
+
 constexpr double kMaxResidual = 1e-6;
 // The two-level solver's relative residual: a map as exact as the direct LU's for the planner
 // (tests/nodes/param/harmonic_test.cpp: (u,v) within 1e-8 of the domain's size of the direct
@@ -183,17 +190,15 @@ UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>&
       for (int e = start[j]; e < start[j + 1]; ++e)
         if (!reached[dependent[e]]) reached[dependent[e]] = 1, stack.push_back(dependent[e]);
     }
-    std::size_t cut = 0;
-    Eigen::Index first = -1;
+    std::vector<int> cut;
     for (Eigen::Index i = 0; i < n; ++i)
-      if (!reached[i]) {
-        if (first < 0) first = i;
-        ++cut;
-      }
-    if (cut > 0)
-      throw std::runtime_error(std::to_string(cut) + " points (first: point " + std::to_string(first) +
+      if (!reached[i]) cut.push_back(static_cast<int>(i));
+    if (!cut.empty()) {
+      const std::string what = std::to_string(cut.size()) + " points (first: point " + std::to_string(cut[0]) +
                                ") are not connected to the outer boundary through their neighbours, so "
-                               "their (u,v) is undefined (separate clusters? run cloud.clean or raise k)");
+                               "their (u,v) is undefined (separate clusters? run cloud.clean or raise k)";
+      throw UnreachedPoints(what, std::move(cut));
+    }
   };
   std::optional<std::future<void>> connected;
   if (!same_unknowns) connected = std::async(std::launch::async, check_connected);
@@ -305,12 +310,26 @@ UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>&
   return out;
 }
 
+// solve(L), and where points are not reached through their rows and join is given, solve(join(them)).
+template <class Solve>
+UVMap solve_joining_unreached(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, const JoinRows& join,
+                              const Solve& solve) {
+  try {
+    return solve(L);
+  } catch (const UnreachedPoints& e) {
+    if (!join) throw;
+    return solve(join(e.points));
+  }
+}
+
 }  // namespace
 
 UVMap solve_harmonic(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L, const UVMap& boundary,
                      HarmonicSolver solver,
-                     const std::vector<std::pair<int, Eigen::Vector2d>>& fixed) {
-  return solve_harmonic_reusing(L, boundary, solver, fixed, nullptr, kTwoLevelTolerance);
+                     const std::vector<std::pair<int, Eigen::Vector2d>>& fixed, const JoinRows& join) {
+  return solve_joining_unreached(L, join, [&](const Eigen::SparseMatrix<double, Eigen::RowMajor>& A) {
+    return solve_harmonic_reusing(A, boundary, solver, fixed, nullptr, kTwoLevelTolerance);
+  });
 }
 
 UVMap solve_harmonic_band(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L,
@@ -318,24 +337,26 @@ UVMap solve_harmonic_band(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L,
                           const std::vector<std::uint8_t>& is_boundary,
                           const std::vector<std::vector<int>>& loops, const UVMap& boundary,
                           HarmonicSolver solver,
-                          const std::function<void(double, const std::string&)>& progress) {
+                          const std::function<void(double, const std::string&)>& progress, const JoinRows& join) {
   if (static_cast<std::size_t>(L.rows()) != P.size())
     throw std::invalid_argument("the Laplacian has " + std::to_string(L.rows()) + " rows but the cloud has " +
                                 std::to_string(P.size()) + " points");
   const std::vector<BandPoint> band = outer_band(P, N, is_boundary, loops, boundary.outer_loop, boundary.corners);
   const std::vector<Eigen::Vector2d> zero(boundary.outer_loop.size(), Eigen::Vector2d::Zero());
-  SystemFactor factor;  // both solves usually fix the same points: one factorisation
-  if (progress)
-    progress(0.05, "first solve, the band on the domain's edge (" + std::to_string(L.rows()) +
-                       " points; the sparse factorisation takes most of the time)");
-  UVMap first =
-      solve_harmonic_reusing(L, boundary, solver, band_values(band, boundary, zero), &factor, kBandDepthTolerance);
-  if (progress) progress(0.6, "second solve, the band at its measured depth");
-  UVMap out = solve_harmonic_reusing(
-      L, boundary, solver, band_values(band, boundary, band_depth_slope(band, boundary, first.uv)), &factor,
-      kTwoLevelTolerance);
-  if (progress) progress(1.0, "solved");
-  return out;
+  return solve_joining_unreached(L, join, [&](const Eigen::SparseMatrix<double, Eigen::RowMajor>& A) {
+    SystemFactor factor;  // both solves usually fix the same points: one factorisation
+    if (progress)
+      progress(0.05, "first solve, the band on the domain's edge (" + std::to_string(A.rows()) +
+                         " points; the sparse factorisation takes most of the time)");
+    UVMap first =
+        solve_harmonic_reusing(A, boundary, solver, band_values(band, boundary, zero), &factor, kBandDepthTolerance);
+    if (progress) progress(0.6, "second solve, the band at its measured depth");
+    UVMap out = solve_harmonic_reusing(
+        A, boundary, solver, band_values(band, boundary, band_depth_slope(band, boundary, first.uv)), &factor,
+        kTwoLevelTolerance);
+    if (progress) progress(1.0, "solved");
+    return out;
+  });
 }
 
 }  // namespace scallop

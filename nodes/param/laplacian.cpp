@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "nodes/geom/tangent_frame.h"
@@ -36,16 +37,21 @@ double mean_sq_neighbor_distance(const Neighborhoods& nbrs) {
   return nbrs.sq_dists.empty() ? 0.0 : s / static_cast<double>(nbrs.sq_dists.size());
 }
 
+double heat_time(const Neighborhoods& nbrs, double t) {
+  if (!(t > 0)) t = mean_sq_neighbor_distance(nbrs);
+  return t > 0 ? t : 1.0;  // all points coincide: any t works
+}
+
 namespace {
 
-// Normal of the least-variance direction of p_i and its neighbours (for clouds without normals).
-Eigen::Vector3d local_pca_normal(const std::vector<Eigen::Vector3d>& P, const Neighborhoods& nb,
-                                 std::size_t i) {
+// Normal of the least-variance direction of p_i and its k neighbours idx (for clouds without
+// normals).
+Eigen::Vector3d local_pca_normal(const std::vector<Eigen::Vector3d>& P, std::size_t i, const int* idx, int k) {
   Eigen::Vector3d c = P[i];
-  for (int j = 0; j < nb.k; ++j) c += P[nb.index(i, j)];
-  c /= nb.k + 1;
+  for (int j = 0; j < k; ++j) c += P[idx[j]];
+  c /= k + 1;
   Eigen::Matrix3d cov = (P[i] - c) * (P[i] - c).transpose();
-  for (int j = 0; j < nb.k; ++j) cov += (P[nb.index(i, j)] - c) * (P[nb.index(i, j)] - c).transpose();
+  for (int j = 0; j < k; ++j) cov += (P[idx[j]] - c) * (P[idx[j]] - c).transpose();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
   return es.eigenvectors().col(0);
 }
@@ -55,15 +61,13 @@ Eigen::Vector3d local_pca_normal(const std::vector<Eigen::Vector3d>& P, const Ne
 // (C + eps I) w = 1 is solved through its 2 x 2 form (Sherman-Morrison-Woodbury):
 // (eps I + D^T D)^-1 1 = (1 - D^T (eps I + D D^T)^-1 D 1) / eps; the 1 / eps goes with the
 // normalisation to sum 1. The same weights as a k x k factorisation, in O(k) instead of O(k^3).
-void optimal_weights(const std::vector<Eigen::Vector3d>& P, const Eigen::Vector3d& n,
-                     const Neighborhoods& nb, std::size_t i, double delta, Eigen::VectorXd& w,
-                     Eigen::Matrix2Xd& D) {
-  const int k = nb.k;
+void optimal_weights(const std::vector<Eigen::Vector3d>& P, const Eigen::Vector3d& n, std::size_t i, const int* idx,
+                     int k, double delta, Eigen::VectorXd& w, Eigen::Matrix2Xd& D) {
   Eigen::Vector3d t1, t2;
   tangent_frame(n, t1, t2);
   D.resize(2, k);  // tangent-plane components of p_i - p_j' (= of p_i - p_j)
   for (int j = 0; j < k; ++j) {
-    Eigen::Vector3d d = P[i] - P[nb.index(i, j)];
+    Eigen::Vector3d d = P[i] - P[idx[j]];
     D(0, j) = d.dot(t1);
     D(1, j) = d.dot(t2);
   }
@@ -96,6 +100,25 @@ void optimal_weights(const std::vector<Eigen::Vector3d>& P, const Eigen::Vector3
   w.array() -= z(2);
 }
 
+// The weights of row i over its k neighbours idx (sq their squared distances), not yet
+// normalised: w has k entries.
+void row_weights(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N, std::size_t i,
+                 const int* idx, const double* sq, int k, LaplacianScheme scheme, double t, double regularization,
+                 Eigen::VectorXd& w, Eigen::Matrix2Xd& D) {
+  w.resize(k);
+  switch (scheme) {
+    case LaplacianScheme::Uniform: w.setConstant(1.0); break;
+    case LaplacianScheme::Heat:
+      for (int j = 0; j < k; ++j) w(j) = std::exp(-sq[j] / t);
+      break;
+    case LaplacianScheme::Optimal: {
+      const Eigen::Vector3d nrm = N.empty() ? local_pca_normal(P, i, idx, k) : N[i];
+      optimal_weights(P, nrm, i, idx, k, regularization, w, D);
+      break;
+    }
+  }
+}
+
 }  // namespace
 
 Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<Eigen::Vector3d>& P,
@@ -126,8 +149,7 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<E
     if (idx < 0 || static_cast<std::size_t>(idx) >= n)
       throw std::invalid_argument("a neighbour index is out of range");
 
-  if (scheme == LaplacianScheme::Heat && !(t > 0)) t = mean_sq_neighbor_distance(nbrs);
-  if (scheme == LaplacianScheme::Heat && !(t > 0)) t = 1.0;  // all points coincide: any t works
+  if (scheme == LaplacianScheme::Heat) t = heat_time(nbrs, t);
 
   // Row i: -w_ij at its neighbours' columns and the weights' sum on the diagonal (1 up to
   // rounding; so that the row sums to zero to the last bit), columns sorted, written straight
@@ -158,17 +180,7 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<E
     Eigen::Matrix2Xd D;
     std::vector<std::pair<int, double>> e;
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      switch (scheme) {
-        case LaplacianScheme::Uniform: w.setConstant(1.0); break;
-        case LaplacianScheme::Heat:
-          for (int j = 0; j < k; ++j) w(j) = std::exp(-nbrs.sq_dist(i, j) / t);
-          break;
-        case LaplacianScheme::Optimal: {
-          Eigen::Vector3d nrm = N.empty() ? local_pca_normal(P, nbrs, i) : N[i];
-          optimal_weights(P, nrm, nbrs, i, regularization, w, D);
-          break;
-        }
-      }
+      row_weights(P, N, i, &nbrs.indices[i * k], &nbrs.sq_dists[i * k], k, scheme, t, regularization, w, D);
       double sum = w.sum();
       if (!(std::abs(sum) > 0)) {  // heat kernel underflow: every neighbour is far beyond sqrt(t)
         w.setConstant(1.0);
@@ -199,6 +211,60 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<E
   });
   L.makeCompressed();
   return L;
+}
+
+Eigen::SparseMatrix<double, Eigen::RowMajor> join_rows_both_ways(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L,
+                                                                 const std::vector<Eigen::Vector3d>& P,
+                                                                 const std::vector<Eigen::Vector3d>& N,
+                                                                 LaplacianScheme scheme, double t, double regularization,
+                                                                 const std::vector<int>& points) {
+  const Eigen::Index n = L.rows();
+  if (L.cols() != n || static_cast<std::size_t>(n) != P.size() || (!N.empty() && N.size() != P.size()))
+    throw std::invalid_argument("the Laplacian has " + std::to_string(n) + " rows, the cloud " + std::to_string(P.size()) +
+                                " points and " + std::to_string(N.size()) + " normals");
+  std::vector<char> rebuilt(n, 0);
+  for (int i : points) {
+    if (i < 0 || i >= n)
+      throw std::invalid_argument("point " + std::to_string(i) + " is outside the Laplacian's " + std::to_string(n) +
+                                  " rows");
+    rebuilt[i] = 1;
+  }
+  using RowIt = Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator;
+  std::vector<std::vector<int>> both(n);  // the rebuilt rows' neighbours, both ways
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (RowIt it(L, i); it; ++it) {
+      const int j = static_cast<int>(it.col());
+      if (j == i || it.value() == 0) continue;
+      if (rebuilt[i]) both[i].push_back(j);
+      if (rebuilt[j]) both[j].push_back(static_cast<int>(i));
+    }
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(static_cast<std::size_t>(L.nonZeros()) + points.size() * 32);
+  Eigen::VectorXd w;
+  Eigen::Matrix2Xd D;
+  std::vector<double> sq;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!rebuilt[i]) {
+      for (RowIt it(L, i); it; ++it) entries.emplace_back(static_cast<int>(i), static_cast<int>(it.col()), it.value());
+      continue;
+    }
+    std::vector<int>& nb = both[i];
+    std::sort(nb.begin(), nb.end());
+    nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+    const int k = static_cast<int>(nb.size());
+    sq.resize(nb.size());
+    for (int j = 0; j < k; ++j) sq[j] = (P[i] - P[nb[j]]).squaredNorm();
+    // (the optimal scheme needs 3 neighbours; fewer get equal weights)
+    row_weights(P, N, static_cast<std::size_t>(i), nb.data(), sq.data(), k,
+                scheme == LaplacianScheme::Optimal && k < 3 ? LaplacianScheme::Uniform : scheme, t, regularization, w, D);
+    double sum = w.sum();
+    if (!(std::abs(sum) > 0)) w.setConstant(1.0), sum = k;  // heat kernel underflow, as build_laplacian
+    entries.emplace_back(static_cast<int>(i), static_cast<int>(i), 1.0);
+    for (int j = 0; j < k; ++j) entries.emplace_back(static_cast<int>(i), nb[j], -w(j) / sum);
+  }
+  Eigen::SparseMatrix<double, Eigen::RowMajor> out(n, n);
+  out.setFromTriplets(entries.begin(), entries.end());
+  return out;
 }
 
 }  // namespace scallop

@@ -25,6 +25,9 @@ std::string to_string(LaplacianScheme scheme);
 
 // Automatic heat-kernel time: the mean squared neighbour distance over all KNN pairs (mm^2).
 double mean_sq_neighbor_distance(const Neighborhoods& nbrs);
+// The heat-kernel time build_laplacian uses for a given t: t itself when positive, else
+// mean_sq_neighbor_distance (1 where every point coincides).
+double heat_time(const Neighborhoods& nbrs, double t);
 
 // P     #P by 3 positions (mm)
 // N     #P by 3 unit normals, or empty: the optimal scheme then uses local PCA normals of the
@@ -52,5 +55,19 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> build_laplacian(const std::vector<E
                                                              LaplacianScheme scheme, double t = 0,
                                                              double regularization = 1e-3,
                                                              const std::function<void(double)>& progress = {});
+
+// L with the rows of `points` rebuilt by `scheme` (t, regularization as build_laplacian's; t > 0)
+// over their neighbours both ways: the points a row names and the points whose rows name it. A
+// region whose points all have their k nearest neighbours inside it (a denser patch beside a
+// sparser one, as a scan's overlapping strips leave) is reached by its surroundings' rows but
+// reaches nothing outside through its own, so the harmonic system is singular there; rebuilt
+// this way each of its rows names the points around it that name it, with the scheme's
+// precision (optimal: linear). Rows of other points are unchanged. P, N as build_laplacian's.
+// Throws std::invalid_argument for mismatched sizes or a point index outside L.
+Eigen::SparseMatrix<double, Eigen::RowMajor> join_rows_both_ways(const Eigen::SparseMatrix<double, Eigen::RowMajor>& L,
+                                                                 const std::vector<Eigen::Vector3d>& P,
+                                                                 const std::vector<Eigen::Vector3d>& N,
+                                                                 LaplacianScheme scheme, double t, double regularization,
+                                                                 const std::vector<int>& points);
 
 }  // namespace scallop

@@ -10,7 +10,7 @@ namespace scallop::param_nodes {
 NodeDecl make_laplacian_node() {
   NodeDecl d;
   d.type = "param.laplacian";
-  d.version = 2;  // 2: optimal weights through the 2 x 2 form (the same weights, other rounding)
+  d.version = 3;  // 2: optimal weights through the 2 x 2 form (the same weights, other rounding); 3: keeps its t and regularization (param.harmonic rebuilds rows with them)
   // Cheaper to build again (1.2 s at a million points) than to write and read its #P (k + 1)
   // entries (200 MB, 7 s of a cold run's disk cache at a million points); only param.harmonic,
   // whose own map is cached, reads it.
@@ -32,9 +32,10 @@ NodeDecl make_laplacian_node() {
     try {
       LaplacianScheme s = parse_laplacian_scheme(ctx.text("scheme"));
       out.scheme = to_string(s);
+      out.heat_time = s == LaplacianScheme::Heat ? heat_time(*nbrs, ctx.number("t")) : 0.0;
+      out.regularization = ctx.number("regularization");
       out.L = build_laplacian(cloud->points, cloud->has_normals() ? cloud->normals : std::vector<Eigen::Vector3d>{},
-                              *nbrs, s, ctx.number("t"), ctx.number("regularization"),
-                              [&ctx](double f) { ctx.progress(f); });
+                              *nbrs, s, out.heat_time, out.regularization, [&ctx](double f) { ctx.progress(f); });
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());
     }

@@ -23,6 +23,8 @@ ValuePtr BoundaryLoops::deserialize(std::istream& in) {
 
 void Laplacian::serialize(std::ostream& out) const {
   bin::write_string(out, scheme);
+  bin::write_f64(out, heat_time);
+  bin::write_f64(out, regularization);
   bin::write_u64(out, static_cast<std::uint64_t>(L.rows()));
   bin::write_u64(out, static_cast<std::uint64_t>(L.cols()));
   std::vector<int> rows, cols;
@@ -41,6 +43,8 @@ void Laplacian::serialize(std::ostream& out) const {
 ValuePtr Laplacian::deserialize(std::istream& in) {
   auto l = std::make_shared<Laplacian>();
   l->scheme = bin::read_string(in);
+  l->heat_time = bin::read_f64(in);
+  l->regularization = bin::read_f64(in);
   auto nr = static_cast<Eigen::Index>(bin::read_u64(in));
   auto nc = static_cast<Eigen::Index>(bin::read_u64(in));
   auto rows = bin::read_vector<int>(in);

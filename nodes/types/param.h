@@ -31,6 +31,8 @@ std::vector<std::vector<Eigen::Vector2d>> loop_polygons_xy(const BoundaryLoops& 
 // ((L f)_i = sum_j w_ij (f_i - f_j), rows sum to zero).
 struct Laplacian final : Value {
   std::string scheme;  // "uniform", "heat", "optimal"
+  double heat_time = 0;       // mm^2, the heat scheme's t
+  double regularization = 0;  // the optimal scheme's delta
   Eigen::SparseMatrix<double, Eigen::RowMajor> L;
 
   std::string type_name() const override { return "Laplacian"; }

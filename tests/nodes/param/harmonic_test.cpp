@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 #include <vector>
 
+#include "nodes/param/laplacian.h"
 #include "tests/nodes/param/param_test_util.h"
 
 namespace scallop {
@@ -145,6 +146,35 @@ TEST(Harmonic, DisconnectedClusterIsAClearError) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("not connected to the outer boundary"), std::string::npos) << e.what();
   }
+}
+
+TEST(Harmonic, ADenseClusterWhoseNeighboursAreAllInsideItIsJoinedToThePointsAroundIt) {
+  // 20 points 0.05 apart inside the disk (spacing about 0.6): their 12 nearest neighbours are all
+  // among themselves, so their rows lead nowhere (as at a scan's overlap), while the points around
+  // them name them. Without `join` that is the error; with it the join is asked for exactly those
+  // points and, the rows rebuilt with the optimal scheme, an affine boundary still gives the
+  // affine map everywhere.
+  PointCloud c = test::random_disk(800, 10, 14);
+  for (int i = 0; i < 20; ++i)
+    c.points.emplace_back(3 + 0.05 * (i % 5), 2 + 0.05 * (i / 5), 0), c.normals.push_back(Eigen::Vector3d::UnitZ());
+  auto nb = compute_knn(c.points, 12);
+  UVMap b;
+  b.domain = "disk";
+  for (int i = 0; i < 800; ++i)
+    if (c.points[i].head<2>().norm() > 9.5) b.outer_loop.push_back(i);
+  auto f = [](const Eigen::Vector3d& p) { return Eigen::Vector2d(0.5 * p.x() - 0.2 * p.y() + 1, 0.3 * p.x() + 2 * p.y()); };
+  for (int i : b.outer_loop) b.boundary_uv.push_back(f(c.points[i]));
+  const auto L = build_laplacian(c.points, c.normals, nb, LaplacianScheme::Optimal);
+  EXPECT_THROW(solve_harmonic(L, b, HarmonicSolver::Direct), std::runtime_error);
+  std::vector<int> asked;
+  const UVMap m = solve_harmonic(L, b, HarmonicSolver::Direct, {}, [&](const std::vector<int>& points) {
+    asked = points;
+    return join_rows_both_ways(L, c.points, c.normals, LaplacianScheme::Optimal, 0, 1e-3, points);
+  });
+  std::vector<int> cluster;
+  for (int i = 800; i < 820; ++i) cluster.push_back(i);
+  EXPECT_EQ(asked, cluster);
+  for (std::size_t i = 0; i < c.size(); ++i) EXPECT_LT((m.uv[i] - f(c.points[i])).norm(), 1e-8) << "point " << i;
 }
 
 TEST(Harmonic, FixedPointsKeepTheirValues) {

@@ -114,6 +114,50 @@ TEST(Laplacian, OptimalWeightsSolveTheRegularizedKByKSystem) {
   EXPECT_LT(worst, 1e-12);
 }
 
+TEST(Laplacian, RowsJoinedBothWaysAverageTheirNeighboursEitherWay) {
+  // 0 names 1 and 2; 1 and 2 name only each other; 3 names 0 and 2. Joined with the uniform
+  // scheme, row 1 averages 2 and 0 (which names it), row 2 averages 1, 0 and 3; rows 0 and 3 are
+  // unchanged.
+  const std::vector<Eigen::Vector3d> P = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  Eigen::SparseMatrix<double, Eigen::RowMajor> L(4, 4);
+  std::vector<Eigen::Triplet<double>> t = {{0, 0, 1},    {0, 1, -0.25}, {0, 2, -0.75}, {1, 1, 1}, {1, 2, -1},
+                                           {2, 2, 1},    {2, 1, -1},    {3, 3, 1},     {3, 0, -0.6}, {3, 2, -0.4}};
+  L.setFromTriplets(t.begin(), t.end());
+  const Eigen::MatrixXd J = Eigen::MatrixXd(join_rows_both_ways(L, P, {}, LaplacianScheme::Uniform, 1, 1e-3, {1, 2}));
+  Eigen::MatrixXd expected(4, 4);
+  expected << 1, -0.25, -0.75, 0,  //
+      -0.5, 1, -0.5, 0,            //
+      -1.0 / 3, -1.0 / 3, 1, -1.0 / 3,  //
+      -0.6, 0, -0.4, 1;
+  EXPECT_LT((J - expected).cwiseAbs().maxCoeff(), 1e-15) << J;
+  EXPECT_THROW(join_rows_both_ways(L, P, {}, LaplacianScheme::Uniform, 1, 1e-3, {4}), std::invalid_argument);
+  EXPECT_THROW(join_rows_both_ways(L, {P[0]}, {}, LaplacianScheme::Uniform, 1, 1e-3, {1}), std::invalid_argument);
+}
+
+TEST(Laplacian, RowsJoinedWithOptimalWeightsKeepLinearPrecision) {
+  // A tight cluster inside a planar disk: its 12 nearest neighbours are its own, and the rows
+  // rebuilt over both ways with the optimal scheme still reproduce the points' own positions
+  // (sum_j w_ij p_j = p_i on a plane), as every other row does.
+  PointCloud c = test::random_disk(600, 10, 21);
+  for (int i = 0; i < 16; ++i)
+    c.points.emplace_back(3 + 0.04 * (i % 4), -2 + 0.04 * (i / 4), 0), c.normals.push_back(Eigen::Vector3d::UnitZ());
+  const auto nb = compute_knn(c.points, 12);
+  const auto L = build_laplacian(c.points, c.normals, nb, LaplacianScheme::Optimal);
+  std::vector<int> cluster;
+  for (int i = 600; i < 616; ++i) cluster.push_back(i);
+  const auto J = join_rows_both_ways(L, c.points, c.normals, LaplacianScheme::Optimal, 0, 1e-3, cluster);
+  Eigen::MatrixXd X(c.size(), 2);
+  for (std::size_t i = 0; i < c.size(); ++i) X.row(i) = c.points[i].head<2>().transpose();
+  const Eigen::MatrixXd LX = J * X;
+  for (int i : cluster) {
+    EXPECT_LT(LX.row(i).norm(), 1e-12) << "row " << i;
+    int outside = 0;  // the rebuilt row names points around the cluster
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(J, i); it; ++it) outside += it.col() < 600;
+    EXPECT_GT(outside, 0) << "row " << i;
+  }
+  EXPECT_EQ((Eigen::MatrixXd(J).topRows(600) - Eigen::MatrixXd(L).topRows(600)).cwiseAbs().maxCoeff(), 0.0);
+}
+
 TEST(Laplacian, Errors) {
   PointCloud c = wavy_cloud(50, 5);
   Neighborhoods nb2 = compute_knn(c.points, 2);
