@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Runs both shipped graphs on the real clouds of ../shared/data and prints, per run, the
-# certificate (post.simulate) or the error that stopped it.
+# certificate (post.simulate) or the error that stopped it. The hemisphere's programs are then
+# judged by verify.py (SCALLOP_TOOLS, default ../shared/tools) against its true surface, the
+# sphere of radius 50 up to the trim's 75 degrees (bench/sphere_cap_mesh.py).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 data=${SCALLOP_DATA:-../shared/data}
@@ -21,4 +23,14 @@ for run in "${runs[@]}"; do
       echo "| $name (x$scale) | $graph | ${err#error: } |||||"
     fi
   done
+done
+tools=${SCALLOP_TOOLS:-../shared/tools}
+cap="$work/sphere_cap75.ply"
+[ -f "$cap" ] || /usr/bin/python3 bench/sphere_cap_mesh.py -o "$cap" --radius 50 --max-angle 75 >/dev/null
+for graph in zigzag contour; do
+  gcode="$work/hemisphere_$graph/gcode.ngc"
+  [ -f "$gcode" ] || continue
+  /usr/bin/python3 "$tools/verify.py" --gcode "$gcode" --tool-radius 4 --scallop 0.05 --chord 0.01 --mesh "$cap" \
+    --json "$work/hemisphere_$graph.verify.json" >/dev/null
+  /usr/bin/python3 -c "import json,sys; r=json.load(open(sys.argv[1])); print(f\"| hemisphere (x50), true sphere | $graph | verify.py | whole {r['scallop_max']:.4f}, interior {r['scallop_max_interior']:.4f} | {r['gouge_max']:.4f} | {r['uncut_fraction']:.4f} | {r['pass']} |\")" "$work/hemisphere_$graph.verify.json"
 done
