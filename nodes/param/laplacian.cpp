@@ -244,11 +244,11 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> join_rows_both_ways(const Eigen::Sp
   Eigen::Matrix2Xd D;
   std::vector<double> sq;
   for (Eigen::Index i = 0; i < n; ++i) {
-    if (!rebuilt[i]) {
+    std::vector<int>& nb = both[i];
+    if (!rebuilt[i] || nb.empty()) {  // (a point no row joins to any other keeps its own)
       for (RowIt it(L, i); it; ++it) entries.emplace_back(static_cast<int>(i), static_cast<int>(it.col()), it.value());
       continue;
     }
-    std::vector<int>& nb = both[i];
     std::sort(nb.begin(), nb.end());
     nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
     const int k = static_cast<int>(nb.size());
@@ -259,8 +259,12 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> join_rows_both_ways(const Eigen::Sp
                 scheme == LaplacianScheme::Optimal && k < 3 ? LaplacianScheme::Uniform : scheme, t, regularization, w, D);
     double sum = w.sum();
     if (!(std::abs(sum) > 0)) w.setConstant(1.0), sum = k;  // heat kernel underflow, as build_laplacian
-    entries.emplace_back(static_cast<int>(i), static_cast<int>(i), 1.0);
-    for (int j = 0; j < k; ++j) entries.emplace_back(static_cast<int>(i), nb[j], -w(j) / sum);
+    double diagonal = 0;  // the weights' sum, so that the row sums to zero to the last bit
+    for (int j = 0; j < k; ++j) {
+      entries.emplace_back(static_cast<int>(i), nb[j], -w(j) / sum);
+      diagonal += w(j) / sum;
+    }
+    entries.emplace_back(static_cast<int>(i), static_cast<int>(i), diagonal);
   }
   Eigen::SparseMatrix<double, Eigen::RowMajor> out(n, n);
   out.setFromTriplets(entries.begin(), entries.end());
