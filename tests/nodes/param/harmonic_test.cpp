@@ -7,7 +7,10 @@
 #include <tbb/parallel_for.h>
 #include <vector>
 
+#include "engine/node.h"
+#include "nodes/all_nodes.h"
 #include "nodes/param/laplacian.h"
+#include "nodes/types/param.h"
 #include "tests/nodes/param/param_test_util.h"
 
 namespace scallop {
@@ -175,6 +178,41 @@ TEST(Harmonic, ADenseClusterWhoseNeighboursAreAllInsideItIsJoinedToThePointsArou
   for (int i = 800; i < 820; ++i) cluster.push_back(i);
   EXPECT_EQ(asked, cluster);
   for (std::size_t i = 0; i < c.size(); ++i) EXPECT_LT((m.uv[i] - f(c.points[i])).norm(), 1e-8) << "point " << i;
+}
+
+TEST(Harmonic, NodeJoinsRowsThatLeadNowhereAndSaysHowMany) {
+  // The node, as the shipped graphs run it (the band fixed): the same dense cluster is joined with
+  // the Laplacian's own scheme, and the count reaches the terminal; the map is finite everywhere.
+  PointCloud c = test::random_disk(800, 10, 14);
+  for (int i = 0; i < 20; ++i)
+    c.points.emplace_back(3 + 0.05 * (i % 5), 2 + 0.05 * (i / 5), 0), c.normals.push_back(Eigen::Vector3d::UnitZ());
+  const auto nb = compute_knn(c.points, 12);
+  BoundaryLoops loops;
+  loops.is_boundary = detect_boundary(c.points, c.normals, nb, std::numbers::pi / 2);
+  loops.loops = order_boundary_loops(c.points, c.normals, nb, loops.is_boundary);
+  Laplacian lap;
+  lap.scheme = "optimal";
+  lap.regularization = 1e-3;
+  lap.L = build_laplacian(c.points, c.normals, nb, LaplacianScheme::Optimal);
+  const NodeDecl& d = *builtin_registry().find("param.harmonic");
+  nlohmann::json params;
+  for (const auto& p : d.params) params[p.name] = p.default_value;
+  std::vector<std::string> said;
+  NodeContext ctx(d, "harmonic", "part", params,
+                  {{"laplacian", std::make_shared<const Laplacian>(lap)},
+                   {"map", std::make_shared<const UVMap>(map_boundary(c.points, loops.loops[0], BoundaryDomain::Disk))},
+                   {"loops", std::make_shared<const BoundaryLoops>(loops)},
+                   {"cloud", std::make_shared<const PointCloud>(c)}},
+                  nullptr, [&](const std::string& m) { said.push_back(m); });
+  d.run(ctx);
+  const auto map = std::dynamic_pointer_cast<const UVMap>(ctx.take_outputs().at("map"));
+  ASSERT_TRUE(map);
+  for (const auto& q : map->uv) ASSERT_TRUE(q.allFinite());
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_EQ(said[0],
+            "20 points had their nearest neighbours all among themselves (a denser region beside a sparser one), so "
+            "no row led from them to the boundary: their rows were rebuilt over their neighbours both ways, the "
+            "points they name and those naming them");
 }
 
 TEST(Harmonic, FixedPointsKeepTheirValues) {
