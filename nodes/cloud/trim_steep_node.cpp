@@ -23,7 +23,7 @@ std::string fmt(double x) {
 NodeDecl make_trim_steep_node() {
   NodeDecl d;
   d.type = "cloud.trim_steep";
-  d.version = 2;  // 2: the kept cloud's k nearest neighbours as an output
+  d.version = 3;  // 2: the kept cloud's k nearest neighbours as an output; 3: a piece apart is said so (the cached warning)
   d.description =
       "trims a patch's steep rim (points steeper than max_slope, and what that cuts off) so the "
       "rest can be planned and certified; the trimmed band is reported as not machined";
@@ -75,13 +75,21 @@ NodeDecl make_trim_steep_node() {
                       " degrees: nothing left to machine from above (raise max_slope)");
     if (trimmed > 0) {
       const TrimmedRegion& g = r.regions.front();
+      // With no steep point the pieces left are apart from the patch whatever max_slope is (a
+      // clamp, a second object in the scan): raising it would not keep them.
+      const std::string what =
+          r.steep == 0 ? " apart from the largest connected piece, which is machined"
+                       : " steeper than " + fmt(o.max_slope_deg) + " degrees or cut off by them";
+      const std::string advice =
+          r.steep == 0 ? "; not connected to it through their " + std::to_string(o.k) +
+                             " nearest neighbours: give such a piece as a part of its own to machine it"
+                       : "; raise max_slope to keep more";
+      const std::size_t pieces = r.regions.size();
       ctx.warn("not machined: " + std::to_string(trimmed) + " points (" + fmt(r.trimmed_area) +
-               " mm2, " + fmt(100 * r.trimmed_area / r.area) + " % of the area) steeper than " +
-               fmt(o.max_slope_deg) + " degrees or cut off by them, in " +
-               std::to_string(r.regions.size()) + (r.regions.size() == 10 ? " or more" : "") +
-               " pieces; the largest (" + fmt(g.area) + " mm2) from x " + fmt(g.min.x()) + " to " +
-               fmt(g.max.x()) + ", y " + fmt(g.min.y()) + " to " + fmt(g.max.y()) +
-               "; raise max_slope to keep more");
+               " mm2, " + fmt(100 * r.trimmed_area / r.area) + " % of the area)" + what + ", in " +
+               std::to_string(pieces) + (pieces == 10 ? " or more" : "") + (pieces == 1 ? " piece" : " pieces") +
+               "; the largest (" + fmt(g.area) + " mm2) from x " + fmt(g.min.x()) + " to " +
+               fmt(g.max.x()) + ", y " + fmt(g.min.y()) + " to " + fmt(g.max.y()) + advice);
     }
     PointCloud out;
     out.points.reserve(r.kept.size());

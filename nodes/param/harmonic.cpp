@@ -58,7 +58,8 @@ constexpr double kBandDepthTolerance = 1e-8;
 constexpr Eigen::Index kTwoLevelFrom = 50000;
 const char* kSingular =
     "the harmonic map system is singular: some points are not connected to the outer boundary "
-    "through their neighbours (separate clusters? run cloud.clean or raise k)";
+    "through their neighbours (a piece of the cloud apart from the patch? cloud.trim_steep keeps the "
+    "largest connected piece and reports the rest)";
 
 template <class Solver>
 Eigen::MatrixXd solve_iterative(Solver& s, const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& B,
@@ -196,7 +197,8 @@ UVMap solve_harmonic_reusing(const Eigen::SparseMatrix<double, Eigen::RowMajor>&
     if (!cut.empty()) {
       const std::string what = std::to_string(cut.size()) + " points (first: point " + std::to_string(cut[0]) +
                                ") are not connected to the outer boundary through their neighbours, so "
-                               "their (u,v) is undefined (separate clusters? run cloud.clean or raise k)";
+                               "their (u,v) is undefined (a piece of the cloud apart from the patch? "
+                               "cloud.trim_steep keeps the largest connected piece and reports the rest)";
       throw UnreachedPoints(what, std::move(cut));
     }
   };

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <random>
 
@@ -136,6 +137,28 @@ TEST(TrimSteepNode, ItsParametersAreTrimSteepOptions) {
                        "expected 1 .. 90 deg");
 }
 
+// The node run on `pc` with its defaults and `max_slope`: its outputs and what it said.
+struct TrimNodeRun {
+  std::map<std::string, ValuePtr> out;
+  std::shared_ptr<const PointCloud> cloud;
+  std::shared_ptr<const Report> report;
+  std::vector<std::string> said;
+};
+TrimNodeRun run_trim_node(const PointCloud& pc, double max_slope) {
+  const NodeDecl& d = *builtin_registry().find("cloud.trim_steep");
+  nlohmann::json params;
+  for (const auto& p : d.params) params[p.name] = p.default_value;
+  params["max_slope"] = max_slope;
+  TrimNodeRun r;
+  NodeContext ctx(d, "trim", "cap", params, {{"cloud", std::make_shared<const PointCloud>(pc)}}, nullptr,
+                  [&](const std::string& m) { r.said.push_back(m); });
+  d.run(ctx);
+  r.out = ctx.take_outputs();
+  r.cloud = std::dynamic_pointer_cast<const PointCloud>(r.out.at("cloud"));
+  r.report = std::dynamic_pointer_cast<const Report>(r.out.at("report"));
+  return r;
+}
+
 TEST(TrimSteepNode, SaysWhatIsNotMachinedAndKeepsTheRest) {
   const NodeDecl& d = *builtin_registry().find("cloud.trim_steep");
   PointCloud pc;
@@ -144,13 +167,8 @@ TEST(TrimSteepNode, SaysWhatIsNotMachinedAndKeepsTheRest) {
   nlohmann::json params;
   for (const auto& p : d.params) params[p.name] = p.default_value;
   params["max_slope"] = 70.0;
-  std::vector<std::string> said;
-  NodeContext ctx(d, "trim", "cap", params, {{"cloud", std::make_shared<const PointCloud>(pc)}}, nullptr,
-                  [&](const std::string& m) { said.push_back(m); });
-  d.run(ctx);
-  auto out = ctx.take_outputs();
-  auto cloud = std::dynamic_pointer_cast<const PointCloud>(out.at("cloud"));
-  auto report = std::dynamic_pointer_cast<const Report>(out.at("report"));
+  const TrimNodeRun run = run_trim_node(pc, 70.0);
+  const auto& [out, cloud, report, said] = run;
   ASSERT_TRUE(cloud && report);
   EXPECT_EQ(report->data["kept"], cloud->size());
   EXPECT_EQ(cloud->uncertainty.size(), cloud->size());
@@ -160,7 +178,7 @@ TEST(TrimSteepNode, SaysWhatIsNotMachinedAndKeepsTheRest) {
                           0),
             0u)
       << said[0];
-  EXPECT_NE(said[0].find("steeper than 70 degrees or cut off by them, in 1 pieces"), std::string::npos) << said[0];
+  EXPECT_NE(said[0].find("steeper than 70 degrees or cut off by them, in 1 piece;"), std::string::npos) << said[0];
 
   // its neighbours are cloud.knn's on the kept points: whether some were trimmed (computed
   // again on them) or none (the trim's own, handed on)
@@ -209,6 +227,34 @@ TEST(TrimSteepNode, SaysWhatIsNotMachinedAndKeepsTheRest) {
               std::string::npos)
         << e.what();
   }
+}
+
+std::string g4(double x) {  // as the node prints numbers
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", x);
+  return b;
+}
+
+TEST(TrimSteepNode, APieceApartFromThePatchIsNamedApartNotSteep) {
+  // A gentle cap and, 30 mm beyond it, a 6 x 6 grid of points (a clamp's top in the scan): no
+  // point is steep, so raising max_slope would keep nothing more; the warning says the piece is
+  // apart and what would machine it, word for word.
+  PointCloud pc;
+  pc.points = sphere_cap(30, 30, 4000, 3);
+  for (int i = 0; i < 36; ++i) pc.points.emplace_back(50 + 0.3 * (i % 6), 0.3 * (i / 6), 0.0);
+  const TrimNodeRun run = run_trim_node(pc, 75.0);
+  const auto& [out, cloud, report, said] = run;
+  ASSERT_TRUE(cloud && report);
+  EXPECT_EQ(cloud->size(), 4000u);
+  EXPECT_EQ(report->data["steep"], 0);
+  EXPECT_EQ(report->data["cut_off"], 36);
+  ASSERT_EQ(said.size(), 1u);
+  const double area = report->data["trimmed_area_mm2"], whole = report->data["area_mm2"];
+  EXPECT_EQ(said[0], "not machined: 36 points (" + g4(area) + " mm2, " + g4(100 * area / whole) +
+                         " % of the area) apart from the largest connected piece, which is machined, in 1 "
+                         "piece; the largest (" + g4(area) + " mm2) from x 50 to 51.5, y 0 to 1.5; not "
+                         "connected to it through their 16 nearest neighbours: give such a piece as a part "
+                         "of its own to machine it");
 }
 
 }  // namespace

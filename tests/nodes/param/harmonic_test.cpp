@@ -9,6 +9,7 @@
 
 #include "engine/node.h"
 #include "nodes/all_nodes.h"
+#include "nodes/cloud/trim_steep.h"
 #include "nodes/param/laplacian.h"
 #include "nodes/types/param.h"
 #include "tests/nodes/param/param_test_util.h"
@@ -148,7 +149,16 @@ TEST(Harmonic, DisconnectedClusterIsAClearError) {
     FAIL() << "expected an error";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("not connected to the outer boundary"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("(a piece of the cloud apart from the patch? cloud.trim_steep keeps the "
+                                         "largest connected piece and reports the rest)"),
+              std::string::npos)
+        << e.what();
   }
+  // The advice works: the trim keeps the disk and leaves the cluster out.
+  const TrimSteepResult trimmed = trim_steep(c.points, TrimSteepOptions{});
+  EXPECT_EQ(trimmed.kept.size(), 800u);
+  EXPECT_EQ(trimmed.cut_off, 20u);
+  EXPECT_EQ(trimmed.kept.back(), 799u);
 }
 
 TEST(Harmonic, ADenseClusterWhoseNeighboursAreAllInsideItIsJoinedToThePointsAroundIt) {
