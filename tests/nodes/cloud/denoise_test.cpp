@@ -451,7 +451,7 @@ TEST(DenoiseAuto, MoreNoisePicksALargerK) {
     const DenoiseResult r = mls_denoise(P, {}, o);
     EXPECT_FALSE(r.skipped);
     EXPECT_NEAR(r.noise_sigma, sigma, 0.15 * sigma);
-    EXPECT_EQ(r.k, choose_denoise_k(r.noise_sigma, o.tolerance));
+    EXPECT_EQ(r.k, 4 * choose_denoise_k(r.noise_sigma, o.tolerance));  // widen 4, the default
     EXPECT_NEAR(r.moved_rms, sigma, 0.2 * sigma);  // the noise is what moved
     EXPECT_LT(rms_plane_distance(r.points, 0.2, 0.1, 0), sigma / 2.5);
     ks.push_back(r.k);
@@ -461,9 +461,10 @@ TEST(DenoiseAuto, MoreNoisePicksALargerK) {
   {  // widen: the widest of several scales takes that many times the one-scale k
     const auto P = noisy_plane(0.2, 0.1, 0, 30, 30, 2000, 0.008, false, 11);
     DenoiseOptions w = o;
-    w.widen = 4;
+    EXPECT_EQ(w.widen, 4);
+    w.widen = 2;
     const DenoiseResult r = mls_denoise(P, {}, w);
-    EXPECT_EQ(r.k, 4 * choose_denoise_k(r.noise_sigma, w.tolerance));
+    EXPECT_EQ(r.k, 2 * choose_denoise_k(r.noise_sigma, w.tolerance));
     w.scales = 1;  // one scale: k as chosen
     EXPECT_EQ(mls_denoise(P, {}, w).k, choose_denoise_k(r.noise_sigma, w.tolerance));
     w.widen = 0;
@@ -544,7 +545,7 @@ TEST(DenoiseNode, AutomaticModeReports) {
   EXPECT_EQ(report->data.at("skipped"), false);
   const double sigma = report->data.at("noise_sigma");
   EXPECT_NEAR(sigma, 0.01, 0.0015);
-  EXPECT_EQ(report->data.at("k"), choose_denoise_k(sigma, 0.004));
+  EXPECT_EQ(report->data.at("k"), DenoiseOptions{}.widen * choose_denoise_k(sigma, 0.004));
   EXPECT_GT(report->data.at("moved_rms").get<double>(), 0.007);
   // every point carries its bound: by default (7 scales) kUncertaintyFactorMultiScale standard
   // errors of its kept fit plus its bias bound
