@@ -24,8 +24,6 @@ namespace {
 
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
-using Vector6d = Eigen::Matrix<double, 6, 1>;
-using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
 struct Projection {
   Vector3d point, normal;
@@ -66,62 +64,78 @@ bool weighted_frame(const Vector3d* X, const double* d2, int m, double h2, const
   return true;
 }
 
-// Basis of the quadric w = a + b s + c t + d s^2 + e s t + f t^2 at frame coordinates (s, t).
-Vector6d quadric_basis(double s, double t) {
-  Vector6d phi;
-  phi << 1, s, t, s * s, s * t, t * t;
+// Bases of the local height w(s, t) at frame coordinates (s, t): the quadric
+// a + b s + c t + d s^2 + e s t + f t^2 (6 terms) and the cubic, which adds s^3, s^2 t, s t^2 and
+// t^3 (10 terms). Both start with 1, s, t, so coef(0) is the offset and coef(1), coef(2) the
+// gradient at the centre whatever the degree.
+template <int N>
+Eigen::Matrix<double, N, 1> polynomial_basis(double s, double t) {
+  static_assert(N == 6 || N == 10);
+  Eigen::Matrix<double, N, 1> phi;
+  if constexpr (N == 6) {
+    phi << 1, s, t, s * s, s * t, t * t;
+  } else {
+    phi << 1, s, t, s * s, s * t, t * t, s * s * s, s * s * t, s * t * t, t * t * t;
+  }
   return phi;
 }
 
-// The Gaussian-weighted least-squares quadric w = a + b s + c t + d s^2 + e s t + f t^2 of a
+// The Gaussian-weighted least-squares polynomial w = coef . polynomial_basis<N>(s, t) of a
 // neighbourhood in the PCA frame of its reference plane (steps 1 and 2 of the projection below).
-struct QuadricFit {
+template <int N>
+struct PolynomialFit {
+  using Vector = Eigen::Matrix<double, N, 1>;
+  using Matrix = Eigen::Matrix<double, N, N>;
   Vector3d n, t1, t2;    // the frame: normal (oriented along `up`) and tangents
   double inv_h = 0;      // frame coordinates are scaled by 1/h: s = u / h, t = v / h
-  Matrix6d B;            // Phi^T W^2 Phi, for the variance of the coefficients
-  Eigen::LDLT<Matrix6d> ldlt;  // of A = Phi^T W Phi
-  Vector6d coef;
+  Matrix B;              // Phi^T W^2 Phi, for the variance of the coefficients
+  Eigen::LDLT<Matrix> ldlt;  // of A = Phi^T W Phi
+  Vector coef;
 };
 
 // Fits X[0..m) (squared distances d2[0..m) from X[0], Gaussian weights exp(-d2 / h2) into w,
 // the points' frame coordinates (s, t, offset along n) into local, for residual_variance).
 // False for a degenerate neighbourhood (coincident or collinear points, a singular system).
-bool fit_quadric(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up,
-                 std::vector<double>& w, std::vector<Vector3d>& local, QuadricFit& f) {
+template <int N>
+bool fit_polynomial(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up,
+                    std::vector<double>& w, std::vector<Vector3d>& local, PolynomialFit<N>& f) {
+  using Vector = typename PolynomialFit<N>::Vector;
+  using Matrix = typename PolynomialFit<N>::Matrix;
   // Step 1: reference plane.
   if (!weighted_frame(X, d2, m, h2, up, w, f.n, f.t1, f.t2)) return false;
-  // Step 2: weighted least squares, with the frame coordinates scaled by h so that the 6x6
-  // normal equations are well scaled whatever the units.
+  // Step 2: weighted least squares, with the frame coordinates scaled by h so that the normal
+  // equations are well scaled whatever the units.
   f.inv_h = 1.0 / std::sqrt(h2);
-  Matrix6d A = Matrix6d::Zero();
-  f.B = Matrix6d::Zero();
-  Vector6d rhs = Vector6d::Zero();
+  Matrix A = Matrix::Zero();
+  f.B = Matrix::Zero();
+  Vector rhs = Vector::Zero();
   local.resize(m);
   for (int j = 0; j < m; ++j) {
     const Vector3d r = X[j] - X[0];
     local[j] = Vector3d(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h, r.dot(f.n));
-    const Vector6d phi = quadric_basis(local[j].x(), local[j].y());
+    const Vector phi = polynomial_basis<N>(local[j].x(), local[j].y());
     add_weighted_outer_lower(A, phi, w[j]);
     add_weighted_outer_lower(f.B, phi, w[j] * w[j]);
     rhs += (w[j] * local[j].z()) * phi;
   }
-  A = A.selfadjointView<Eigen::Lower>();
-  f.B = f.B.selfadjointView<Eigen::Lower>();
+  A = A.template selfadjointView<Eigen::Lower>();
+  f.B = f.B.template selfadjointView<Eigen::Lower>();
   f.ldlt.compute(A);
   if (f.ldlt.info() != Eigen::Success || !(f.ldlt.rcond() > 1e-10)) return false;
   f.coef = f.ldlt.solve(rhs);
   return f.coef.allFinite();
 }
 
-// The residual variance of the weighted quadric fit f to m points (weights w, frame coordinates
-// local, as fit_quadric gave them), an estimate of sigma^2 when the quadric follows the surface,
-// and its effective degrees of freedom. False when they are not defined (too few points for the
-// weights).
-bool residual_variance(int m, const QuadricFit& f, const std::vector<double>& w,
+// The residual variance of the weighted polynomial fit f to m points (weights w, frame
+// coordinates local, as fit_polynomial gave them), an estimate of sigma^2 when the polynomial
+// follows the surface, and its effective degrees of freedom. False when they are not defined (too
+// few points for the weights).
+template <int N>
+bool residual_variance(int m, const PolynomialFit<N>& f, const std::vector<double>& w,
                        const std::vector<Vector3d>& local, double& var, double& dof) {
   double sw = 0, sw2 = 0, ssr = 0;
   for (int j = 0; j < m; ++j) {
-    const Vector6d phi = quadric_basis(local[j].x(), local[j].y());
+    const typename PolynomialFit<N>::Vector phi = polynomial_basis<N>(local[j].x(), local[j].y());
     sw += w[j];
     sw2 += w[j] * w[j];
     ssr += w[j] * std::pow(local[j].z() - phi.dot(f.coef), 2);
@@ -129,38 +143,50 @@ bool residual_variance(int m, const QuadricFit& f, const std::vector<double>& w,
   // E[sum w r^2] = sigma^2 tr(W (I - H)) with the hat matrix H = Phi A^-1 Phi^T W, and
   // tr(W H) = tr(A^-1 Phi^T W^2 Phi) = tr(A^-1 B).
   const double denom = sw - f.ldlt.solve(f.B).trace();
-  dof = sw * sw / sw2 - 6;
+  dof = sw * sw / sw2 - N;
   if (!(denom > 0) || !(dof > 1)) return false;
   var = ssr / denom;
   return std::isfinite(var);
 }
 
 // One MLS projection of q (= X[0]) given its neighbourhood X[0..m) with squared distances
-// d2[0..m) from q (d2[0] = 0). h2 is the squared Gaussian width: weight exp(-d2 / h2).
-// `up` orients the normal.
-Projection project(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up,
-                   bool with_variance = false) {
+// d2[0..m) from q (d2[0] = 0), by a polynomial of N terms (polynomial_basis). h2 is the squared
+// Gaussian width: weight exp(-d2 / h2). `up` orients the normal.
+template <int N>
+Projection project_with(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up,
+                        bool with_variance) {
   Projection out;
   out.point = X[0];
   out.normal = up;
-  if (m < 6 || !(h2 > 0)) return out;
+  if (m < N || !(h2 > 0)) return out;
   thread_local std::vector<double> w;
   thread_local std::vector<Vector3d> local;
-  QuadricFit f;
-  if (!fit_quadric(X, d2, m, h2, up, w, local, f)) return out;
+  PolynomialFit<N> f;
+  if (!fit_polynomial(X, d2, m, h2, up, w, local, f)) return out;
   // The fitted offset a = e0^T A^-1 Phi^T W z: for independent noise of sigma along n its
   // variance is sigma^2 e0^T A^-1 B A^-1 e0 with B = Phi^T W^2 Phi.
-  const Vector6d g = f.ldlt.solve(Vector6d::Unit(0));
+  const typename PolynomialFit<N>::Vector g = f.ldlt.solve(PolynomialFit<N>::Vector::Unit(0));
   out.spread = std::sqrt(std::max(0.0, g.dot(f.B * g)));
   if (with_variance && !residual_variance(m, f, w, local, out.residual_variance, out.dof))
     out.residual_variance = -1;
 
-  // Step 3: the quadric point above q, and the quadric's normal there (gradient (b, c) / h).
+  // Step 3: the polynomial's point above q, and its normal there (gradient (b, c) / h).
   out.point = X[0] + f.coef(0) * f.n;
   out.normal = (f.n - f.coef(1) * f.inv_h * f.t1 - f.coef(2) * f.inv_h * f.t2).normalized();
   if (out.normal.dot(up) < 0) out.normal = -out.normal;
   out.moved = true;
   return out;
+}
+
+// A neighbourhood of fewer points than the cubic has coefficients (7 to 9 within the radius at
+// k = 16 or 24) is fitted by the quadric: the cubic would leave its point in place. Every scale of
+// a point is otherwise fitted with the same degree, so that nested fits differ by noise as the
+// agreement test expects (with the quadric below 30 points, a noisy plane's points were narrowed
+// by the mixed comparisons and their normals tilted 0.11 rad).
+Projection project(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up, int degree,
+                   bool with_variance = false) {
+  return degree == 3 && m >= 10 ? project_with<10>(X, d2, m, h2, up, with_variance)
+                                               : project_with<6>(X, d2, m, h2, up, with_variance);
 }
 
 // The residual variance of the weighted quadric fit to X[0..m) (see estimate_noise_sigma), and its
@@ -170,8 +196,8 @@ bool fit_variance(const Vector3d* X, const double* d2, int m, double h2, double&
   if (m < 10 || !(h2 > 0)) return false;
   thread_local std::vector<double> w;
   thread_local std::vector<Vector3d> local;
-  QuadricFit f;
-  if (!fit_quadric(X, d2, m, h2, Vector3d::UnitZ(), w, local, f)) return false;
+  PolynomialFit<6> f;
+  if (!fit_polynomial(X, d2, m, h2, Vector3d::UnitZ(), w, local, f)) return false;
   return residual_variance(m, f, w, local, var, dof);
 }
 
@@ -198,6 +224,8 @@ void check_input(const std::vector<Vector3d>& P, const std::vector<Vector3d>& N,
   if (!std::isfinite(o.radius) || o.radius < 0)
     throw std::invalid_argument("radius must be finite and >= 0 (got " +
                                 std::to_string(o.radius) + ")");
+  if (o.degree != 2 && o.degree != 3)
+    throw std::invalid_argument("degree must be 2 or 3 (got " + std::to_string(o.degree) + ")");
   if (o.widen < 1)
     throw std::invalid_argument("widen must be at least 1 (got " + std::to_string(o.widen) + ")");
   if (o.iterations < 0)
@@ -294,6 +322,7 @@ void summarize_uncertainty(DenoiseResult& res, int scales) {
 }  // namespace
 
 constexpr int kMaxWiden = 2;
+constexpr int kCubicFromK = 64;  // DenoiseOptions::degree 3 applies from this k
 constexpr int kIsolationNeighbours = 32;  // a narrowed point with under a quarter of its 32 nearest narrowed is chance
 constexpr int kMinScaleNeighbours = 16;  // the narrowest fit of the multi-scale rule
 constexpr double kRefitAgreement = 2;  // how many noise widths a wider rim refit may move a point
@@ -327,6 +356,9 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
   const int k = nbrs ? std::min(k_wanted, nbrs->k)
                      : static_cast<int>(std::min<std::size_t>(k_wanted, n - 1));
   res.k = k;
+  // The cubic needs many points in its widest fit: from the few of a small k its normal is
+  // noise (k = 16 on a noisy plane: normals tilted 67 degrees).
+  const int degree = o.degree == 3 && k >= kCubicFromK ? 3 : 2;
   const double r2 = o.radius * o.radius;
   const int iterations = o.iterations;
   std::vector<Vector3d> next(n), next_normals(n);
@@ -435,7 +467,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
       // averages over most of the neighbourhood (measured: lower noise than h = R / 2 for the
       // same k, with no visible bias).
       const Vector3d up = N.empty() ? Vector3d::UnitZ() : N[i];
-      return project(s.pts.data(), s.pd2.data(), static_cast<int>(s.pts.size()), R2 / 2, up,
+      return project(s.pts.data(), s.pd2.data(), static_cast<int>(s.pts.size()), R2 / 2, up, degree,
                      lack_of_fit);
     };
     // The projection of point i from the narrower neighbourhood of radius R sqrt(kk / k), the
@@ -450,7 +482,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
           s.sub_pd2.push_back(s.pd2[j]);
         }
       const Vector3d up = N.empty() ? Vector3d::UnitZ() : N[i];
-      return project(s.sub_pts.data(), s.sub_pd2.data(), static_cast<int>(s.sub_pts.size()), R2 / 2, up,
+      return project(s.sub_pts.data(), s.sub_pd2.data(), static_cast<int>(s.sub_pts.size()), R2 / 2, up, degree,
                      lack_of_fit);
     };
     auto store = [&](std::size_t i, const Projection& p) {

@@ -11,7 +11,7 @@ namespace scallop::cloud_nodes {
 NodeDecl make_denoise_node() {
   NodeDecl d;
   d.type = "cloud.denoise";
-  d.version = 8;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty, a 0.1 um floor; 6: 5 scales by default; 7: 7 scales, `widen`, a lack-of-fit test, the bias from the 3 nearest narrower scales, lone narrowings undone; 8: `widen` 4 by default
+  d.version = 9;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty, a 0.1 um floor; 6: 5 scales by default; 7: 7 scales, `widen`, a lack-of-fit test, the bias from the 3 nearest narrower scales, lone narrowings undone; 8: `widen` 4 by default; 9: a cubic fit (`degree` 3) by default
   d.description =
       "moving-least-squares denoising: each point projected along its local normal onto a "
       "weighted quadric fitted to its neighbours, at the widest of several scales (k, k/2, ... "
@@ -42,6 +42,10 @@ NodeDecl make_denoise_node() {
                "k. 4 (the default) halves the uncertainty of smooth noisy clouds against 1 (sigma "
                "0.02 mm: median 0.010 mm, and h = 0.05 becomes plannable) and takes about 4 times "
                "as long")
+      .integer("degree", &DenoiseOptions::degree, 2, 3, "",
+               "the local polynomial fitted: 2 a quadric, 3 a cubic (as noisy inside the cloud, "
+               "and its residuals no longer hold the surface's third derivative, so wide fits "
+               "are kept on smooth curved surfaces)")
       .number("tolerance", &DenoiseOptions::tolerance, 1e-6, 1e3, "mm",
               "automatic mode (k = 0): the normal error the denoised cloud should reach; "
               "clouds with less estimated noise are left as they are")
