@@ -51,7 +51,11 @@ struct DenoiseOptions {
                            // residuals no longer hold the surface's third derivative: on the
                            // waves the lack-of-fit test narrowed 77 % of the quadric fits at
                            // k = 1200 for it, a misfit that does not move the fitted offset.
-                           // Below k = 64 the quadric whatever this says.
+                           // Per point: the cubic where its widest fit's standard error is within
+                           // 1.1 times the quadric's (inside), the quadric elsewhere (a one-sided
+                           // neighbourhood at the rim couples the cubic terms with the offset),
+                           // the same degree at every scale of the point. Below k = 64 the
+                           // quadric whatever this says.
   double tolerance = 0.002;  // mm; automatic mode only: the normal error (RMS) aimed at
   double radius = 0;       // mm; R, the neighbourhood radius: of the k nearest neighbours only
                            // those within R are used, with Gaussian weights exp(-2 d^2 / R^2).

@@ -43,9 +43,10 @@ NodeDecl make_denoise_node() {
                "0.02 mm: median 0.010 mm, and h = 0.05 becomes plannable) and takes about 4 times "
                "as long")
       .integer("degree", &DenoiseOptions::degree, 2, 3, "",
-               "the local polynomial fitted: 2 a quadric, 3 a cubic (as noisy inside the cloud, "
-               "and its residuals no longer hold the surface's third derivative, so wide fits "
-               "are kept on smooth curved surfaces)")
+               "the local polynomial fitted: 2 a quadric, 3 a cubic where it is as certain as the "
+               "quadric (inside the cloud; the quadric at the rim and below k = 64): its residuals "
+               "no longer hold the surface's third derivative, so wide fits are kept on smooth "
+               "curved surfaces")
       .number("tolerance", &DenoiseOptions::tolerance, 1e-6, 1e3, "mm",
               "automatic mode (k = 0): the normal error the denoised cloud should reach; "
               "clouds with less estimated noise are left as they are")
