@@ -88,10 +88,32 @@ struct PolynomialFit {
   using Matrix = Eigen::Matrix<double, N, N>;
   Vector3d n, t1, t2;    // the frame: normal (oriented along `up`) and tangents
   double inv_h = 0;      // frame coordinates are scaled by 1/h: s = u / h, t = v / h
+  Matrix A;              // Phi^T W Phi
   Matrix B;              // Phi^T W^2 Phi, for the variance of the coefficients
-  Eigen::LDLT<Matrix> ldlt;  // of A = Phi^T W Phi
+  Vector rhs;            // Phi^T W z
+  Eigen::LDLT<Matrix> ldlt;  // of A
   Vector coef;
+  bool summed = false;   // A, B and rhs filled (the frame was found)
 };
+
+// Solves f's normal equations (A, rhs filled). False for a singular system.
+template <int N>
+bool solve_fit(PolynomialFit<N>& f) {
+  f.ldlt.compute(f.A);
+  if (f.ldlt.info() != Eigen::Success || !(f.ldlt.rcond() > 1e-10)) return false;
+  f.coef = f.ldlt.solve(f.rhs);
+  return f.coef.allFinite();
+}
+
+// The quadric's fit to the same points as the cubic c: its basis is the cubic's first 6 terms, so
+// its sums are the leading blocks of the cubic's, the same to the last bit as a fit of its own.
+bool leading_quadric(const PolynomialFit<10>& c, PolynomialFit<6>& q) {
+  q.n = c.n, q.t1 = c.t1, q.t2 = c.t2, q.inv_h = c.inv_h;
+  q.A = c.A.topLeftCorner<6, 6>();
+  q.B = c.B.topLeftCorner<6, 6>();
+  q.rhs = c.rhs.head<6>();
+  return solve_fit(q);
+}
 
 // Fits X[0..m) (squared distances d2[0..m) from X[0], Gaussian weights exp(-d2 / h2) into w,
 // the points' frame coordinates (s, t, offset along n) into local, for residual_variance).
@@ -106,24 +128,22 @@ bool fit_polynomial(const Vector3d* X, const double* d2, int m, double h2, const
   // Step 2: weighted least squares, with the frame coordinates scaled by h so that the normal
   // equations are well scaled whatever the units.
   f.inv_h = 1.0 / std::sqrt(h2);
-  Matrix A = Matrix::Zero();
+  f.A = Matrix::Zero();
   f.B = Matrix::Zero();
-  Vector rhs = Vector::Zero();
+  f.rhs = Vector::Zero();
   local.resize(m);
   for (int j = 0; j < m; ++j) {
     const Vector3d r = X[j] - X[0];
     local[j] = Vector3d(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h, r.dot(f.n));
     const Vector phi = polynomial_basis<N>(local[j].x(), local[j].y());
-    add_weighted_outer_lower(A, phi, w[j]);
+    add_weighted_outer_lower(f.A, phi, w[j]);
     add_weighted_outer_lower(f.B, phi, w[j] * w[j]);
-    rhs += (w[j] * local[j].z()) * phi;
+    f.rhs += (w[j] * local[j].z()) * phi;
   }
-  A = A.template selfadjointView<Eigen::Lower>();
+  f.A = f.A.template selfadjointView<Eigen::Lower>();
   f.B = f.B.template selfadjointView<Eigen::Lower>();
-  f.ldlt.compute(A);
-  if (f.ldlt.info() != Eigen::Success || !(f.ldlt.rcond() > 1e-10)) return false;
-  f.coef = f.ldlt.solve(rhs);
-  return f.coef.allFinite();
+  f.summed = true;
+  return solve_fit(f);
 }
 
 // The residual variance of the weighted polynomial fit f to m points (weights w, frame
@@ -152,17 +172,11 @@ bool residual_variance(int m, const PolynomialFit<N>& f, const std::vector<doubl
 // One MLS projection of q (= X[0]) given its neighbourhood X[0..m) with squared distances
 // d2[0..m) from q (d2[0] = 0), by a polynomial of N terms (polynomial_basis). h2 is the squared
 // Gaussian width: weight exp(-d2 / h2). `up` orients the normal.
+// The projection of q = X[0] onto the fit f of m points (weights w, frame coordinates local).
 template <int N>
-Projection project_with(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up,
-                        bool with_variance) {
+Projection projection_of(const PolynomialFit<N>& f, const Vector3d& q, const Vector3d& up, int m,
+                         const std::vector<double>& w, const std::vector<Vector3d>& local, bool with_variance) {
   Projection out;
-  out.point = X[0];
-  out.normal = up;
-  if (m < N || !(h2 > 0)) return out;
-  thread_local std::vector<double> w;
-  thread_local std::vector<Vector3d> local;
-  PolynomialFit<N> f;
-  if (!fit_polynomial(X, d2, m, h2, up, w, local, f)) return out;
   // The fitted offset a = e0^T A^-1 Phi^T W z: for independent noise of sigma along n its
   // variance is sigma^2 e0^T A^-1 B A^-1 e0 with B = Phi^T W^2 Phi.
   const typename PolynomialFit<N>::Vector g = f.ldlt.solve(PolynomialFit<N>::Vector::Unit(0));
@@ -171,11 +185,33 @@ Projection project_with(const Vector3d* X, const double* d2, int m, double h2, c
     out.residual_variance = -1;
 
   // Step 3: the polynomial's point above q, and its normal there (gradient (b, c) / h).
-  out.point = X[0] + f.coef(0) * f.n;
+  out.point = q + f.coef(0) * f.n;
   out.normal = (f.n - f.coef(1) * f.inv_h * f.t1 - f.coef(2) * f.inv_h * f.t2).normalized();
   if (out.normal.dot(up) < 0) out.normal = -out.normal;
   out.moved = true;
   return out;
+}
+
+// One MLS projection of q (= X[0]) by a polynomial of N terms; with N = 10 and `quadric` given,
+// the quadric's projection from the same points too (left unmoved when it is degenerate).
+template <int N>
+Projection project_with(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up,
+                        bool with_variance, Projection* quadric) {
+  Projection out;
+  out.point = X[0];
+  out.normal = up;
+  if (quadric) *quadric = out;
+  if (m < N || !(h2 > 0)) return out;
+  thread_local std::vector<double> w;
+  thread_local std::vector<Vector3d> local;
+  PolynomialFit<N> f;
+  const bool fitted = fit_polynomial(X, d2, m, h2, up, w, local, f);
+  if constexpr (N == 10) {
+    PolynomialFit<6> q;
+    if (quadric && f.summed && leading_quadric(f, q))
+      *quadric = projection_of(q, X[0], up, m, w, local, with_variance);
+  }
+  return fitted ? projection_of(f, X[0], up, m, w, local, with_variance) : out;
 }
 
 // A neighbourhood of fewer points than the cubic has coefficients (7 to 9 within the radius at
@@ -183,10 +219,11 @@ Projection project_with(const Vector3d* X, const double* d2, int m, double h2, c
 // a point is otherwise fitted with the same degree, so that nested fits differ by noise as the
 // agreement test expects (with the quadric below 30 points, a noisy plane's points were narrowed
 // by the mixed comparisons and their normals tilted 0.11 rad).
+// With `quadric` given and the cubic fitted, the quadric's projection from the same points too.
 Projection project(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up, int degree,
-                   bool with_variance = false) {
-  return degree == 3 && m >= 10 ? project_with<10>(X, d2, m, h2, up, with_variance)
-                                               : project_with<6>(X, d2, m, h2, up, with_variance);
+                   bool with_variance = false, Projection* quadric = nullptr) {
+  return degree == 3 && m >= 10 ? project_with<10>(X, d2, m, h2, up, with_variance, quadric)
+                                : project_with<6>(X, d2, m, h2, up, with_variance, nullptr);
 }
 
 // The residual variance of the weighted quadric fit to X[0..m) (see estimate_noise_sigma), and its
@@ -445,7 +482,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
     }
     // The projection of point i from its `kk` nearest neighbours (kk > k: a wider neighbourhood,
     // the radius grown by sqrt(kk / k), so as many points again count on a one-sided rim).
-    auto fit_point = [&](std::size_t i, Scratch& s, int kk) {
+    auto fit_point = [&](std::size_t i, Scratch& s, int kk, Projection* quadric = nullptr) {
       if (kk == k) {
         neighbours(i, s);
       } else {
@@ -474,7 +511,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
       // same k, with no visible bias).
       const Vector3d up = N.empty() ? Vector3d::UnitZ() : N[i];
       return project(s.pts.data(), s.pd2.data(), static_cast<int>(s.pts.size()), R2 / 2, up, point_degree[i],
-                     lack_of_fit);
+                     lack_of_fit, quadric);
     };
     // The projection of point i from the narrower neighbourhood of radius R sqrt(kk / k), the
     // subset of the one fit_point(i, s, k) has just gathered into s.
@@ -519,15 +556,11 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
     // its spread sqrt(2 / dof) (measured on a noisy crest of slope 0.3, radius 3 mm, k = 1200:
     // largest |error| / uncertainty 1.21 without the test, 0.90 with it).
     auto fit_scales = [&](std::size_t i, Scratch& s) -> Projection {
-      Projection widest = fit_point(i, s, k);
-      if (point_degree[i] == 3) {
-        const Vector3d up = N.empty() ? Vector3d::UnitZ() : N[i];
-        const Projection quadric =
-            project(s.pts.data(), s.pd2.data(), static_cast<int>(s.pts.size()), s.R2 / 2, up, 2, lack_of_fit);
-        if (quadric.moved && !(widest.moved && widest.spread <= kCubicSpreadRatio * quadric.spread)) {
-          point_degree[i] = 2;
-          widest = quadric;
-        }
+      Projection quadric;  // the quadric's widest fit, from the cubic's sums
+      Projection widest = fit_point(i, s, k, point_degree[i] == 3 ? &quadric : nullptr);
+      if (quadric.moved && !(widest.moved && widest.spread <= kCubicSpreadRatio * quadric.spread)) {
+        point_degree[i] = 2;
+        widest = quadric;
       }
       bias[i] = 0;
       chosen[i] = 0;
