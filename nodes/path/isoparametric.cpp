@@ -985,24 +985,28 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   std::nth_element(deltas.begin(), deltas.begin() + deltas.size() / 2, deltas.end());
   const double delta_median = deltas[deltas.size() / 2];
   const double delta_max = *std::max_element(deltas.begin(), deltas.end());
+  // The delta that all but 1 / kMostlyCertainDivisor of the points are known to: the scallop
+  // height it needs is the least that both refusals below let through.
+  const std::size_t p99 = deltas.size() - 1 - deltas.size() / kMostlyCertainDivisor;
+  std::nth_element(deltas.begin(), deltas.begin() + p99, deltas.end());
+  const double delta_p99 = deltas[p99];
   if (too_uncertain(o, margins(o, delta_median)))
     throw std::invalid_argument(
         "the cloud's surface is known only to +-" + fmt(delta_median) + " mm (median; cloud.denoise's "
         "uncertainty or its height field's, the smaller), too much of the scallop height " + fmt(o.scallop_height) +
-        " mm to promise it: denoise with more neighbours, scan more finely or raise scallop_height");
+        " mm to promise it: denoise with more neighbours, scan more finely or raise scallop_height (to at least " +
+        fmt(plannable_scallop_height(o, delta_p99)) + " mm for 99 % of the points)");
   // Where more than 1 % of the points are too uncertain, nearly every strip crosses some of
   // them and fails at every side step (measured on a noisy plane, sigma 0.02: at h 0.06, 28 % of
   // its points, all 155 strips failed in 553 s; at h 0.086, 4.75 %, 118 of 130 in 428 s; both
   // certificates failed); say so at once, with the scallop height the points need at least.
   if (uncertain > deltas.size() / kMostlyCertainDivisor) {
-    const std::size_t p99 = deltas.size() - 1 - deltas.size() / kMostlyCertainDivisor;
-    std::nth_element(deltas.begin(), deltas.begin() + p99, deltas.end());
     throw std::invalid_argument(
         fmt(100.0 * double(uncertain) / double(deltas.size())) + " % of the cloud's points are known "
         "too poorly for the scallop height " + fmt(o.scallop_height) + " mm (99 % of them to +-" +
-        fmt(deltas[p99]) + " mm, cloud.denoise's uncertainty or its height field's, the smaller; more than 1 % leaves nearly every "
+        fmt(delta_p99) + " mm, cloud.denoise's uncertainty or its height field's, the smaller; more than 1 % leaves nearly every "
         "strip over the limit): scallop_height must be at least " +
-        fmt(plannable_scallop_height(o, deltas[p99])) + " mm for them, or denoise with more "
+        fmt(plannable_scallop_height(o, delta_p99)) + " mm for them, or denoise with more "
         "neighbours or scan more finely");
   }
   const WorkEstimate work = estimate_work(cloud, neighbors, map, o, margins(o, delta_median));
