@@ -169,9 +169,6 @@ bool residual_variance(int m, const PolynomialFit<N>& f, const std::vector<doubl
   return std::isfinite(var);
 }
 
-// One MLS projection of q (= X[0]) given its neighbourhood X[0..m) with squared distances
-// d2[0..m) from q (d2[0] = 0), by a polynomial of N terms (polynomial_basis). h2 is the squared
-// Gaussian width: weight exp(-d2 / h2). `up` orients the normal.
 // The projection of q = X[0] onto the fit f of m points (weights w, frame coordinates local).
 template <int N>
 Projection projection_of(const PolynomialFit<N>& f, const Vector3d& q, const Vector3d& up, int m,
@@ -192,7 +189,9 @@ Projection projection_of(const PolynomialFit<N>& f, const Vector3d& q, const Vec
   return out;
 }
 
-// One MLS projection of q (= X[0]) by a polynomial of N terms; with N = 10 and `quadric` given,
+// One MLS projection of q (= X[0]) given its neighbourhood X[0..m) with squared distances
+// d2[0..m) from q (d2[0] = 0), by a polynomial of N terms (polynomial_basis). h2 is the squared
+// Gaussian width: weight exp(-d2 / h2). `up` orients the normal. With N = 10 and `quadric` given,
 // the quadric's projection from the same points too (left unmoved when it is degenerate).
 template <int N>
 Projection project_with(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up,
@@ -214,12 +213,12 @@ Projection project_with(const Vector3d* X, const double* d2, int m, double h2, c
   return fitted ? projection_of(f, X[0], up, m, w, local, with_variance) : out;
 }
 
-// A neighbourhood of fewer points than the cubic has coefficients (7 to 9 within the radius at
-// k = 16 or 24) is fitted by the quadric: the cubic would leave its point in place. Every scale of
-// a point is otherwise fitted with the same degree, so that nested fits differ by noise as the
-// agreement test expects (with the quadric below 30 points, a noisy plane's points were narrowed
-// by the mixed comparisons and their normals tilted 0.11 rad).
-// With `quadric` given and the cubic fitted, the quadric's projection from the same points too.
+// `degree` 2 or 3. A neighbourhood of fewer points than the cubic has coefficients is fitted by
+// the quadric: the cubic would leave its point in place. Otherwise a point's scales all take its
+// degree, so that nested fits differ by noise as the agreement test expects (with the quadric
+// below 30 points and the cubic above, a noisy plane's points were narrowed by the mixed
+// comparisons and their normals tilted 0.11 rad). With `quadric` given and the cubic fitted, the
+// quadric's projection from the same points too.
 Projection project(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up, int degree,
                    bool with_variance = false, Projection* quadric = nullptr) {
   return degree == 3 && m >= 10 ? project_with<10>(X, d2, m, h2, up, with_variance, quadric)

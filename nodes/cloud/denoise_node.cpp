@@ -14,7 +14,7 @@ NodeDecl make_denoise_node() {
   d.version = 9;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty, a 0.1 um floor; 6: 5 scales by default; 7: 7 scales, `widen`, a lack-of-fit test, the bias from the 3 nearest narrower scales, lone narrowings undone; 8: `widen` 4 by default; 9: a cubic fit inside (`degree` 3), `misfit_z` 5
   d.description =
       "moving-least-squares denoising: each point projected along its local normal onto a "
-      "weighted quadric fitted to its neighbours, at the widest of several scales (k, k/2, ... "
+      "weighted cubic (inside) or quadric (at the rim) fitted to its neighbours, at the widest of several scales (k, k/2, ... "
       "k/64) that agrees with the narrower ones and whose residuals are noise, so crests and "
       "creases are not flattened (parallel)";
   d.input("cloud", "Cloud", "the noisy points; their normals, if any, only orient the new ones")

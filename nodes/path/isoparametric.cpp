@@ -985,22 +985,25 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   std::nth_element(deltas.begin(), deltas.begin() + deltas.size() / 2, deltas.end());
   const double delta_median = deltas[deltas.size() / 2];
   const double delta_max = *std::max_element(deltas.begin(), deltas.end());
-  // The delta that all but 1 / kMostlyCertainDivisor of the points are known to: the scallop
-  // height it needs is the least that both refusals below let through.
-  const std::size_t p99 = deltas.size() - 1 - deltas.size() / kMostlyCertainDivisor;
-  std::nth_element(deltas.begin(), deltas.begin() + p99, deltas.end());
-  const double delta_p99 = deltas[p99];
+  // The delta that all but 1 / kMostlyCertainDivisor of the points are known to (for the
+  // refusals below only): the scallop height it needs is the least that both let through.
+  auto p99_delta = [&] {
+    const std::size_t p99 = deltas.size() - 1 - deltas.size() / kMostlyCertainDivisor;
+    std::nth_element(deltas.begin(), deltas.begin() + p99, deltas.end());
+    return deltas[p99];
+  };
   if (too_uncertain(o, margins(o, delta_median)))
     throw std::invalid_argument(
         "the cloud's surface is known only to +-" + fmt(delta_median) + " mm (median; cloud.denoise's "
         "uncertainty or its height field's, the smaller), too much of the scallop height " + fmt(o.scallop_height) +
         " mm to promise it: denoise with more neighbours, scan more finely or raise scallop_height (to at least " +
-        fmt(plannable_scallop_height(o, delta_p99)) + " mm for 99 % of the points)");
+        fmt(plannable_scallop_height(o, p99_delta())) + " mm for 99 % of the points)");
   // Where more than 1 % of the points are too uncertain, nearly every strip crosses some of
   // them and fails at every side step (measured on a noisy plane, sigma 0.02: at h 0.06, 28 % of
   // its points, all 155 strips failed in 553 s; at h 0.086, 4.75 %, 118 of 130 in 428 s; both
   // certificates failed); say so at once, with the scallop height the points need at least.
   if (uncertain > deltas.size() / kMostlyCertainDivisor) {
+    const double delta_p99 = p99_delta();
     throw std::invalid_argument(
         fmt(100.0 * double(uncertain) / double(deltas.size())) + " % of the cloud's points are known "
         "too poorly for the scallop height " + fmt(o.scallop_height) + " mm (99 % of them to +-" +
