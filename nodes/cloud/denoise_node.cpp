@@ -11,7 +11,7 @@ namespace scallop::cloud_nodes {
 NodeDecl make_denoise_node() {
   NodeDecl d;
   d.type = "cloud.denoise";
-  d.version = 9;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty, a 0.1 um floor; 6: 5 scales by default; 7: 7 scales, `widen`, a lack-of-fit test, the bias from the 3 nearest narrower scales, lone narrowings undone; 8: `widen` 4 by default; 9: a cubic fit inside (`degree` 3), `misfit_z` 5
+  d.version = 10;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty, a 0.1 um floor; 6: 5 scales by default; 7: 7 scales, `widen`, a lack-of-fit test, the bias from the 3 nearest narrower scales, lone narrowings undone; 8: `widen` 4 by default; 9: a cubic fit inside (`degree` 3), `misfit_z` 5; 10: `bias_scales` 2
   d.description =
       "moving-least-squares denoising: each point projected along its local normal onto a "
       "weighted cubic (inside) or quadric (at the rim) fitted to its neighbours, at the widest of several scales (k, k/2, ... "
@@ -63,8 +63,9 @@ NodeDecl make_denoise_node() {
                "uncertainty 4 standard errors, noise only, which a crest or crease sharp for the "
                "neighbourhood exceeds")
       .integer("bias_scales", &DenoiseOptions::bias_scales, 0, 8, "",
-               "how many narrower scales next to the kept one bound its bias (0: all; the "
-               "narrowest are noisy enough to double the uncertainty on a plane)")
+               "how many narrower scales next to the kept one bound its bias (0: all; each "
+               "narrower one is noisier, and on a smooth surface its noise, not a bias, sets the "
+               "bound)")
       .number("misfit_z", &DenoiseOptions::misfit_z, 0.0, 10.0, "",
               "lack-of-fit test: a wider fit is kept only while its residual variance is within "
               "this many of its own spreads of the noise's (0: no test)")
