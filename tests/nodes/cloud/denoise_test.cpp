@@ -200,6 +200,35 @@ TEST(Denoise, MultiScaleFitKeepsTheWidestOnAPlane) {
   EXPECT_GT(worst, 0.3);  // and not a vacuous bound
 }
 
+// On a smooth surface the bias bound is the narrower fits' noise (each scale down doubles a fit's
+// variance), and a strip is stepped as the worst place along it needs: the upper tail of the
+// uncertainty counts. Compared with 2 narrower scales (the default) rather than 3 it is lower
+// there and still bounds every point's error; the crests keep theirs (the two tests above, at the
+// default). Measured here: 99th percentile 0.0259 against 0.0302 mm, largest |error| / uncertainty
+// 0.37 both.
+TEST(Denoise, TheBiasBoundFromTwoNarrowerScalesIsLessNoisy) {
+  const double a = 0.1, b = -0.05, z0 = 2;
+  const auto P = noisy_plane(a, b, z0, 40, 30, 8000, 0.02, false, 29);
+  DenoiseOptions o;
+  o.k = 512;
+  ASSERT_EQ(o.bias_scales, 2);
+  const DenoiseResult two = mls_denoise(P, {}, o);
+  o.bias_scales = 3;
+  const DenoiseResult three = mls_denoise(P, {}, o);
+  auto p99 = [](std::vector<double> u) {
+    std::nth_element(u.begin(), u.begin() + u.size() * 99 / 100, u.end());
+    return u[u.size() * 99 / 100];
+  };
+  auto worst = [&](const DenoiseResult& r) {
+    double w = 0;
+    for (std::size_t i = 0; i < P.size(); ++i) w = std::max(w, std::abs(plane_distance(r.points[i], a, b, z0)) / r.uncertainty[i]);
+    return w;
+  };
+  EXPECT_LT(p99(two.uncertainty), 0.92 * p99(three.uncertainty));
+  EXPECT_LE(worst(two), 1.0);
+  EXPECT_LE(worst(three), 1.0);
+}
+
 // Near the rim a one-sided neighbourhood leaves a point 1.5 to 4 times less certain; refitting
 // those points from a wider neighbourhood brings most of them back near the interior's level. The
 // cubic (the default degree) is as certain as the quadric inside, where its extra terms are about
