@@ -173,6 +173,33 @@ double plannable_scallop_height(const IsoparametricOptions& o, double delta) {
 // The planner refuses when more than 1 / this of the cloud's points are too uncertain.
 constexpr std::size_t kMostlyCertainDivisor = 100;
 
+// The largest uncertainty of the certificate's height field (post.simulate's, the same model) on
+// the outer loop's edges, sampled every quarter of the cloud's spacing: the loop runs through the
+// outermost points, whose fits are one-sided, and between them the field extrapolates. There the
+// certificate's whole-patch bound is hardest to meet: on the noisy waves (sigma 0.02) the points
+// are known to +-0.021 mm (99 %) but the field at the outline to +-0.038, and a program planned
+// for the points at h = 0.053, 0.06 and 0.07 failed its certificate there (0.073-0.076 mm), one
+// planned at h = 0.103 passed. 0 without a usable loop or uncertainty.
+double outline_uncertainty(const HeightFieldModel& model, const PointCloud& cloud, const std::vector<int>& loop) {
+  if (!cloud.has_uncertainty() || loop.size() < 3) return 0;
+  const double step = 0.25 * model.spacing();
+  double worst = 0;
+  for (std::size_t k = 0; k < loop.size(); ++k) {
+    const int i = loop[k], j = loop[(k + 1) % loop.size()];
+    if (i < 0 || j < 0 || std::size_t(i) >= cloud.size() || std::size_t(j) >= cloud.size()) return 0;
+    const Eigen::Vector2d a = cloud.points[i].head<2>(), b = cloud.points[j].head<2>();
+    const int m = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step)));
+    for (int t = 0; t < m; ++t) {
+      const Eigen::Vector2d q = a + (b - a) * (double(t) / m);
+      double z, u = 0;
+      Eigen::Vector3d n;
+      model.eval(q.x(), q.y(), z, n, /*force=*/true, &u);
+      if (std::isfinite(u)) worst = std::max(worst, u);
+    }
+  }
+  return worst;
+}
+
 class Planner {
  public:
   // model  the cloud's height field (post.simulate's model), or null
@@ -992,12 +1019,22 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     std::nth_element(deltas.begin(), deltas.begin() + p99, deltas.end());
     return deltas[p99];
   };
+  // The scallop height the certificate's whole-patch bound needs at the outline, where the
+  // surface is known worst (outline_uncertainty), when that is more than `points_need`.
+  const double rim_delta = outline_uncertainty(*model, cloud, map.outer_loop);
+  const double rim_height = plannable_scallop_height(o, rim_delta);
+  auto whole_patch_advice = [&](double points_need) -> std::string {
+    if (!(rim_height > std::max(points_need, o.scallop_height))) return "";
+    return "; " + fmt(rim_height) + " mm for a certificate of the whole patch, whose outline is known only to +-" +
+           fmt(rim_delta) + " mm";
+  };
   if (too_uncertain(o, margins(o, delta_median)))
     throw std::invalid_argument(
         "the cloud's surface is known only to +-" + fmt(delta_median) + " mm (median; cloud.denoise's "
         "uncertainty or its height field's, the smaller), too much of the scallop height " + fmt(o.scallop_height) +
         " mm to promise it: denoise with more neighbours, scan more finely or raise scallop_height (to at least " +
-        fmt(plannable_scallop_height(o, p99_delta())) + " mm for 99 % of the points)");
+        fmt(plannable_scallop_height(o, p99_delta())) + " mm for 99 % of the points" +
+        whole_patch_advice(plannable_scallop_height(o, p99_delta())) + ")");
   // Where more than 1 % of the points are too uncertain, nearly every strip crosses some of
   // them and fails at every side step (measured on a noisy plane, sigma 0.02: at h 0.06, 28 % of
   // its points, all 155 strips failed in 553 s; at h 0.086, 4.75 %, 118 of 130 in 428 s; both
@@ -1009,8 +1046,9 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
         "too poorly for the scallop height " + fmt(o.scallop_height) + " mm (99 % of them to +-" +
         fmt(delta_p99) + " mm, cloud.denoise's uncertainty or its height field's, the smaller; more than 1 % leaves nearly every "
         "strip over the limit): scallop_height must be at least " +
-        fmt(plannable_scallop_height(o, delta_p99)) + " mm for them, or denoise with more "
-        "neighbours or scan more finely");
+        fmt(plannable_scallop_height(o, delta_p99)) + " mm for them" +
+        whole_patch_advice(plannable_scallop_height(o, delta_p99)) +
+        ", or denoise with more neighbours or scan more finely");
   }
   const WorkEstimate work = estimate_work(cloud, neighbors, map, o, margins(o, delta_median));
   if (work.passes > o.max_passes)
@@ -1279,6 +1317,11 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     warnings.push_back(std::to_string(planner.forward_floor_hits) +
                        " forward steps reached the smallest step with the chord still too far "
                        "off (a kink in the surface or the map?)");
+  if (rim_height > o.scallop_height)
+    warnings.push_back("the cloud's outline is known only to +-" + fmt(rim_delta) +
+                       " mm (its points' fits are one-sided, and between them the surface is extrapolated): "
+                       "the certificate's whole-patch bound there needs scallop_height " + fmt(rim_height) +
+                       " mm or more, and may fail at the outline while the interior holds");
   if (uncertain > 0)
     warnings.push_back(std::to_string(uncertain) + " cloud points (" +
                        fmt(100.0 * uncertain / cloud.size()) + " %) are known only to +-" +
@@ -1320,6 +1363,8 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
                         {"conformal_tolerance_deg", o.conformal_tolerance}}},
       {"steps_shrunk_by_check", shrunk},
       {"strip_checks", strip_checks},
+      {"outline_uncertainty", rim_delta},
+      {"outline_scallop_height", rim_height},
       {"strips_over_limit", strips_over.size()},
       {"strips_over_limit_at", strips_over},
       {"predicted", {{"scallop_max", scallop_max}, {"scallop_max_at", vec(scallop_where)},

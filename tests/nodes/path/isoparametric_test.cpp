@@ -424,6 +424,34 @@ TEST(Isoparametric, AMostlyUncertainCloudIsRefusedWithTheScallopHeightItNeeds) {
   }
 }
 
+// The outline known worse than the points: the loop runs through the outermost points, whose
+// fits are one-sided, and the certificate's height field extrapolates between them (the noisy
+// waves: points to +-0.021 mm, the field at the outline to +-0.038; programs planned for the
+// points failed their whole-patch certificates there up to h = 0.07, one at 0.103 passed). Here
+// the outline's points stand 0.004 mm alternately above and below the plane while each says it is
+// known to 0.001: the field over them misfits, the planner plans for the points (each known well)
+// and says which scallop height the certificate's whole-patch bound needs at the outline.
+TEST(Isoparametric, AnOutlineKnownWorseThanItsPointsIsWarnedAbout) {
+  const IsoparametricOptions o = fine_options();
+  Input in = flat();
+  in.cloud.uncertainty.assign(in.cloud.size(), 0.001);
+  const IsoparametricResult plain = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  EXPECT_LE(plain.report["outline_scallop_height"].get<double>(), o.scallop_height);
+  for (std::size_t k = 0; k < in.map.outer_loop.size(); ++k)
+    in.cloud.points[in.map.outer_loop[k]].z() = k % 2 ? 0.004 : -0.004;
+  const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  const double rim_delta = res.report["outline_uncertainty"].get<double>();
+  EXPECT_GT(rim_delta, 0.004);  // beyond the points' 0.001 by 3 times the field's misfit
+  // the margins' closed form (SurfaceUncertaintyIsKeptAsAMargin): h - 1.15 delta - stock >= 0.2 h,
+  // stock = 0.00125 + delta - (0.9 e - 0.15 delta), rounded up to a micron
+  const double stock = 0.00125 + rim_delta - (0.9 * o.chord_error - 0.15 * rim_delta);
+  EXPECT_NEAR(res.report["outline_scallop_height"].get<double>(), (1.15 * rim_delta + stock) / 0.8, 1e-3);
+  bool warned = false;
+  for (const auto& w : res.report["warnings"])
+    warned = warned || w.get<std::string>().rfind("the cloud's outline is known only to +-", 0) == 0;
+  EXPECT_TRUE(warned) << res.report["warnings"].dump();
+}
+
 TEST(Isoparametric, ForwardStepOnACylinderKeepsTheChordDeviation) {
   // Convex cylinder of radius 20 along x; passes at x = const run round it.
   const double Rc = 20, r = 3, e = 0.002;
