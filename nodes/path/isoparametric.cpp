@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_invoke.h>
 
 #include <Eigen/Geometry>
@@ -182,22 +183,26 @@ constexpr std::size_t kMostlyCertainDivisor = 100;
 // planned at h = 0.103 passed. 0 without a usable loop or uncertainty.
 double outline_uncertainty(const HeightFieldModel& model, const PointCloud& cloud, const std::vector<int>& loop) {
   if (!cloud.has_uncertainty() || loop.size() < 3) return 0;
+  for (int i : loop)
+    if (i < 0 || std::size_t(i) >= cloud.size()) return 0;
   const double step = 0.25 * model.spacing();
-  double worst = 0;
-  for (std::size_t k = 0; k < loop.size(); ++k) {
-    const int i = loop[k], j = loop[(k + 1) % loop.size()];
-    if (i < 0 || j < 0 || std::size_t(i) >= cloud.size() || std::size_t(j) >= cloud.size()) return 0;
-    const Eigen::Vector2d a = cloud.points[i].head<2>(), b = cloud.points[j].head<2>();
-    const int m = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step)));
-    for (int t = 0; t < m; ++t) {
-      const Eigen::Vector2d q = a + (b - a) * (double(t) / m);
-      double z, u = 0;
-      Eigen::Vector3d n;
-      model.eval(q.x(), q.y(), z, n, /*force=*/true, &u);
-      if (std::isfinite(u)) worst = std::max(worst, u);
-    }
-  }
-  return worst;
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, loop.size(), 64), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& r, double worst) {
+        for (std::size_t k = r.begin(); k < r.end(); ++k) {
+          const Eigen::Vector2d a = cloud.points[loop[k]].head<2>(), b = cloud.points[loop[(k + 1) % loop.size()]].head<2>();
+          const int m = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step)));
+          for (int t = 0; t < m; ++t) {
+            const Eigen::Vector2d q = a + (b - a) * (double(t) / m);
+            double z, u = 0;
+            Eigen::Vector3d n;
+            model.eval(q.x(), q.y(), z, n, /*force=*/true, &u);
+            if (std::isfinite(u)) worst = std::max(worst, u);
+          }
+        }
+        return worst;
+      },
+      [](double a, double b) { return std::max(a, b); });
 }
 
 class Planner {
@@ -1028,26 +1033,26 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     return "; " + fmt(rim_height) + " mm for a certificate of the whole patch, whose outline is known only to +-" +
            fmt(rim_delta) + " mm";
   };
-  if (too_uncertain(o, margins(o, delta_median)))
+  if (too_uncertain(o, margins(o, delta_median))) {
+    const double points_need = plannable_scallop_height(o, p99_delta());
     throw std::invalid_argument(
         "the cloud's surface is known only to +-" + fmt(delta_median) + " mm (median; cloud.denoise's "
         "uncertainty or its height field's, the smaller), too much of the scallop height " + fmt(o.scallop_height) +
         " mm to promise it: denoise with more neighbours, scan more finely or raise scallop_height (to at least " +
-        fmt(plannable_scallop_height(o, p99_delta())) + " mm for 99 % of the points" +
-        whole_patch_advice(plannable_scallop_height(o, p99_delta())) + ")");
+        fmt(points_need) + " mm for 99 % of the points" + whole_patch_advice(points_need) + ")");
+  }
   // Where more than 1 % of the points are too uncertain, nearly every strip crosses some of
   // them and fails at every side step (measured on a noisy plane, sigma 0.02: at h 0.06, 28 % of
   // its points, all 155 strips failed in 553 s; at h 0.086, 4.75 %, 118 of 130 in 428 s; both
   // certificates failed); say so at once, with the scallop height the points need at least.
   if (uncertain > deltas.size() / kMostlyCertainDivisor) {
-    const double delta_p99 = p99_delta();
+    const double delta_p99 = p99_delta(), points_need = plannable_scallop_height(o, delta_p99);
     throw std::invalid_argument(
         fmt(100.0 * double(uncertain) / double(deltas.size())) + " % of the cloud's points are known "
         "too poorly for the scallop height " + fmt(o.scallop_height) + " mm (99 % of them to +-" +
         fmt(delta_p99) + " mm, cloud.denoise's uncertainty or its height field's, the smaller; more than 1 % leaves nearly every "
         "strip over the limit): scallop_height must be at least " +
-        fmt(plannable_scallop_height(o, delta_p99)) + " mm for them" +
-        whole_patch_advice(plannable_scallop_height(o, delta_p99)) +
+        fmt(points_need) + " mm for them" + whole_patch_advice(points_need) +
         ", or denoise with more neighbours or scan more finely");
   }
   const WorkEstimate work = estimate_work(cloud, neighbors, map, o, margins(o, delta_median));
