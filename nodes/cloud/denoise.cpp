@@ -14,6 +14,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 
 #include "nodes/cloud/knn.h"
 #include "nodes/geom/normal_equations.h"
@@ -93,7 +94,10 @@ struct PolynomialFit {
   Vector rhs;            // Phi^T W z
   Eigen::LDLT<Matrix> ldlt;  // of A
   Vector coef;
-  bool summed = false;   // A, B and rhs filled (the frame was found)
+  bool summed = false;   // A, B, rhs and the sums below filled (the frame was found)
+  // sum w, sum w^2 and sum w z^2 over the points (z their offset along n): with rhs they give the
+  // residual sum of squares without a second pass over the points (residual_variance)
+  double sum_w = 0, sum_w2 = 0, sum_wzz = 0;
 };
 
 // Solves f's normal equations (A, rhs filled). False for a singular system.
@@ -112,15 +116,15 @@ bool leading_quadric(const PolynomialFit<10>& c, PolynomialFit<6>& q) {
   q.A = c.A.topLeftCorner<6, 6>();
   q.B = c.B.topLeftCorner<6, 6>();
   q.rhs = c.rhs.head<6>();
+  q.sum_w = c.sum_w, q.sum_w2 = c.sum_w2, q.sum_wzz = c.sum_wzz;
   return solve_fit(q);
 }
 
-// Fits X[0..m) (squared distances d2[0..m) from X[0], Gaussian weights exp(-d2 / h2) into w,
-// the points' frame coordinates (s, t, offset along n) into local, for residual_variance).
+// Fits X[0..m) (squared distances d2[0..m) from X[0], Gaussian weights exp(-d2 / h2) into w).
 // False for a degenerate neighbourhood (coincident or collinear points, a singular system).
 template <int N>
 bool fit_polynomial(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up,
-                    std::vector<double>& w, std::vector<Vector3d>& local, PolynomialFit<N>& f) {
+                    std::vector<double>& w, PolynomialFit<N>& f) {
   using Vector = typename PolynomialFit<N>::Vector;
   using Matrix = typename PolynomialFit<N>::Matrix;
   // Step 1: reference plane.
@@ -131,14 +135,17 @@ bool fit_polynomial(const Vector3d* X, const double* d2, int m, double h2, const
   f.A = Matrix::Zero();
   f.B = Matrix::Zero();
   f.rhs = Vector::Zero();
-  local.resize(m);
+  f.sum_w = f.sum_w2 = f.sum_wzz = 0;
   for (int j = 0; j < m; ++j) {
     const Vector3d r = X[j] - X[0];
-    local[j] = Vector3d(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h, r.dot(f.n));
-    const Vector phi = polynomial_basis<N>(local[j].x(), local[j].y());
+    const double z = r.dot(f.n);
+    const Vector phi = polynomial_basis<N>(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h);
     add_weighted_outer_lower(f.A, phi, w[j]);
     add_weighted_outer_lower(f.B, phi, w[j] * w[j]);
-    f.rhs += (w[j] * local[j].z()) * phi;
+    f.rhs += (w[j] * z) * phi;
+    f.sum_w += w[j];
+    f.sum_w2 += w[j] * w[j];
+    f.sum_wzz += w[j] * z * z;
   }
   f.A = f.A.template selfadjointView<Eigen::Lower>();
   f.B = f.B.template selfadjointView<Eigen::Lower>();
@@ -146,20 +153,16 @@ bool fit_polynomial(const Vector3d* X, const double* d2, int m, double h2, const
   return solve_fit(f);
 }
 
-// The residual variance of the weighted polynomial fit f to m points (weights w, frame
-// coordinates local, as fit_polynomial gave them), an estimate of sigma^2 when the polynomial
-// follows the surface, and its effective degrees of freedom. False when they are not defined (too
-// few points for the weights).
+// The residual variance of the weighted polynomial fit f (as fit_polynomial gave it), an
+// estimate of sigma^2 when the polynomial follows the surface, and its effective degrees of
+// freedom. False when they are not defined (too few points for the weights).
 template <int N>
-bool residual_variance(int m, const PolynomialFit<N>& f, const std::vector<double>& w,
-                       const std::vector<Vector3d>& local, double& var, double& dof) {
-  double sw = 0, sw2 = 0, ssr = 0;
-  for (int j = 0; j < m; ++j) {
-    const typename PolynomialFit<N>::Vector phi = polynomial_basis<N>(local[j].x(), local[j].y());
-    sw += w[j];
-    sw2 += w[j] * w[j];
-    ssr += w[j] * std::pow(local[j].z() - phi.dot(f.coef), 2);
-  }
+bool residual_variance(const PolynomialFit<N>& f, double& var, double& dof) {
+  const double sw = f.sum_w, sw2 = f.sum_w2;
+  // sum w (z - phi . coef)^2 = sum w z^2 - coef . rhs, as A coef = rhs (a second pass over the
+  // points was 6 % of denoising). The subtraction loses the digits by which the offsets z (the
+  // surface's height over the fitted plane) exceed the residuals; a few of double's 16.
+  const double ssr = std::max(0.0, f.sum_wzz - f.coef.dot(f.rhs));
   // E[sum w r^2] = sigma^2 tr(W (I - H)) with the hat matrix H = Phi A^-1 Phi^T W, and
   // tr(W H) = tr(A^-1 Phi^T W^2 Phi) = tr(A^-1 B).
   const double denom = sw - f.ldlt.solve(f.B).trace();
@@ -169,16 +172,15 @@ bool residual_variance(int m, const PolynomialFit<N>& f, const std::vector<doubl
   return std::isfinite(var);
 }
 
-// The projection of q = X[0] onto the fit f of m points (weights w, frame coordinates local).
+// The projection of q = X[0] onto the fit f.
 template <int N>
-Projection projection_of(const PolynomialFit<N>& f, const Vector3d& q, const Vector3d& up, int m,
-                         const std::vector<double>& w, const std::vector<Vector3d>& local, bool with_variance) {
+Projection projection_of(const PolynomialFit<N>& f, const Vector3d& q, const Vector3d& up, bool with_variance) {
   Projection out;
   // The fitted offset a = e0^T A^-1 Phi^T W z: for independent noise of sigma along n its
   // variance is sigma^2 e0^T A^-1 B A^-1 e0 with B = Phi^T W^2 Phi.
   const typename PolynomialFit<N>::Vector g = f.ldlt.solve(PolynomialFit<N>::Vector::Unit(0));
   out.spread = std::sqrt(std::max(0.0, g.dot(f.B * g)));
-  if (with_variance && !residual_variance(m, f, w, local, out.residual_variance, out.dof))
+  if (with_variance && !residual_variance(f, out.residual_variance, out.dof))
     out.residual_variance = -1;
 
   // Step 3: the polynomial's point above q, and its normal there (gradient (b, c) / h).
@@ -202,15 +204,14 @@ Projection project_with(const Vector3d* X, const double* d2, int m, double h2, c
   if (quadric) *quadric = out;
   if (m < N || !(h2 > 0)) return out;
   thread_local std::vector<double> w;
-  thread_local std::vector<Vector3d> local;
   PolynomialFit<N> f;
-  const bool fitted = fit_polynomial(X, d2, m, h2, up, w, local, f);
+  const bool fitted = fit_polynomial(X, d2, m, h2, up, w, f);
   if constexpr (N == 10) {
     PolynomialFit<6> q;
     if (quadric && f.summed && leading_quadric(f, q))
-      *quadric = projection_of(q, X[0], up, m, w, local, with_variance);
+      *quadric = projection_of(q, X[0], up, with_variance);
   }
-  return fitted ? projection_of(f, X[0], up, m, w, local, with_variance) : out;
+  return fitted ? projection_of(f, X[0], up, with_variance) : out;
 }
 
 // `degree` 2 or 3. A neighbourhood of fewer points than the cubic has coefficients is fitted by
@@ -231,10 +232,9 @@ bool fit_variance(const Vector3d* X, const double* d2, int m, double h2, double&
                   double& dof) {
   if (m < 10 || !(h2 > 0)) return false;
   thread_local std::vector<double> w;
-  thread_local std::vector<Vector3d> local;
   PolynomialFit<6> f;
-  if (!fit_polynomial(X, d2, m, h2, Vector3d::UnitZ(), w, local, f)) return false;
-  return residual_variance(m, f, w, local, var, dof);
+  if (!fit_polynomial(X, d2, m, h2, Vector3d::UnitZ(), w, f)) return false;
+  return residual_variance(f, var, dof);
 }
 
 void check_points(const std::vector<Vector3d>& P) {
@@ -416,6 +416,7 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
     std::vector<double> sub_pd2;
     std::vector<Projection> fits;  // fit_scales: one per scale
     std::vector<double> offsets;
+    std::vector<std::pair<double, int>> by_distance;  // fit_point's wider neighbourhood
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
   std::vector<double> reach(n);  // distance from each point to its k-th neighbour (mm)
@@ -438,7 +439,8 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
     // The k neighbours of point i into s.idx / s.d2 (squared distances at the current positions).
     auto neighbours = [&](std::size_t i, Scratch& s) {
       if (index && r2 == 0) {  // the radius is known: reach2[i]
-        index->query_within(X[i], reach2[i], k, s.idx, s.d2, static_cast<int>(i));
+        // a fit sums over its neighbours: their order does not matter
+        index->query_within(X[i], reach2[i], k, s.idx, s.d2, static_cast<int>(i), false);
       } else if (index) {
         index->query(X[i], k, s.idx, s.d2, static_cast<int>(i));
       } else {
@@ -486,7 +488,18 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
         neighbours(i, s);
       } else {
         if (!index) throw std::logic_error("fit_point: no index for a wider neighbourhood");
-        index->query(X[i], kk, s.idx, s.d2, static_cast<int>(i));
+        // the kk nearest in no order, searched first within the k nearest's reach grown as the
+        // area they cover (a guess: the same points either way)
+        const double guess = reach2[i] > 0 ? 1.3 * reach2[i] * kk / k : 0.0;
+        const double kth = index->kth_sq_distance(X[i], kk, static_cast<int>(i), guess);
+        index->query_within(X[i], kth, kk, s.idx, s.d2, static_cast<int>(i), false);
+        // the k nearest of them first (by distance, then index, as a search of k gives them):
+        // the radius below is taken over those
+        s.by_distance.resize(s.idx.size());
+        for (std::size_t j = 0; j < s.idx.size(); ++j) s.by_distance[j] = {s.d2[j], s.idx[j]};
+        if (static_cast<std::size_t>(k) < s.by_distance.size())
+          std::nth_element(s.by_distance.begin(), s.by_distance.begin() + k, s.by_distance.end());
+        for (std::size_t j = 0; j < s.idx.size(); ++j) std::tie(s.d2[j], s.idx[j]) = s.by_distance[j];
       }
       double R2 = r2;
       if (R2 == 0) {

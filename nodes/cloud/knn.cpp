@@ -194,12 +194,12 @@ void KnnIndex::query(const Eigen::Vector3d& q, int k, std::vector<int>& idx,
 }
 
 void KnnIndex::query_within(const Eigen::Vector3d& q, double sq_radius, int k, std::vector<int>& idx,
-                            std::vector<double>& sq_dist, int skip) const {
+                            std::vector<double>& sq_dist, int skip, bool in_order) const {
   std::vector<std::pair<double, int>>& found = points_within(impl_->tree, q, sq_radius, skip);
   const std::size_t want = std::min<std::size_t>(std::max(k, 0), found.size());
   // by (distance, index); more than k only where distances tie at the radius
   if (want < found.size()) std::nth_element(found.begin(), found.begin() + want, found.end());
-  std::sort(found.begin(), found.begin() + want);
+  if (in_order) std::sort(found.begin(), found.begin() + want);
   idx.resize(want);
   sq_dist.resize(want);
   for (std::size_t i = 0; i < want; ++i) {

@@ -46,8 +46,10 @@ class KnnIndex {
   // The points of P (minus `skip`) within squared distance sq_radius of q, the k nearest of them
   // when there are more, in query()'s order. With sq_radius = kth_sq_distance(q, k, skip) it
   // gives what query(q, k, ...) gives, in less time (the search knows its radius from the start).
+  // in_order false: the same points in the search's own order (deterministic, not by distance),
+  // for callers that only sum over them (putting a thousand in order costs more than finding them).
   void query_within(const Eigen::Vector3d& q, double sq_radius, int k, std::vector<int>& idx,
-                    std::vector<double>& sq_dist, int skip = -1) const;
+                    std::vector<double>& sq_dist, int skip = -1, bool in_order = true) const;
 
   // The squared distance from q to the k-th nearest point of P (minus `skip`), as query() would
   // give it last, without putting the k in order; 0 when there are none. guess > 0: a squared

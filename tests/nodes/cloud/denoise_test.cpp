@@ -673,7 +673,11 @@ TEST(DenoiseNode, DenoisesWithOrWithoutNeighbours) {
       run_node(d, {{"k", 128}}, {{"cloud", cloud}, {"neighbors", nb}}).at("cloud"));
   ASSERT_TRUE(a && b);
   ASSERT_TRUE(a->has_normals());
-  EXPECT_EQ(a->points, b->points);
+  // the same neighbours, summed in another order (the search's own without them, by distance
+  // with them): the same points to rounding
+  ASSERT_EQ(a->points.size(), b->points.size());
+  for (std::size_t i = 0; i < a->points.size(); ++i)
+    ASSERT_LT((a->points[i] - b->points[i]).norm(), 1e-12) << "point " << i;
   EXPECT_LT(rms_plane_distance(a->points, 0.2, 0.1, 1),
             rms_plane_distance(cloud->points, 0.2, 0.1, 1) / 3);
   // normals off: the input's (none here) are kept

@@ -194,6 +194,14 @@ TEST(KnnIndex, TheKthDistanceAndTheSearchWithinItGiveWhatTheQueryGives) {
         index.query_within(P[i], kth, k, idx_within, d_within, i);
         ASSERT_EQ(idx_within, idx) << "point " << i << ", k = " << k;
         ASSERT_EQ(d_within, d) << "point " << i << ", k = " << k;
+        // out of order: the same points, each with its distance
+        index.query_within(P[i], kth, k, idx_within, d_within, i, false);
+        std::vector<std::pair<int, double>> unordered, ordered;
+        for (std::size_t j = 0; j < idx.size(); ++j) ordered.emplace_back(idx[j], d[j]);
+        for (std::size_t j = 0; j < idx_within.size(); ++j) unordered.emplace_back(idx_within[j], d_within[j]);
+        std::sort(ordered.begin(), ordered.end());
+        std::sort(unordered.begin(), unordered.end());
+        ASSERT_EQ(unordered, ordered) << "point " << i << ", k = " << k;
       }
     // Fewer points than k: every one, the farthest last.
     index.query(P[0], 5000, idx, d, 0);
