@@ -12,10 +12,14 @@ namespace scallop {
 // fits call it for each of their 20 to 64 neighbours: Eigen's selfadjoint rank update is an
 // out-of-line call per neighbour (6 % of the bundled example's CPU; written out, the example
 // takes 0.98 times the CPU, the same products in the same order, outputs byte-identical).
+// Unrolled whole (GCC left the inner loop's variable trip count as a loop): each entry's sum
+// the same as before, cloud.denoise's graph on the noisy plane 4.11 -> 3.87 s, byte-identical.
 template <int N>
 inline void add_weighted_outer_lower(Eigen::Matrix<double, N, N>& M, const Eigen::Matrix<double, N, 1>& b, double w) {
+#pragma GCC unroll 16
   for (int c = 0; c < N; ++c) {
     const double wb = w * b[c];
+#pragma GCC unroll 16
     for (int r = c; r < N; ++r) M(r, c) += wb * b[r];
   }
 }
