@@ -411,10 +411,16 @@ UVMap map_boundary(const std::vector<Eigen::Vector3d>& P, const std::vector<int>
     if (!(side[k] > 0))
       throw std::invalid_argument("side " + std::to_string(k + 1) + " of the rectangle has zero length");
   }
-  m.width = (side[0] + side[2]) / 2;
-  m.height = (side[1] + side[3]) / 2;
+  // The longer pair of sides along u: zig-zag passes are iso-u lines, so they then run the
+  // patch's short way. Where a cloud's rim is uncertain (one-sided fits), the strips beside the
+  // edges parallel to the passes are stepped finely, and shorter passes make those strips
+  // shorter: the noisy plane's program 10 553 -> 9 655 mm of cut, the clean plane's 6 571 ->
+  // 6 427 mm the other way round (the loop's start, not the part, chose the direction before).
+  const int first = side[1] + side[3] > side[0] + side[2] ? 1 : 0;  // the uv corner of corners[0]
+  m.width = (side[first] + side[first + 2]) / 2;
+  m.height = (side[1 - first] + side[3 - first]) / 2;
   const double W = m.width, H = m.height;
-  const Eigen::Vector2d corner_uv[5] = {{0, 0}, {W, 0}, {W, H}, {0, H}, {0, 0}};
+  const Eigen::Vector2d corner_uv[4] = {{0, 0}, {W, 0}, {W, H}, {0, H}};
   for (int k = 0; k < 4; ++k) {
     std::size_t i = static_cast<std::size_t>(corners[k]);
     const std::size_t end = static_cast<std::size_t>(corners[(k + 1) % 4]);
@@ -422,7 +428,7 @@ UVMap map_boundary(const std::vector<Eigen::Vector3d>& P, const std::vector<int>
       double s = cum[i] - cum[corners[k]];
       if (s < 0) s += L;  // the last side wraps past outer[0]
       double lambda = s / side[k];
-      m.boundary_uv[i] = (1 - lambda) * corner_uv[k] + lambda * corner_uv[k + 1];
+      m.boundary_uv[i] = (1 - lambda) * corner_uv[(k + first) % 4] + lambda * corner_uv[(k + first + 1) % 4];
       i = (i + 1) % n;
     } while (i != end);
   }

@@ -33,9 +33,13 @@ BoundaryDomain parse_boundary_domain(const std::string& name);
 // point), and
 //   disk: radius R = L / (2 pi), L the length of the smoothed loop (smoothed_loop); point i at angle 2 pi lambda_i, lambda_i the
 //         chord length from outer[0] over L, centred at the origin;
-//   rectangle: corners sorted ascending, c0 -> (0,0), c1 -> (W,0), c2 -> (W,H), c3 -> (0,H) with
-//         W = (L1 + L3) / 2, H = (L2 + L4) / 2, L1..L4 the chord lengths of the four sides
-//         c0..c1, c1..c2, c2..c3, c3..c0; each side mapped by chord length along its edge.
+//   rectangle: corners sorted ascending c0..c3, L1..L4 the chord lengths of the four sides
+//         c0..c1, c1..c2, c2..c3, c3..c0; the longer pair along u (W >= H, so that zig-zag
+//         passes, iso-u lines, run the patch's short way): when L1 + L3 >= L2 + L4,
+//         c0 -> (0,0), c1 -> (W,0), c2 -> (W,H), c3 -> (0,H) with W = (L1 + L3) / 2,
+//         H = (L2 + L4) / 2; otherwise c0 -> (W,0), c1 -> (W,H), c2 -> (0,H), c3 -> (0,0) with
+//         W = (L2 + L4) / 2, H = (L1 + L3) / 2 (the same orientation); each side mapped by
+//         chord length along its edge.
 // Chord lengths are measured along smoothed_loop(P, outer, half_window), not through the raw
 // loop points.
 // Throws std::invalid_argument for a short loop, a bad index, a zero-length loop or side, or bad

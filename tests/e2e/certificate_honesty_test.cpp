@@ -272,10 +272,20 @@ void expect_holds_on_the_exact_surface(const Outcome& o, double h) {
   EXPECT_EQ(o.exact["uncut_fraction"].get<double>(), 0.0) << summary(o);
 }
 
+// On the 3 mm crest the interior holds; where the crest runs out at the patch's edge the exact
+// surface's whole-patch scallop exceeds h and the certificate, which fails there, says so. With
+// the passes across the crest (the map's orientation before param.boundary_map v3) this sample
+// of 5000 points held it too (0.0492), but another sample of the same surface did not in either
+// orientation (0.0742 across, 0.0724 along; bench/extra_surfaces.py's verify, stop 83).
 TEST(CertificateHonesty, CleanRoundedCrests) {
   expect_honest({crest(2, 0.7)});
   const Case three_mm{crest(3, 0.3)};
-  expect_holds_on_the_exact_surface(expect_honest(three_mm), three_mm.h);
+  const Outcome o = expect_honest(three_mm);
+  ASSERT_TRUE(o.errors.empty());
+  EXPECT_FALSE(o.certificate["pass"].get<bool>()) << summary(o);
+  EXPECT_LE(num(o.exact["scallop_max_interior"]), 1.01 * three_mm.h + o.fit_error) << summary(o);
+  EXPECT_LE(o.exact["gouge_max"].get<double>(), kChord + kTiny + o.fit_error) << summary(o);
+  EXPECT_EQ(o.exact["uncut_fraction"].get<double>(), 0.0) << summary(o);
 }
 
 // The certificate's 20-point quadric lies about 0.001 mm low on this crest's top: before its

@@ -67,18 +67,26 @@ TEST(BoundaryMap, RectangleSidesByChordLength) {
 TEST(BoundaryMap, ExplicitCornersAndUnequalSides) {
   auto P = uneven_square();
   auto loop = iota_loop(P.size());
-  // Corners at positions 1, 3, 10, 15: side 1 is 20 - 6.67, side 4 is 20 + 6.67.
+  // Corners at positions 1, 3, 10, 15: side 1 is 20 - 6.67, side 4 is 20 + 6.67. Sides 2 and 4
+  // (20 and 26.67) are the longer pair, so they go along u: corner 15 at the origin.
   UVMap m = map_boundary(P, loop, BoundaryDomain::Rectangle, parse_corners("15, 1,3,10", P.size()), 0);
   EXPECT_EQ(m.corners, (std::vector<int>{1, 3, 10, 15}));
-  EXPECT_NEAR(m.width, (40.0 / 3 + 20) / 2, 1e-12);
-  EXPECT_NEAR(m.height, (20 + 20 + 20.0 / 3) / 2, 1e-12);
-  EXPECT_LT((m.boundary_uv[1] - Eigen::Vector2d(0, 0)).norm(), 1e-12);
-  EXPECT_LT((m.boundary_uv[3] - Eigen::Vector2d(m.width, 0)).norm(), 1e-12);
-  EXPECT_LT((m.boundary_uv[10] - Eigen::Vector2d(m.width, m.height)).norm(), 1e-12);
-  EXPECT_LT((m.boundary_uv[15] - Eigen::Vector2d(0, m.height)).norm(), 1e-12);
+  EXPECT_NEAR(m.width, (20 + 20 + 20.0 / 3) / 2, 1e-12);
+  EXPECT_NEAR(m.height, (40.0 / 3 + 20) / 2, 1e-12);
+  EXPECT_LT((m.boundary_uv[15] - Eigen::Vector2d(0, 0)).norm(), 1e-12);
+  EXPECT_LT((m.boundary_uv[1] - Eigen::Vector2d(m.width, 0)).norm(), 1e-12);
+  EXPECT_LT((m.boundary_uv[3] - Eigen::Vector2d(m.width, m.height)).norm(), 1e-12);
+  EXPECT_LT((m.boundary_uv[10] - Eigen::Vector2d(0, m.height)).norm(), 1e-12);
   // Position 0 lies on side 4 (15 -> 1, wrapping), 20/3 of its 80/3 mm from the end.
-  EXPECT_NEAR(m.boundary_uv[0].x(), 0, 1e-12);
-  EXPECT_NEAR(m.boundary_uv[0].y(), m.height * (20.0 / 3) / (80.0 / 3), 1e-12);
+  EXPECT_NEAR(m.boundary_uv[0].x(), m.width * (60.0 / 3) / (80.0 / 3), 1e-12);
+  EXPECT_NEAR(m.boundary_uv[0].y(), 0, 1e-12);
+  // Corners at 0, 5, 10, 15: sides 1 and 3 (25.71 and 20) are the longer pair, as they come:
+  // corner 0 at the origin.
+  UVMap n = map_boundary(P, loop, BoundaryDomain::Rectangle, parse_corners("0,5,10,15", P.size()), 0);
+  EXPECT_NEAR(n.width, (20 + 40.0 / 7 + 20) / 2, 1e-12);
+  EXPECT_NEAR(n.height, (100.0 / 7 + 20) / 2, 1e-12);
+  EXPECT_LT((n.boundary_uv[0] - Eigen::Vector2d(0, 0)).norm(), 1e-12);
+  EXPECT_LT((n.boundary_uv[5] - Eigen::Vector2d(n.width, 0)).norm(), 1e-12);
 }
 
 TEST(BoundaryMap, CornersOfANoisySquarePatchAreItsCorners) {
