@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <unordered_map>
 
 #include "nodes/cloud/knn.h"
 #include "nodes/geom/normal_equations.h"
@@ -214,6 +215,91 @@ Projection project_with(const Vector3d* X, const double* d2, int m, double h2, c
   return fitted ? projection_of(f, X[0], up, with_variance) : out;
 }
 
+// A fit kept to be evaluated at points other than its centre: the widest scales of the points
+// around a centre are fitted once there (DenoiseOptions::share).
+struct SharedFit {
+  int terms = 0;  // 6 (quadric) or 10 (cubic); 0: none (a degenerate neighbourhood)
+  Vector3d origin = Vector3d::Zero(), n = Vector3d::UnitZ(), t1 = Vector3d::UnitX(), t2 = Vector3d::UnitY();
+  double inv_h = 0;
+  Eigen::Matrix<double, 10, 1> coef = Eigen::Matrix<double, 10, 1>::Zero();
+  // A^-1 B A^-1: the variance of the polynomial's value at basis phi is sigma^2 phi^T cov phi
+  Eigen::Matrix<double, 10, 10> cov = Eigen::Matrix<double, 10, 10>::Zero();
+  double residual_variance = -1, dof = 0;
+  // the standard error at the centre / sigma, as projection_of gives it there
+  double spread() const { return std::sqrt(std::max(0.0, cov(0, 0))); }
+};
+
+template <int N>
+SharedFit shared_fit(const PolynomialFit<N>& f, const Vector3d& origin, bool with_variance) {
+  SharedFit out;
+  out.terms = N;
+  out.origin = origin, out.n = f.n, out.t1 = f.t1, out.t2 = f.t2, out.inv_h = f.inv_h;
+  out.coef.template head<N>() = f.coef;
+  const typename PolynomialFit<N>::Matrix AinvB = f.ldlt.solve(f.B);
+  out.cov.template topLeftCorner<N, N>() = f.ldlt.solve(AinvB.transpose());
+  if (with_variance && !residual_variance(f, out.residual_variance, out.dof)) out.residual_variance = -1;
+  return out;
+}
+
+// The projection of q onto the shared fit f: q moves along f's normal onto the polynomial above
+// q's place in f's frame (projection_of, evaluated away from the centre).
+template <int N>
+Projection evaluate_shared(const SharedFit& f, const Vector3d& q, const Vector3d& up) {
+  using Vector = Eigen::Matrix<double, N, 1>;
+  const Vector3d r = q - f.origin;
+  const double s = r.dot(f.t1) * f.inv_h, t = r.dot(f.t2) * f.inv_h;
+  const Vector phi = polynomial_basis<N>(s, t);
+  Vector ds, dt;  // d phi / ds, d phi / dt
+  if constexpr (N == 6) {
+    ds << 0, 1, 0, 2 * s, t, 0;
+    dt << 0, 0, 1, 0, s, 2 * t;
+  } else {
+    ds << 0, 1, 0, 2 * s, t, 0, 3 * s * s, 2 * s * t, t * t, 0;
+    dt << 0, 0, 1, 0, s, 2 * t, 0, s * s, 2 * s * t, 3 * t * t;
+  }
+  const Vector coef = f.coef.template head<N>();
+  Projection out;
+  out.point = q + (coef.dot(phi) - r.dot(f.n)) * f.n;
+  out.normal = (f.n - coef.dot(ds) * f.inv_h * f.t1 - coef.dot(dt) * f.inv_h * f.t2).normalized();
+  if (out.normal.dot(up) < 0) out.normal = -out.normal;
+  out.spread = std::sqrt(std::max(0.0, phi.dot(f.cov.template topLeftCorner<N, N>() * phi)));
+  out.residual_variance = f.residual_variance;
+  out.dof = f.dof;
+  out.moved = true;
+  return out;
+}
+
+Projection evaluate_shared(const SharedFit& f, const Vector3d& q, const Vector3d& up) {
+  if (f.terms == 10) return evaluate_shared<10>(f, q, up);
+  if (f.terms == 6) return evaluate_shared<6>(f, q, up);
+  Projection out;
+  out.point = q;
+  out.normal = up;
+  return out;
+}
+
+// The fit project() makes of X[0..m), kept for sharing (terms 0 where project() would leave the
+// point in place); with `quadric` given and the cubic summed, its leading quadric too.
+SharedFit fit_for_sharing(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up, int degree,
+                          bool with_variance, SharedFit* quadric = nullptr) {
+  SharedFit out;
+  if (quadric) *quadric = SharedFit{};
+  thread_local std::vector<double> w;
+  if (degree == 3 && m >= 10) {
+    if (!(h2 > 0)) return out;
+    PolynomialFit<10> f;
+    const bool fitted = fit_polynomial(X, d2, m, h2, up, w, f);
+    PolynomialFit<6> q;
+    if (quadric && f.summed && leading_quadric(f, q)) *quadric = shared_fit(q, X[0], with_variance);
+    if (fitted) out = shared_fit(f, X[0], with_variance);
+    return out;
+  }
+  if (m < 6 || !(h2 > 0)) return out;
+  PolynomialFit<6> f;
+  if (fit_polynomial(X, d2, m, h2, up, w, f)) out = shared_fit(f, X[0], with_variance);
+  return out;
+}
+
 // `degree` 2 or 3. A neighbourhood of fewer points than the cubic has coefficients is fitted by
 // the quadric: the cubic would leave its point in place. Otherwise a point's scales all take its
 // degree, so that nested fits differ by noise as the agreement test expects (with the quadric
@@ -357,6 +443,86 @@ void summarize_uncertainty(DenoiseResult& res, int scales) {
 }
 }  // namespace
 
+namespace {
+// Cell of a uniform grid over the points (side `cell`), as a key (21 bits per axis: cells that
+// wrap share a key, and only add candidates).
+std::uint64_t cell_key(const Vector3d& p, const Vector3d& lo, double cell) {
+  const auto c = [&](int a) { return static_cast<std::uint64_t>(std::floor((p(a) - lo(a)) / cell)) & 0x1FFFFF; };
+  return (c(0) << 42) | (c(1) << 21) | c(2);
+}
+
+// Centres in a uniform grid, for the nearest within a radius.
+struct CentreGrid {
+  Vector3d lo = Vector3d::Zero();
+  double cell = 0;
+  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells;
+  void add(const std::vector<Vector3d>& X, std::size_t c) { cells[cell_key(X[c], lo, cell)].push_back(c); }
+  // The centre nearest p within sqrt(r2) (ties: the lower index), or -1.
+  long nearest(const std::vector<Vector3d>& X, const Vector3d& p, double r2) const {
+    const int rings = static_cast<int>(std::ceil(std::sqrt(r2) / cell));
+    const Vector3d q = ((p - lo) / cell).array().floor();
+    long best = -1;
+    double best_d2 = r2;
+    for (int dx = -rings; dx <= rings; ++dx)
+      for (int dy = -rings; dy <= rings; ++dy)
+        for (int dz = -rings; dz <= rings; ++dz) {
+          const Vector3d mid = lo + cell * (q + Vector3d(dx + 0.5, dy + 0.5, dz + 0.5));
+          const auto found = cells.find(cell_key(mid, lo, cell));
+          if (found == cells.end()) continue;
+          for (std::size_t c : found->second) {
+            const double d2 = (X[c] - p).squaredNorm();
+            if (d2 < best_d2 || (d2 == best_d2 && best >= 0 && static_cast<long>(c) < best))
+              best = static_cast<long>(c), best_d2 = d2;
+          }
+        }
+    return best;
+  }
+};
+
+// The centres of the shared fits and the points each serves (CSR: centre c's points are
+// member[first[c] .. first[c + 1])).
+struct CentreMembers {
+  std::vector<std::size_t> centre, first, member;
+};
+
+// A point becomes a centre when no centre so far lies within share times its reach (its k-th
+// neighbour's distance), the points taken in the cloud's order; then each point goes to its
+// nearest centre, which lies within that.
+CentreMembers share_centres(const std::vector<Vector3d>& X, const std::vector<double>& reach, double share) {
+  CentreGrid grid;
+  grid.lo = X[0];
+  for (const Vector3d& p : X) grid.lo = grid.lo.cwiseMin(p);
+  std::vector<double> r = reach;
+  std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
+  grid.cell = std::max(share * r[r.size() / 2], 1e-9);
+  CentreMembers out;
+  std::vector<int> slot(X.size(), -1);
+  for (std::size_t i = 0; i < X.size(); ++i) {
+    const double within = share * reach[i];
+    if (grid.nearest(X, X[i], within * within) >= 0) continue;
+    grid.add(X, i);
+    slot[i] = static_cast<int>(out.centre.size());
+    out.centre.push_back(i);
+  }
+  std::vector<int> of(X.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, X.size(), 1024), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const double within = share * reach[i];
+      const long c = grid.nearest(X, X[i], within * within);
+      of[i] = c < 0 ? slot[i] : slot[static_cast<std::size_t>(c)];  // none: i is a centre itself
+    }
+  });
+  out.first.assign(out.centre.size() + 1, 0);
+  for (int c : of) ++out.first[static_cast<std::size_t>(c) + 1];
+  for (std::size_t c = 0; c < out.centre.size(); ++c) out.first[c + 1] += out.first[c];
+  out.member.resize(X.size());
+  std::vector<std::size_t> next(out.first.begin(), out.first.end() - 1);
+  for (std::size_t i = 0; i < X.size(); ++i) out.member[next[static_cast<std::size_t>(of[i])]++] = i;
+  return out;
+}
+}  // namespace
+
+constexpr std::size_t kSharedScales = 3;  // DenoiseOptions::share: the widest three scales are shared
 constexpr int kMaxWiden = 2;
 constexpr int kCubicFromK = 64;  // DenoiseOptions::degree 3 applies from this k
 constexpr double kCubicSpreadRatio = 1.1;  // and where its widest fit's standard error is within this of the quadric's
@@ -483,7 +649,9 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
     }
     // The projection of point i from its `kk` nearest neighbours (kk > k: a wider neighbourhood,
     // the radius grown by sqrt(kk / k), so as many points again count on a one-sided rim).
-    auto fit_point = [&](std::size_t i, Scratch& s, int kk, Projection* quadric = nullptr) {
+    // Point i's `kk` nearest neighbours within its radius into s.pts / s.pd2 (the point itself
+    // first), and the radius's square, grown by kk / k, into s.R2.
+    auto gather = [&](std::size_t i, Scratch& s, int kk) {
       if (kk == k) {
         neighbours(i, s);
       } else {
@@ -518,16 +686,19 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
         s.pts.push_back(X[s.idx[j]]);
         s.pd2.push_back(s.d2[j]);
       }
+    };
+    auto fit_point = [&](std::size_t i, Scratch& s, int kk, Projection* quadric = nullptr) {
+      gather(i, s, kk);
       // Gaussian width h = R / sqrt(2): the weight at R is e^-2, so the fit is local but still
       // averages over most of the neighbourhood (measured: lower noise than h = R / 2 for the
       // same k, with no visible bias).
       const Vector3d up = N.empty() ? Vector3d::UnitZ() : N[i];
-      return project(s.pts.data(), s.pd2.data(), static_cast<int>(s.pts.size()), R2 / 2, up, point_degree[i],
+      return project(s.pts.data(), s.pd2.data(), static_cast<int>(s.pts.size()), s.R2 / 2, up, point_degree[i],
                      lack_of_fit, quadric);
     };
     // The projection of point i from the narrower neighbourhood of radius R sqrt(kk / k), the
     // subset of the one fit_point(i, s, k) has just gathered into s.
-    auto fit_subset = [&](std::size_t i, Scratch& s, int kk) {
+    auto subset = [&](Scratch& s, int kk) {
       const double R2 = s.R2 * kk / k;
       s.sub_pts.clear();
       s.sub_pd2.clear();
@@ -536,6 +707,10 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
           s.sub_pts.push_back(s.pts[j]);
           s.sub_pd2.push_back(s.pd2[j]);
         }
+      return R2;
+    };
+    auto fit_subset = [&](std::size_t i, Scratch& s, int kk) {
+      const double R2 = subset(s, kk);
       const Vector3d up = N.empty() ? Vector3d::UnitZ() : N[i];
       return project(s.sub_pts.data(), s.sub_pd2.data(), static_cast<int>(s.sub_pts.size()), R2 / 2, up,
                      point_degree[i], lack_of_fit);
@@ -567,22 +742,11 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
     // if its residual variance passes a lack-of-fit test against sigma^2, within misfit_z of
     // its spread sqrt(2 / dof) (measured on a noisy crest of slope 0.3, radius 3 mm, k = 1200:
     // largest |error| / uncertainty 1.21 without the test, 0.90 with it).
-    auto fit_scales = [&](std::size_t i, Scratch& s) -> Projection {
-      Projection quadric;  // the quadric's widest fit, from the cubic's sums
-      Projection widest = fit_point(i, s, k, point_degree[i] == 3 ? &quadric : nullptr);
-      if (quadric.moved && !(widest.moved && widest.spread <= kCubicSpreadRatio * quadric.spread)) {
-        point_degree[i] = 2;
-        widest = quadric;
-      }
-      bias[i] = 0;
-      chosen[i] = 0;
-      if (ks.size() == 1 || !widest.moved) return widest;
-      std::vector<Projection>& fits = s.fits;
+    auto choose_scale = [&](std::size_t i, Scratch& s) -> Projection {
+      const std::vector<Projection>& fits = s.fits;
+      const Projection& widest = fits.back();
       std::vector<double>& a = s.offsets;
-      fits.resize(ks.size());
       a.resize(ks.size());
-      fits.back() = widest;
-      for (std::size_t j = 0; j + 1 < ks.size(); ++j) fits[j] = fit_subset(i, s, ks[j]);
       for (std::size_t j = 0; j < ks.size(); ++j) a[j] = (fits[j].point - X[i]).dot(widest.normal);
       const double sigma = std::max(0.0, res.noise_sigma);
       std::size_t keep = ks.size();  // none yet
@@ -620,20 +784,114 @@ DenoiseResult mls_denoise(const std::vector<Vector3d>& P, const std::vector<Vect
       chosen[i] = static_cast<int>(ks.size() - 1 - keep);
       return fits[keep];
     };
+    auto fit_scales = [&](std::size_t i, Scratch& s) -> Projection {
+      Projection quadric;  // the quadric's widest fit, from the cubic's sums
+      Projection widest = fit_point(i, s, k, point_degree[i] == 3 ? &quadric : nullptr);
+      if (quadric.moved && !(widest.moved && widest.spread <= kCubicSpreadRatio * quadric.spread)) {
+        point_degree[i] = 2;
+        widest = quadric;
+      }
+      bias[i] = 0;
+      chosen[i] = 0;
+      if (ks.size() == 1 || !widest.moved) return widest;
+      std::vector<Projection>& fits = s.fits;
+      fits.resize(ks.size());
+      fits.back() = widest;
+      for (std::size_t j = 0; j + 1 < ks.size(); ++j) fits[j] = fit_subset(i, s, ks[j]);
+      return choose_scale(i, s);
+    };
+    // Shared wide fits: the widest kSharedScales scales change little from one point to the next
+    // (their neighbourhoods nearly the same points), so they are fitted once at centres share R
+    // apart and each point evaluates those of its nearest centre at itself (evaluate_shared: its
+    // standard error there counts the distance from the centre). The narrower scales, which a
+    // crest or a rim changes within a spacing, stay each point's own. Centre by centre: its fits,
+    // then its points (the fits are dropped after them).
+    const bool sharing = o.share > 0 && index && r2 == 0 && ks.size() > kSharedScales;
+    struct CentreFits {
+      SharedFit fits[kSharedScales];  // the shared scales, narrowest first
+      int degree = 2;
+      double R2 = 0;                  // the centre's squared radius (widest scale)
+    };
+    auto fit_centre = [&](std::size_t i, Scratch& s, CentreFits& cf) {
+      gather(i, s, k);
+      cf.R2 = s.R2;
+      const Vector3d up = N.empty() ? Vector3d::UnitZ() : N[i];
+      SharedFit quadric;
+      SharedFit widest = fit_for_sharing(s.pts.data(), s.pd2.data(), static_cast<int>(s.pts.size()), s.R2 / 2, up,
+                                         point_degree[i], lack_of_fit, point_degree[i] == 3 ? &quadric : nullptr);
+      cf.degree = point_degree[i];
+      // the cubic where it is about as certain as the quadric, as fit_scales decides it
+      if (quadric.terms && !(widest.terms && widest.spread() <= kCubicSpreadRatio * quadric.spread())) {
+        cf.degree = 2;
+        widest = quadric;
+      }
+      cf.fits[kSharedScales - 1] = widest;
+      for (std::size_t j = 0; j + 1 < kSharedScales; ++j) {
+        const double R2 = subset(s, ks[ks.size() - kSharedScales + j]);
+        cf.fits[j] = fit_for_sharing(s.sub_pts.data(), s.sub_pd2.data(), static_cast<int>(s.sub_pts.size()), R2 / 2,
+                                     up, cf.degree, lack_of_fit);
+      }
+    };
+    // Point i from its centre's shared fits and its own narrower ones; its own fits at every scale
+    // where the centre's widest is degenerate.
+    auto fit_scales_shared = [&](std::size_t i, Scratch& s, const CentreFits& cf) -> Projection {
+      if (!cf.fits[kSharedScales - 1].terms) return fit_scales(i, s);
+      const Vector3d up = N.empty() ? Vector3d::UnitZ() : N[i];
+      point_degree[i] = static_cast<char>(cf.degree);
+      bias[i] = 0;
+      chosen[i] = 0;
+      std::vector<Projection>& fits = s.fits;
+      fits.resize(ks.size());
+      const std::size_t own = ks.size() - kSharedScales;
+      for (std::size_t j = 0; j < kSharedScales; ++j) fits[own + j] = evaluate_shared(cf.fits[j], X[i], up);
+      // its own neighbours within the widest own scale's radius (the centre's R, as its subsets)
+      s.R2 = cf.R2;
+      index->query_within(X[i], cf.R2 * ks[own - 1] / k, static_cast<int>(n), s.idx, s.d2, static_cast<int>(i), false);
+      s.pts.assign(1, X[i]);
+      s.pd2.assign(1, 0.0);
+      for (std::size_t j = 0; j < s.idx.size(); ++j) {
+        s.pts.push_back(X[s.idx[j]]);
+        s.pd2.push_back(s.d2[j]);
+      }
+      for (std::size_t j = 0; j < own; ++j) fits[j] = fit_subset(i, s, ks[j]);
+      return choose_scale(i, s);
+    };
     std::atomic<std::size_t> kept{0};
     ParallelProgress done(progress, n, static_cast<double>(it) / iterations,
                           static_cast<double>(it + 1) / iterations);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const auto& range) {
-      Scratch& s = scratch.local();
-      std::size_t kept_here = 0;
-      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-        const Projection p = fit_scales(i, s);
-        store(i, p);
-        if (!p.moved) ++kept_here;
-      }
-      kept += kept_here;
-      done.done(range.size());
-    });
+    if (sharing) {
+      const CentreMembers centres = share_centres(X, reach, o.share);
+      res.shared_centres = centres.centre.size();
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, centres.centre.size(), 4), [&](const auto& range) {
+        Scratch& s = scratch.local();
+        std::size_t kept_here = 0, points = 0;
+        CentreFits cf;
+        for (std::size_t c = range.begin(); c != range.end(); ++c) {
+          fit_centre(centres.centre[c], s, cf);
+          for (std::size_t m = centres.first[c]; m < centres.first[c + 1]; ++m) {
+            const std::size_t i = centres.member[m];
+            const Projection p = fit_scales_shared(i, s, cf);
+            store(i, p);
+            if (!p.moved) ++kept_here;
+            ++points;
+          }
+        }
+        kept += kept_here;
+        done.done(points);
+      });
+    } else {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const auto& range) {
+        Scratch& s = scratch.local();
+        std::size_t kept_here = 0;
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const Projection p = fit_scales(i, s);
+          store(i, p);
+          if (!p.moved) ++kept_here;
+        }
+        kept += kept_here;
+        done.done(range.size());
+      });
+    }
     // A point narrowed nearly alone, under a quarter of its kIsolationNeighbours nearest
     // narrowed with it, is chance: the neighbourhoods of nearby points overlap it almost wholly,
     // so a shape the wide fit misses would narrow them too (a crest narrows a band, whose edge

@@ -99,6 +99,16 @@ struct DenoiseOptions {
                             // noisy clouds of bench/extra_surfaces.py (the catalog and 5 crests)
                             // at most 0.929, at 1 0.954; but at 1 the model between the points of
                             // the 1 mm crest came to 1.014 (0.898 at 2 and 3).
+  double share = 0.1;        // the three widest scales (k, k/2, k/4) are fitted once at centres
+                            // this times the neighbourhood's radius R apart (each point within
+                            // that of one), and each point evaluates its nearest centre's fits
+                            // at itself, with the standard error there; the narrower scales,
+                            // which a crest or a rim changes within a spacing, stay its own. On the
+                            // catalog's noisy clouds (50 000 points, sigma 0.02, k ~ 1 200) a
+                            // centre per 6.5 points, denoising 1.9 times faster, the median
+                            // uncertainty 1 % higher, the largest |error| / uncertainty over 15
+                            // clouds 0.960 as with every point's own fits. 0: every point its own
+                            // fits at every scale
 };
 
 struct DenoiseResult {
@@ -121,6 +131,7 @@ struct DenoiseResult {
   // uncertainty_factor(scales) * standard_error + bias; when skipped, the points being the input
   // ones, uncertainty_factor(scales) * noise_sigma for every point; at least kUncertaintyFloor
   std::vector<double> uncertainty;
+  std::size_t shared_centres = 0;  // centres of the shared wide fits (0: not shared)
   std::size_t narrowed = 0;  // points kept with a narrower fit than k (sharp shape)
   std::size_t unnarrowed = 0;  // points narrowed alone (by chance) given the widest fit back
   // The uncertainty in brief, for reports (mm): its median (the upper one of an even count),

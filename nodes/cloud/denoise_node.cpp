@@ -11,7 +11,7 @@ namespace scallop::cloud_nodes {
 NodeDecl make_denoise_node() {
   NodeDecl d;
   d.type = "cloud.denoise";
-  d.version = 11;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty, a 0.1 um floor; 6: 5 scales by default; 7: 7 scales, `widen`, a lack-of-fit test, the bias from the 3 nearest narrower scales, lone narrowings undone; 8: `widen` 4 by default; 9: a cubic fit inside (`degree` 3), `misfit_z` 5; 10: `bias_scales` 2; 11: neighbours summed in the search's order, residuals from the normal equations (the same points to 1e-12 mm; the noisy plane's denoising graph 7.81 -> 4.22 s)
+  d.version = 12;  // 2: automatic k, tolerance, report; 3: rim refits, per-point uncertainty; 4: biased rim refits refused; 5: multi-scale fits, bias in the uncertainty, a 0.1 um floor; 6: 5 scales by default; 7: 7 scales, `widen`, a lack-of-fit test, the bias from the 3 nearest narrower scales, lone narrowings undone; 8: `widen` 4 by default; 9: a cubic fit inside (`degree` 3), `misfit_z` 5; 10: `bias_scales` 2; 11: neighbours summed in the search's order, residuals from the normal equations (the same points to 1e-12 mm; the noisy plane's denoising graph 7.81 -> 4.22 s); 12: the three widest scales shared between nearby points (`share` 0.1; the noisy plane's denoising 3.55 -> 1.83 s)
   d.description =
       "moving-least-squares denoising: each point projected along its local normal onto a "
       "weighted cubic (inside) or quadric (at the rim) fitted to its neighbours, at the widest of several scales (k, k/2, ... "
@@ -28,7 +28,7 @@ NodeDecl make_denoise_node() {
               "keep it as a margin")
       .output("report", "Report",
               "{noise_sigma (mm, estimated), k (used; 0 when skipped), moved_rms (mm), skipped, "
-              "rim_refitted (points refitted from a wider neighbourhood), rim_refits_biased (of those, kept with the narrower fit because the wider one was biased), narrowed (points kept with a narrower fit than k: sharp shape), unnarrowed (points narrowed alone, by chance, given the widest fit back), bias_max (mm), uncertainty {median, "
+              "rim_refitted (points refitted from a wider neighbourhood), rim_refits_biased (of those, kept with the narrower fit because the wider one was biased), narrowed (points kept with a narrower fit than k: sharp shape), unnarrowed (points narrowed alone, by chance, given the widest fit back), bias_max (mm), shared_centres (centres of the shared wide fits), uncertainty {median, "
               "max, max_at, factor}: how far the points may still be off the real surface}");
   d.options<DenoiseOptions>()
       .integer("k", &DenoiseOptions::k, 0, 4096, "",
@@ -73,6 +73,11 @@ NodeDecl make_denoise_node() {
               "how many noise spreads two nested fits may differ by and still agree")
       .number("bias_growth", &DenoiseOptions::bias_growth, 0.25, 3.0, "",
               "a fit's bias is taken to grow at least by 2^bias_growth per doubling of k")
+      .number("share", &DenoiseOptions::share, 0.0, 0.5, "",
+              "the three widest scales are fitted once at centres this many neighbourhood radii "
+              "apart, and each point evaluates its nearest centre's fits at itself (its "
+              "standard error there counts the distance); its narrower fits stay its own. 0: "
+              "every point its own fits (about 1.9 times longer)")
       .flag("normals", &DenoiseOptions::set_normals,
             "set normals from the fitted quadrics (oriented like the input normals, or "
             "+Z); otherwise the input normals are kept");
@@ -101,6 +106,7 @@ NodeDecl make_denoise_node() {
                    {"rim_refits_biased", r.refits_biased},
                    {"narrowed", r.narrowed},
                    {"unnarrowed", r.unnarrowed},
+                   {"shared_centres", r.shared_centres},
                    {"bias_max", r.bias_max},
                    {"uncertainty", {{"median", r.uncertainty_median},
                                     {"max", r.uncertainty_max},

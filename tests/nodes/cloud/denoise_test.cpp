@@ -118,6 +118,41 @@ std::vector<Vector3d> noisy_crest(const Crest& crest, int n, double sigma, unsig
   return P;
 }
 
+// The three widest scales fitted once per centre and evaluated at the points around it
+// (DenoiseOptions::share, the default) against every point's own fits, on a noisy crest:
+// far fewer wide fits, each point still within its uncertainty of the exact surface, the
+// uncertainty about as before, and the points where their own fits put them, within it.
+TEST(Denoise, SharedWideFitsBoundTheErrorAsTheirOwn) {
+  const Crest crest;
+  const auto P = noisy_crest(crest, 12000, 0.02, 37);
+  DenoiseOptions o;
+  o.k = 512;
+  ASSERT_GT(o.share, 0);
+  const DenoiseResult shared = mls_denoise(P, {}, o);
+  o.share = 0;
+  const DenoiseResult own = mls_denoise(P, {}, o);
+  EXPECT_EQ(own.shared_centres, 0u);
+  // a centre per 4 points here (measured 3 029 of 12 000; the spacing is a tenth of the radius)
+  EXPECT_GT(shared.shared_centres, P.size() / 40);
+  EXPECT_LT(shared.shared_centres, P.size() / 3);
+  double worst = 0;
+  std::vector<double> moves;  // from where the point's own fits put it, in its uncertainty
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    worst = std::max(worst, std::abs(crest.distance(shared.points[i])) / shared.uncertainty[i]);
+    moves.push_back((shared.points[i] - own.points[i]).norm() / own.uncertainty[i]);
+  }
+  EXPECT_LE(worst, 1.0);  // measured 0.768 (own fits 0.794)
+  EXPECT_GT(worst, 0.3);  // and not a vacuous bound
+  std::sort(moves.begin(), moves.end());
+  EXPECT_LT(moves[moves.size() * 9 / 10], 0.1);  // measured 0.037 (median 0.006)
+  auto median = [](std::vector<double> u) {
+    std::nth_element(u.begin(), u.begin() + u.size() / 2, u.end());
+    return u[u.size() / 2];
+  };
+  // measured 0.01566 against 0.01548 mm
+  EXPECT_NEAR(median(shared.uncertainty), median(own.uncertainty), 0.03 * median(own.uncertainty));
+}
+
 TEST(Denoise, MultiScaleFitBoundsTheErrorOnACrest) {
   const Crest crest;
   const auto P = noisy_crest(crest, 4000, 0.02, 31);
@@ -667,10 +702,11 @@ TEST(DenoiseNode, DenoisesWithOrWithoutNeighbours) {
   auto cloud = std::make_shared<PointCloud>();
   cloud->points = noisy_plane(0.2, 0.1, 1, 20, 20, 1000, 0.03, false, 7);
   auto nb = std::make_shared<Neighborhoods>(compute_knn(cloud->points, 128));
+  // (fits shared between points need a search of their own: not with given neighbourhoods)
   auto a = std::dynamic_pointer_cast<const PointCloud>(
-      run_node(d, {{"k", 128}}, {{"cloud", cloud}}).at("cloud"));
+      run_node(d, {{"k", 128}, {"share", 0.0}}, {{"cloud", cloud}}).at("cloud"));
   auto b = std::dynamic_pointer_cast<const PointCloud>(
-      run_node(d, {{"k", 128}}, {{"cloud", cloud}, {"neighbors", nb}}).at("cloud"));
+      run_node(d, {{"k", 128}, {"share", 0.0}}, {{"cloud", cloud}, {"neighbors", nb}}).at("cloud"));
   ASSERT_TRUE(a && b);
   ASSERT_TRUE(a->has_normals());
   // the same neighbours, summed in another order (the search's own without them, by distance
@@ -682,7 +718,7 @@ TEST(DenoiseNode, DenoisesWithOrWithoutNeighbours) {
             rms_plane_distance(cloud->points, 0.2, 0.1, 1) / 3);
   // normals off: the input's (none here) are kept
   auto c = std::dynamic_pointer_cast<const PointCloud>(
-      run_node(d, {{"k", 128}, {"normals", false}}, {{"cloud", cloud}}).at("cloud"));
+      run_node(d, {{"k", 128}, {"share", 0.0}, {"normals", false}}, {{"cloud", cloud}}).at("cloud"));
   EXPECT_FALSE(c->has_normals());
   EXPECT_EQ(c->points, a->points);
 }
