@@ -532,7 +532,18 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   if (!std::isfinite(max_inner)) {
     reasons.push_back("no interior sample was cut");
   } else if (max_inner > 1.01 * H) {
-    std::snprintf(buf, sizeof buf, "interior scallop max %.4g > 1.01 H (whole part %.4g)", max_inner, max_all);
+    // where, and how much of the part: a few places between the samples or whole faces
+    const SimSample& at = res.samples[highest];
+    const double spacing_area = measured > 0 && n_measured > 0 ? measured / double(n_measured) : 0;
+    char extent[160];
+    if (over > 0)
+      std::snprintf(extent, sizeof extent, "%.4g mm² over 1.01 H or uncut, %.3g %% of the measured area", over,
+                    100 * over / measured);
+    else
+      std::snprintf(extent, sizeof extent, "between the samples: less than one sample's area (%.3g mm²) over 1.01 H",
+                    spacing_area);
+    std::snprintf(buf, sizeof buf, "interior scallop max %.4g > 1.01 H (whole part %.4g) at (%.3f, %.3f, %.3f); %s",
+                  max_inner, max_all, at.x, at.y, at.z, extent);
     reasons.push_back(buf);
   }
   if (gouge_max > tol) {

@@ -82,6 +82,30 @@ TEST(SimulatePart, TwoSetupsShareTheTopTheScallopIsTheClosedFormTheSidesAreUncut
     if (std::abs(sim.samples[i].z - 10) < 1e-9) EXPECT_FALSE(std::isnan(sim.samples[i].scallop)) << "a top sample is uncut";
 }
 
+// A failing interior maximum says where it is and over how much of the part: the same top cut
+// for h = 0.03, which its cusps (0.04196) exceed along every pass; with the uncut sides, the area
+// over 1.01 H is the report's fraction of the 1200 mm² measured.
+TEST(SimulatePart, AFailingInteriorMaximumSaysWhereAndOverHowMuch) {
+  const double r = 3, h = 0.03, w = 1;
+  const Mesh box = test::quad_box({1, 1, 1}, V(20, 20, 10));
+  std::vector<PartSetupCut> cuts(1);
+  cuts[0].name = "top", cuts[0].feed = top_passes(0, 20, w, r, 10);
+  const nlohmann::json rep = simulate_part(box, cuts, on_its_base(options(r, h))).report;
+  ASSERT_FALSE(rep["pass"].get<bool>());
+  const std::string reason = rep["fail_reasons"][0];
+  const auto& at = rep["scallop_max_interior_at"];
+  EXPECT_NEAR(at["z"].get<double>(), 10, 1e-9);
+  const double over = rep["frac_over_limit"].get<double>() * 1200;
+  EXPECT_GT(over, 800);  // the sides, and the cusps' crests on the top
+  char expected[300];
+  std::snprintf(expected, sizeof expected,
+                "interior scallop max %.4g > 1.01 H (whole part %.4g) at (%.3f, %.3f, %.3f); %.4g mm² over 1.01 H or "
+                "uncut, %.3g %% of the measured area",
+                rep["scallop_max_interior"].get<double>(), rep["scallop_max"].get<double>(), at["x"].get<double>(),
+                at["y"].get<double>(), at["z"].get<double>(), over, 100 * over / 1200);
+  EXPECT_EQ(reason, expected);
+}
+
 // A mesh made from a cloud has its edges only near the part's: edge_uncertainty moves the
 // interior's border nearer them, so that the interior holds the part's own (stricter, never
 // laxer). The box's top cut from y = 2 on: the band below is left high, and more of it counts.
