@@ -108,7 +108,8 @@ struct DenoiseOptions {
                             // centre per 6.5 points, denoising 1.9 times faster, the median
                             // uncertainty 1 % higher, the largest |error| / uncertainty over 15
                             // clouds 0.960 as with every point's own fits. 0: every point its own
-                            // fits at every scale
+                            // fits at every scale (so too with a fixed `radius`, given
+                            // neighbourhoods, or fewer than 4 scales)
 };
 
 struct DenoiseResult {
