@@ -486,8 +486,8 @@ struct CentreMembers {
 };
 
 // A point becomes a centre when no centre so far lies within share times its reach (its k-th
-// neighbour's distance), the points taken in the cloud's order; then each point goes to its
-// nearest centre, which lies within that.
+// neighbour's distance; at most 4 grid cells), the points taken in the cloud's order; then each
+// point goes to its nearest centre, which lies within that.
 CentreMembers share_centres(const std::vector<Vector3d>& X, const std::vector<double>& reach, double share) {
   CentreGrid grid;
   grid.lo = X[0];
@@ -495,10 +495,14 @@ CentreMembers share_centres(const std::vector<Vector3d>& X, const std::vector<do
   std::vector<double> r = reach;
   std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
   grid.cell = std::max(share * r[r.size() / 2], 1e-9);
+  // A point's radius in cells is capped (a point far sparser than the median, or a median of 0
+  // from repeated points, would search a huge block): a smaller radius only makes more centres.
+  constexpr double kMaxCells = 4;
+  auto radius = [&](std::size_t i) { return std::min(share * reach[i], kMaxCells * grid.cell); };
   CentreMembers out;
   std::vector<int> slot(X.size(), -1);
   for (std::size_t i = 0; i < X.size(); ++i) {
-    const double within = share * reach[i];
+    const double within = radius(i);
     if (grid.nearest(X, X[i], within * within) >= 0) continue;
     grid.add(X, i);
     slot[i] = static_cast<int>(out.centre.size());
@@ -507,7 +511,7 @@ CentreMembers share_centres(const std::vector<Vector3d>& X, const std::vector<do
   std::vector<int> of(X.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, X.size(), 1024), [&](const auto& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const double within = share * reach[i];
+      const double within = radius(i);
       const long c = grid.nearest(X, X[i], within * within);
       of[i] = c < 0 ? slot[i] : slot[static_cast<std::size_t>(c)];  // none: i is a centre itself
     }

@@ -153,6 +153,29 @@ TEST(Denoise, SharedWideFitsBoundTheErrorAsTheirOwn) {
   EXPECT_NEAR(median(shared.uncertainty), median(own.uncertainty), 0.03 * median(own.uncertainty));
 }
 
+// Most points repeated (their k-th neighbour at distance 0, and so the median's) and a few spread
+// out: the centres' grid has the median's cell, and a spread point's radius would span millions of
+// cells; it is capped (more centres), and the run ends with every point finite.
+TEST(Denoise, SharedFitsWithRepeatedPointsEndQuickly) {
+  std::vector<Vector3d> P;
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> u(0, 40);
+  for (int c = 0; c < 60; ++c) {
+    const Vector3d p(u(rng), 0.75 * u(rng), 1);
+    for (int copy = 0; copy < 200; ++copy) P.push_back(p);
+  }
+  for (int i = 0; i < 500; ++i) P.emplace_back(u(rng), 0.75 * u(rng), 1);
+  DenoiseOptions o;
+  o.k = 128;
+  const DenoiseResult r = mls_denoise(P, {}, o);
+  ASSERT_EQ(r.points.size(), P.size());
+  EXPECT_GT(r.shared_centres, 0u);
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    ASSERT_TRUE(r.points[i].allFinite()) << i;
+    ASSERT_TRUE(std::isfinite(r.uncertainty[i])) << i;
+  }
+}
+
 TEST(Denoise, MultiScaleFitBoundsTheErrorOnACrest) {
   const Crest crest;
   const auto P = noisy_crest(crest, 4000, 0.02, 31);
