@@ -15,9 +15,9 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
-#include <unordered_map>
 
 #include "nodes/cloud/knn.h"
+#include "nodes/geom/cell_hash_3d.h"
 #include "nodes/geom/normal_equations.h"
 
 namespace scallop {
@@ -444,40 +444,16 @@ void summarize_uncertainty(DenoiseResult& res, int scales) {
 }  // namespace
 
 namespace {
-// Cell of a uniform grid over the points (side `cell`), as a key (21 bits per axis: cells that
-// wrap share a key, and only add candidates).
-std::uint64_t cell_key(const Vector3d& p, const Vector3d& lo, double cell) {
-  const auto c = [&](int a) { return static_cast<std::uint64_t>(std::floor((p(a) - lo(a)) / cell)) & 0x1FFFFF; };
-  return (c(0) << 42) | (c(1) << 21) | c(2);
+// The centre nearest p within sqrt(r2) (ties: the lower index), or -1; centres filed in `grid`.
+long nearest_centre(const CellHash3& grid, const std::vector<Vector3d>& X, const Vector3d& p, double r2) {
+  long best = -1;
+  double best_d2 = r2;
+  grid.near(p, static_cast<int>(std::ceil(std::sqrt(r2) / grid.cell())), [&](std::size_t c) {
+    const double d2 = (X[c] - p).squaredNorm();
+    if (d2 < best_d2 || (d2 == best_d2 && best >= 0 && static_cast<long>(c) < best)) best = static_cast<long>(c), best_d2 = d2;
+  });
+  return best;
 }
-
-// Centres in a uniform grid, for the nearest within a radius.
-struct CentreGrid {
-  Vector3d lo = Vector3d::Zero();
-  double cell = 0;
-  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells;
-  void add(const std::vector<Vector3d>& X, std::size_t c) { cells[cell_key(X[c], lo, cell)].push_back(c); }
-  // The centre nearest p within sqrt(r2) (ties: the lower index), or -1.
-  long nearest(const std::vector<Vector3d>& X, const Vector3d& p, double r2) const {
-    const int rings = static_cast<int>(std::ceil(std::sqrt(r2) / cell));
-    const Vector3d q = ((p - lo) / cell).array().floor();
-    long best = -1;
-    double best_d2 = r2;
-    for (int dx = -rings; dx <= rings; ++dx)
-      for (int dy = -rings; dy <= rings; ++dy)
-        for (int dz = -rings; dz <= rings; ++dz) {
-          const Vector3d mid = lo + cell * (q + Vector3d(dx + 0.5, dy + 0.5, dz + 0.5));
-          const auto found = cells.find(cell_key(mid, lo, cell));
-          if (found == cells.end()) continue;
-          for (std::size_t c : found->second) {
-            const double d2 = (X[c] - p).squaredNorm();
-            if (d2 < best_d2 || (d2 == best_d2 && best >= 0 && static_cast<long>(c) < best))
-              best = static_cast<long>(c), best_d2 = d2;
-          }
-        }
-    return best;
-  }
-};
 
 // The centres of the shared fits and the points each serves (CSR: centre c's points are
 // member[first[c] .. first[c + 1])).
@@ -489,22 +465,19 @@ struct CentreMembers {
 // neighbour's distance; at most 4 grid cells), the points taken in the cloud's order; then each
 // point goes to its nearest centre, which lies within that.
 CentreMembers share_centres(const std::vector<Vector3d>& X, const std::vector<double>& reach, double share) {
-  CentreGrid grid;
-  grid.lo = X[0];
-  for (const Vector3d& p : X) grid.lo = grid.lo.cwiseMin(p);
   std::vector<double> r = reach;
   std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
-  grid.cell = std::max(share * r[r.size() / 2], 1e-9);
+  CellHash3 grid(std::max(share * r[r.size() / 2], 1e-9));
   // A point's radius in cells is capped (a point far sparser than the median, or a median of 0
   // from repeated points, would search a huge block): a smaller radius only makes more centres.
   constexpr double kMaxCells = 4;
-  auto radius = [&](std::size_t i) { return std::min(share * reach[i], kMaxCells * grid.cell); };
+  auto radius = [&](std::size_t i) { return std::min(share * reach[i], kMaxCells * grid.cell()); };
   CentreMembers out;
   std::vector<int> slot(X.size(), -1);
   for (std::size_t i = 0; i < X.size(); ++i) {
     const double within = radius(i);
-    if (grid.nearest(X, X[i], within * within) >= 0) continue;
-    grid.add(X, i);
+    if (nearest_centre(grid, X, X[i], within * within) >= 0) continue;
+    grid.add(X[i], i);
     slot[i] = static_cast<int>(out.centre.size());
     out.centre.push_back(i);
   }
@@ -512,7 +485,7 @@ CentreMembers share_centres(const std::vector<Vector3d>& X, const std::vector<do
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, X.size(), 1024), [&](const auto& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       const double within = radius(i);
-      const long c = grid.nearest(X, X[i], within * within);
+      const long c = nearest_centre(grid, X, X[i], within * within);
       of[i] = c < 0 ? slot[i] : slot[static_cast<std::size_t>(c)];  // none: i is a centre itself
     }
   });

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-#include <unordered_map>
 
+#include "nodes/geom/cell_hash_3d.h"
 #include "nodes/geom/segment.h"
 #include "nodes/mesh/face_geometry.h"
 #include "nodes/mesh/mesh_distance.h"
@@ -40,16 +40,16 @@ std::vector<int> degrees(std::size_t vertices, const std::vector<Edge>& edges) {
 // a piece within one cell's width of a point is filed in one of the point's 27 neighbouring cells.
 class SegmentGrid {
  public:
-  explicit SegmentGrid(double cell) : cell_(cell) {}
+  explicit SegmentGrid(double cell) : cells_(cell) {}
 
   void add(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / cell_)));
+    const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / cells_.cell())));
     for (int k = 0; k < n; ++k) {
       const Eigen::Vector3d p = a + (b - a) * (double(k) / n), q = a + (b - a) * (double(k + 1) / n);
-      const auto lo = key(p.cwiseMin(q)), hi = key(p.cwiseMax(q));
+      const auto lo = cells_.key(p.cwiseMin(q)), hi = cells_.key(p.cwiseMax(q));
       for (auto i = lo[0]; i <= hi[0]; ++i)
         for (auto j = lo[1]; j <= hi[1]; ++j)
-          for (auto l = lo[2]; l <= hi[2]; ++l) cells_[hash({i, j, l})].push_back(pieces_.size());
+          for (auto l = lo[2]; l <= hi[2]; ++l) cells_.add(CellHash3::Key{i, j, l}, pieces_.size());
       pieces_.push_back({p, q});
     }
   }
@@ -57,27 +57,12 @@ class SegmentGrid {
   // f(a, b) for every piece filed near p (some more than once).
   template <class F>
   void near(const Eigen::Vector3d& p, F&& f) const {
-    const auto c = key(p);
-    for (int i = -1; i <= 1; ++i)
-      for (int j = -1; j <= 1; ++j)
-        for (int l = -1; l <= 1; ++l)
-          if (const auto it = cells_.find(hash({c[0] + i, c[1] + j, c[2] + l})); it != cells_.end())
-            for (std::size_t s : it->second) f(pieces_[s][0], pieces_[s][1]);
+    cells_.near(p, 1, [&](std::size_t s) { f(pieces_[s][0], pieces_[s][1]); });
   }
 
  private:
-  double cell_;
+  CellHash3 cells_;
   std::vector<std::array<Eigen::Vector3d, 2>> pieces_;
-  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;  // a hash collision only adds candidates
-
-  std::array<std::int64_t, 3> key(const Eigen::Vector3d& p) const {
-    return {static_cast<std::int64_t>(std::floor(p.x() / cell_)), static_cast<std::int64_t>(std::floor(p.y() / cell_)),
-            static_cast<std::int64_t>(std::floor(p.z() / cell_))};
-  }
-  static std::uint64_t hash(const std::array<std::int64_t, 3>& k) {
-    return static_cast<std::uint64_t>(k[0]) * 73856093ULL ^ static_cast<std::uint64_t>(k[1]) * 19349663ULL ^
-           static_cast<std::uint64_t>(k[2]) * 83492791ULL;
-  }
 };
 
 enum class Snap : std::uint8_t { Kept, Corner, Feature, Surface };
