@@ -423,20 +423,51 @@ class PassGuard {
       t.highest_lift = dz, t.highest_lift_at = a.contact, t.highest_lift_from = a.contact + r_ * a.normal - Eigen::Vector3d(0, 0, dz);
   }
 
+  // The positions are lifted, then the moves between them refined, each independently of the
+  // others: in blocks of kBlock across threads (a rim pass of a million-point cloud, 4 793
+  // positions beyond the cloud's edge, took 1.7 s alone on one thread while the other had
+  // finished every other pass), the blocks' tallies added in order, so the result is the one
+  // pass in order gives. A move raised whole moves its ends, which the next move shares: those
+  // stay in order.
   ToolpathPass guard(const ToolpathPass& p, Tally& t) const {
+    constexpr std::size_t kBlock = 64;
     const bool has_uv = p.uv.size() == p.contact.size();
-    std::vector<Sample> s(p.contact.size());
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      s[i] = {p.contact[i], p.normal[i], has_uv ? p.uv[i] : Eigen::Vector2d::Zero()};
-      ++t.positions;
-      lift_if_needed(s[i], /*planned_position=*/true, t);
-    }
+    const std::size_t n = p.contact.size(), blocks = (n + kBlock - 1) / kBlock;
+    std::vector<Sample> s(n);
+    std::vector<Tally> lifts(blocks);
+    tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+      for (std::size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+        s[i] = {p.contact[i], p.normal[i], has_uv ? p.uv[i] : Eigen::Vector2d::Zero()};
+        ++lifts[b].positions;
+        lift_if_needed(s[i], /*planned_position=*/true, lifts[b]);
+      }
+    });
+    for (const Tally& x : lifts) t.add(x);
+    // Each block's moves: from the position before its first (held as its out[0]) to its last.
+    struct Moves {
+      std::vector<Sample> out;
+      std::vector<std::size_t> stuck;  // indices into out, as refine gives them
+      Tally t;
+    };
+    std::vector<Moves> moves(blocks);
+    tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+      Moves& m = moves[b];
+      const std::size_t lo = b * kBlock, hi = std::min(n, lo + kBlock);
+      if (lo > 0) m.out.push_back(s[lo - 1]);
+      for (std::size_t i = lo; i < hi; ++i) {
+        if (i > 0) refine(s[i - 1], s[i], 0, m.out, m.stuck, m.t);
+        m.out.push_back(s[i]);
+      }
+    });
     std::vector<Sample> out;
     std::vector<std::size_t> stuck;
     out.reserve(s.size());
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      if (i > 0) refine(s[i - 1], s[i], 0, out, stuck, t);
-      out.push_back(s[i]);
+    for (std::size_t b = 0; b < blocks; ++b) {
+      Moves& m = moves[b];
+      const std::size_t offset = out.empty() ? 0 : out.size() - 1;  // where m.out[0] is in out
+      for (std::size_t k : m.stuck) stuck.push_back(offset + k);
+      out.insert(out.end(), m.out.begin() + (b > 0 ? 1 : 0), m.out.end());
+      t.add(m.t);
     }
     for (std::size_t k : stuck) raise_whole(out[k], out[k + 1], t);
     ToolpathPass q;
