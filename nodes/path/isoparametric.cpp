@@ -218,6 +218,7 @@ class Planner {
   double chord_overcut_max = 0, chord_undercut_max = 0;
   double forward_min = kInf, forward_max = 0;
   int forward_floor_hits = 0;
+  Eigen::Vector3d forward_floor_at = Eigen::Vector3d::Zero();  // the first of them
 
   SurfaceSample at(double s, double t) const { return f_(co_.uv(s, t)); }
   bool over_hole(double s, double t) const { return !holes_.empty() && holes_.any_contains(co_.uv(s, t)); }
@@ -522,7 +523,7 @@ class Planner {
         const double ratio = chord_ratio(s, t, t + dt, centre(x), centre(x1), over, under);
         if (ratio <= 1) break;
         if (dt <= dt_floor || iter >= 40) {
-          ++forward_floor_hits;
+          if (forward_floor_hits++ == 0) forward_floor_at = x.position;
           unchecked = true;
           break;
         }
@@ -1310,18 +1311,37 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   if (!co.polar)
     for (const auto* group : {&outline, &band})
       for (const Pass& P : *group) emit(P, co, false);
+  // Where a warning's place lies beyond the cloud's outer loop, the passes there run over the
+  // band the real outline may reach into, over a surface extrapolated from the rim, and the
+  // certificate measures up to the loop: said, so that a place off the part is not taken for one
+  // on it (the bundled example's contour program warned of a strip 2.4 mm beyond its corner).
+  const Outline outer_outline = [&] {
+    std::vector<Eigen::Vector2d> polygon;
+    if (outer_usable)
+      for (int i : map.outer_loop) polygon.push_back(cloud.points[i].head<2>());
+    return Outline(polygon.size() >= 3 ? std::vector<std::vector<Eigen::Vector2d>>{polygon}
+                                       : std::vector<std::vector<Eigen::Vector2d>>{});
+  }();
+  auto place = [&](const Eigen::Vector3d& p) {
+    std::string text = "x " + fmt(p.x()) + ", y " + fmt(p.y());
+    const double beyond = outer_outline.empty() ? 0.0 : outer_outline.beyond_outer(p.head<2>());
+    if (beyond > 0)
+      text += ", " + fmt(beyond) + " mm beyond the cloud's outline, where the surface is extrapolated and the "
+              "certificate does not measure";
+    return text;
+  };
   if (!strips_over.empty())
     warnings.push_back(std::to_string(strips_over.size()) + " of " +
                        std::to_string(passes.size() - 1) +
                        " strips between passes leave more than the scallop limit at every side "
-                       "step tried (up to " + fmt(strip_over_worst) + " mm, near x " +
-                       fmt(strip_over_where.x()) + ", y " + fmt(strip_over_where.y()) +
+                       "step tried (up to " + fmt(strip_over_worst) + " mm, near " + place(strip_over_where) +
                        "; strips_over_limit_at lists them): a concave place the ball cannot "
                        "reach, a kink, or a surface too uncertain there");
   if (planner.forward_floor_hits > 0)
     warnings.push_back(std::to_string(planner.forward_floor_hits) +
                        " forward steps reached the smallest step with the chord still too far "
-                       "off (a kink in the surface or the map?)");
+                       "off (a kink in the surface or the map?), the first near " +
+                       place(planner.forward_floor_at));
   if (rim_height > o.scallop_height)
     warnings.push_back("the cloud's outline is known only to +-" + fmt(rim_delta) +
                        " mm (its points' fits are one-sided, and between them the surface is extrapolated): "
