@@ -283,18 +283,30 @@ TEST(ContourGrid, TheNodePlansEveryPatchAlongItsOwnDirection) {
 }
 
 // The part's own mesh 0.004 mm under the patch: the scallop is held to h - 0.004 on the patch (a
-// facet's sag on a curved part is like this), and never to less than h / 2.
+// facet's sag on a curved part is like this), and never to less than h / 2. Patches more than
+// h / 2 off are told in one line, however many they are.
 TEST(ContourGrid, WhereThePartLiesOffThePatchTheLimitIsLoweredByThatMuch) {
   auto s = std::make_shared<Surfaces>();
   s->patches.push_back(test::flat_patch({0, 0, 5}, {20, 0, 5}, {0, 10, 5}, {20, 10, 5}, {0, 0, 1}));
   s->patches.back().rows = s->patches.back().cols = 2;
+  s->patches.push_back(s->patches.back());
   for (const auto& [depth, target] : {std::pair{0.004, 0.006}, std::pair{1.0, 0.005}}) {
     auto part = std::make_shared<Mesh>();
     part->vertices = {{-5, -5, 5 - depth}, {25, -5, 5 - depth}, {25, 15, 5 - depth}, {-5, 15, 5 - depth}};
     part->add_face({0, 1, 2, 3});
+    std::vector<std::string> warnings;
     auto out = test::run_node(path_nodes::make_contour_grid_node(),
                               {{"tool_radius", 2}, {"scallop_height", 0.01}, {"chord_error", 0.005}},
-                              {{"surfaces", s}, {"part", part}});
+                              {{"surfaces", s}, {"part", part}}, nullptr, &warnings);
+    if (depth > 0.005) {
+      ASSERT_EQ(warnings.size(), 1u);
+      EXPECT_EQ(warnings[0],
+                "2 of 2 patches lie more than h / 2 off the part's faces (up to 1 mm, patch 0; the report's "
+                "part_distance_max per patch): their contours there are planned to h / 2 and may leave more than h "
+                "on the part (the certificate measures it)");
+    } else {
+      EXPECT_TRUE(warnings.empty());
+    }
     const auto& r = std::dynamic_pointer_cast<const Report>(out.at("report"))->data["patches"][0];
     EXPECT_NEAR(r["part_distance_max"].get<double>(), depth, 1e-9);
     EXPECT_NEAR(r["scallop_limit_min"].get<double>(), target, 1e-12);
