@@ -3,6 +3,7 @@
 #include <string>
 
 #include "engine/node.h"
+#include "nodes/geom/point_text.h"
 #include "nodes/cloud/trim_steep.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
@@ -10,12 +11,6 @@
 namespace scallop::cloud_nodes {
 
 namespace {
-
-std::string fmt(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.4g", x);
-  return b;
-}
 
 
 }  // namespace
@@ -71,7 +66,7 @@ NodeDecl make_trim_steep_node() {
                    {"regions", regions}};
     if (r.kept.size() < 10)
       throw NodeError("only " + std::to_string(r.kept.size()) + " of " + std::to_string(cloud->size()) +
-                      " points are not steeper than " + fmt(o.max_slope_deg) +
+                      " points are not steeper than " + short_number(o.max_slope_deg) +
                       " degrees: nothing left to machine from above (raise max_slope)");
     if (trimmed > 0) {
       const TrimmedRegion& g = r.regions.front();
@@ -79,17 +74,17 @@ NodeDecl make_trim_steep_node() {
       // clamp, a second object in the scan): raising it would not keep them.
       const std::string what =
           r.steep == 0 ? " apart from the largest connected piece, which is machined"
-                       : " steeper than " + fmt(o.max_slope_deg) + " degrees or cut off by them";
+                       : " steeper than " + short_number(o.max_slope_deg) + " degrees or cut off by them";
       const std::string advice =
           r.steep == 0 ? "; not connected to it through their " + std::to_string(o.k) +
                              " nearest neighbours: give such a piece as a part of its own to machine it"
                        : "; raise max_slope to keep more";
       const std::size_t pieces = r.regions.size();
-      ctx.warn("not machined: " + std::to_string(trimmed) + " points (" + fmt(r.trimmed_area) +
-               " mm2, " + fmt(100 * r.trimmed_area / r.area) + " % of the area)" + what + ", in " +
+      ctx.warn("not machined: " + std::to_string(trimmed) + " points (" + short_number(r.trimmed_area) +
+               " mm2, " + short_number(100 * r.trimmed_area / r.area) + " % of the area)" + what + ", in " +
                std::to_string(pieces) + (pieces == 10 ? " or more" : "") + (pieces == 1 ? " piece" : " pieces") +
-               "; the largest (" + fmt(g.area) + " mm2) from x " + fmt(g.min.x()) + " to " +
-               fmt(g.max.x()) + ", y " + fmt(g.min.y()) + " to " + fmt(g.max.y()) + advice);
+               "; the largest (" + short_number(g.area) + " mm2) from x " + short_number(g.min.x()) + " to " +
+               short_number(g.max.x()) + ", y " + short_number(g.min.y()) + " to " + short_number(g.max.y()) + advice);
     }
     PointCloud out;
     out.points.reserve(r.kept.size());

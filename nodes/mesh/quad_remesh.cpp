@@ -10,6 +10,7 @@
 #include <numeric>
 
 #include "nodes/geom/kd_tree.h"
+#include "nodes/geom/point_text.h"
 #include "nodes/geom/segment.h"
 #include "nodes/geom/union_find.h"
 #include "nodes/mesh/external_process.h"
@@ -105,12 +106,6 @@ main()
 
 std::string plural(std::size_t n, const char* one, const char* many) {
   return std::to_string(n) + " " + (n == 1 ? one : many);
-}
-
-std::string fmt(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.4g", x);
-  return b;
 }
 
 template <class T>
@@ -284,10 +279,10 @@ Mesh run_quadriflow(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshRepo
       run_process({report.blender.string(), "-b", "--factory-startup", "-noaudio", "--python-exit-code", "3", "--python",
                    script.string(), "--", in.string(), out.string(), std::to_string(report.target_faces),
                    std::to_string(o.seed)},
-                  log, dir.path(), o.timeout_s, [&](double s) { say(0.05, what + ": " + fmt(std::round(s)) + " s"); });
+                  log, dir.path(), o.timeout_s, [&](double s) { say(0.05, what + ": " + short_number(std::round(s)) + " s"); });
   report.seconds = run.seconds;
   const std::string who = "Blender (" + report.blender.string() + ")";
-  if (run.timed_out) throw QuadriflowRanTooLong("QuadriFlow ran longer than " + fmt(o.timeout_s) + " s and was stopped");
+  if (run.timed_out) throw QuadriflowRanTooLong("QuadriFlow ran longer than " + short_number(o.timeout_s) + " s and was stopped");
   if (run.signal != 0)
     throw std::runtime_error(who + " was ended by signal " + std::to_string(run.signal) + output_lines(log));
   if (run.exit_status != 0)
@@ -512,7 +507,7 @@ std::string quads_off_the_input(const Mesh& input, const Mesh& quads) {
   const MeshTopology t = mesh_topology(input, mesh_edges(input));
   auto count = [](int n) { return static_cast<std::size_t>(n); };
   return "QuadriFlow's quads are not usable: " + std::to_string(off) + " of " + std::to_string(quads.num_vertices()) +
-         " vertices lie outside the input's bounding box, up to " + fmt(farthest) +
+         " vertices lie outside the input's bounding box, up to " + short_number(farthest) +
          " mm from it: QuadriFlow did not converge on this mesh (" + plural(count(t.components), "piece", "pieces") +
          ", " + plural(count(t.boundary_loops), "boundary loop", "boundary loops") + ", " +
          plural(count(t.genus), "handle", "handles") +
@@ -567,7 +562,7 @@ Mesh quad_remesh(const Mesh& mesh, const QuadRemeshOptions& o, QuadRemeshReport&
   if (reference.empty()) reference = sharp_edges(mesh, mesh_edges(mesh), o.angle_deg).edges;
   report.feature_length_below_60 = length_below_60(mesh, reference);
   if (report.feature_length_below_60 > 0)
-    report.warning = fmt(report.feature_length_below_60) + " mm of the feature curves are 60 degrees or softer: "
+    report.warning = short_number(report.feature_length_below_60) + " mm of the feature curves are 60 degrees or softer: "
                      "QuadriFlow does not keep them sharp";
 
   // QuadriFlow now and then tears a hole or leaves a mesh that is not a manifold (the domed

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "nodes/geom/kmeans.h"
+#include "nodes/geom/point_text.h"
 #include "nodes/mesh/face_geometry.h"
 #include "nodes/mesh/keep_faces.h"
 #include "nodes/mesh/mesh_topology.h"
@@ -17,13 +18,9 @@
 namespace scallop {
 namespace {
 
-std::string fmt(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.3g", x);
-  return b;
+std::string direction_text(const Eigen::Vector3d& d) {
+  return "(" + short_number(d.x(), 3) + ", " + short_number(d.y(), 3) + ", " + short_number(d.z(), 3) + ")";
 }
-
-std::string fmt(const Eigen::Vector3d& d) { return "(" + fmt(d.x()) + ", " + fmt(d.y()) + ", " + fmt(d.z()) + ")"; }
 
 // The largest v . d over the vertices that faces use: the part's extreme plane along d.
 double extreme_offset(const Mesh& mesh, const Eigen::Vector3d& d) {
@@ -197,9 +194,9 @@ SetupBaseResult setup_base(const Mesh& mesh, const SetupBaseOptions& o) {
           "no flat face large enough for a setup base: " +
           (largest.faces.empty() ? std::string("no cluster of the face normals has a face on the part's extreme plane")
                                  : "the largest flat part on the part's extreme plane, facing " +
-                                       fmt(Eigen::Vector3d(facing.normalized())) + ", holds " +
-                                       fmt(100 * largest.area / total) + " % of the area") +
-          ", less than min_area " + fmt(100 * o.min_area) +
+                                       direction_text(Eigen::Vector3d(facing.normalized())) + ", holds " +
+                                       short_number(100 * largest.area / total, 3) + " % of the area") +
+          ", less than min_area " + short_number(100 * o.min_area, 3) +
           " %; give the base's outward normal with the parameter direction");
     }
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -215,7 +212,7 @@ SetupBaseResult setup_base(const Mesh& mesh, const SetupBaseOptions& o) {
   r.facing_kept_area = base.kept_area;
   r.plane_offset = extreme_offset(mesh, r.direction);
   if (r.base_faces.size() == mesh.num_faces())
-    throw std::runtime_error("the base facing " + fmt(r.direction) + " is the whole mesh: nothing is left to machine");
+    throw std::runtime_error("the base facing " + direction_text(r.direction) + " is the whole mesh: nothing is left to machine");
 
   std::vector<bool> keep(mesh.num_faces(), true);
   for (auto f : r.base_faces) keep[f] = false;

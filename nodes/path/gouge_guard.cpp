@@ -16,6 +16,7 @@
 
 #include "nodes/cloud/denoise.h"
 #include "nodes/geom/kd_tree.h"
+#include "nodes/geom/point_text.h"
 #include "nodes/path/step_size.h"
 
 namespace scallop {
@@ -487,12 +488,6 @@ class PassGuard {
 
 nlohmann::json point_json(const Eigen::Vector3d& p) { return {{"x", p.x()}, {"y", p.y()}, {"z", p.z()}}; }
 
-std::string mm(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.4g", v);
-  return b;
-}
-
 }  // namespace
 
 GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearance,
@@ -525,9 +520,9 @@ GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearan
   // (e.g. where the (u,v) map folds over): the path would cut air there, or worse.
   if (total.highest_lift > kMaxLiftRadii * r) {
     const Eigen::Vector3d& c = total.highest_lift_from;
-    throw std::runtime_error("the planned ball at (" + mm(c.x()) + ", " + mm(c.y()) + ", " + mm(c.z()) +
-                             ") would have to be lifted by " + mm(total.highest_lift) + " mm (> " +
-                             mm(kMaxLiftRadii) + " tool radii, " + mm(kMaxLiftRadii * r) +
+    throw std::runtime_error("the planned ball at (" + short_number(c.x()) + ", " + short_number(c.y()) + ", " + short_number(c.z()) +
+                             ") would have to be lifted by " + short_number(total.highest_lift) + " mm (> " +
+                             short_number(kMaxLiftRadii) + " tool radii, " + short_number(kMaxLiftRadii * r) +
                              " mm) to clear the cloud's surface: the plan does not follow the surface "
                              "there, e.g. a fold-over of the (u,v) map");
   }
@@ -550,9 +545,9 @@ GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearan
   nlohmann::json warnings = nlohmann::json::array();
   if (total.lifted > 0 || total.raised_moves > 0)
     warnings.push_back(std::to_string(total.lifted) + " tool positions (" + std::to_string(total.inserted) +
-                       " of them added in the middle of moves) were lifted by up to " + mm(total.highest_lift) +
-                       " mm (most near x " + mm(total.highest_lift_at.x()) + ", y " + mm(total.highest_lift_at.y()) +
-                       ") where the planned ball would have cut up to " + mm(total.deepest) +
+                       " of them added in the middle of moves) were lifted by up to " + short_number(total.highest_lift) +
+                       " mm (most near x " + short_number(total.highest_lift_at.x()) + ", y " + short_number(total.highest_lift_at.y()) +
+                       ") where the planned ball would have cut up to " + short_number(total.deepest) +
                        " mm into the cloud's surface (raised by its uncertainty)" +
                        (total.raised_moves > 0 ? ", and " + std::to_string(total.raised_moves) +
                                                      " moves still too deep after their halvings were raised whole"
@@ -561,7 +556,7 @@ GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearan
   if (total.unresolved > 0)
     warnings.push_back(std::to_string(total.unresolved) + " places still cut in after lifting, " +
                        std::to_string(o.max_splits) + " halvings of their moves and raising them whole (deepest near x " +
-                       mm(total.deepest_at.x()) + ", y " + mm(total.deepest_at.y()) + ")");
+                       short_number(total.deepest_at.x()) + ", y " + short_number(total.deepest_at.y()) + ")");
   rep["warnings"] = warnings;
   res.report = std::move(rep);
   return res;

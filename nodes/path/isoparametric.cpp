@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "nodes/geom/height_field_model.h"
+#include "nodes/geom/point_text.h"
 #include "nodes/path/step_size.h"
 #include "nodes/geom/outline.h"
 #include "nodes/path/uv_interpolation.h"
@@ -32,12 +33,6 @@ constexpr double kTwoPi = 2 * M_PI;
 // Bounds on the work: beyond these the map or the cloud is broken (a degenerate map makes the
 // steps vanish), and the planner stops with a clear error instead of running on for hours.
 constexpr std::size_t kMaxPassPoints = 200000;
-
-std::string fmt(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%g", x);
-  return buf;
-}
 
 // (s, t) pass coordinates -> uv; see the header.
 struct Coords {
@@ -542,13 +537,13 @@ class Planner {
       const std::size_t cap = std::min<std::size_t>(kMaxPassPoints, o_.max_points);
       if (P.t.size() > cap)
         throw std::invalid_argument(
-            "a pass (s = " + fmt(s) + ") needs more than " + std::to_string(cap) +
-            " points: the forward step fell to " + fmt(len) +
+            "a pass (s = " + short_number(s, 6) + ") needs more than " + std::to_string(cap) +
+            " points: the forward step fell to " + short_number(len, 6) +
             " mm; the UV map is degenerate there or the cloud too noisy for chord_error " +
-            fmt(o_.chord_error) + " mm (smooth or clean the cloud, or raise chord_error)");
+            short_number(o_.chord_error, 6) + " mm (smooth or clean the cloud, or raise chord_error)");
       if (o_.progress && P.t.size() % 5000 == 0)
         o_.progress(std::min(0.99, s / co_.S),
-                    "pass at s = " + fmt(s) + ": " + std::to_string(P.t.size()) + " points so far");
+                    "pass at s = " + short_number(s, 6) + ": " + std::to_string(P.t.size()) + " points so far");
     }
     lift_segments(P);
     if (P.closed) join_ends(P);
@@ -851,28 +846,28 @@ nlohmann::json concave_regions(const std::vector<Eigen::Vector3d>& pts,
 void check_options(const IsoparametricOptions& o) {
   auto positive = [](double v, const char* what) {
     if (!(v > 0) || !std::isfinite(v))
-      throw std::invalid_argument(std::string(what) + " must be positive (got " + fmt(v) + ")");
+      throw std::invalid_argument(std::string(what) + " must be positive (got " + short_number(v, 6) + ")");
   };
   positive(o.tool_radius, "tool_radius");
   positive(o.scallop_height, "scallop_height");
   positive(o.chord_error, "chord_error");
   positive(o.max_segment, "max_segment");
   if (o.scallop_height >= o.tool_radius)
-    throw std::invalid_argument("scallop_height (" + fmt(o.scallop_height) +
-                                " mm) must be smaller than tool_radius (" + fmt(o.tool_radius) +
+    throw std::invalid_argument("scallop_height (" + short_number(o.scallop_height, 6) +
+                                " mm) must be smaller than tool_radius (" + short_number(o.tool_radius, 6) +
                                 " mm)");
   if (!(o.safety_factor > 0 && o.safety_factor <= 1))
-    throw std::invalid_argument("safety_factor must be in (0, 1] (got " + fmt(o.safety_factor) + ")");
+    throw std::invalid_argument("safety_factor must be in (0, 1] (got " + short_number(o.safety_factor, 6) + ")");
   if (!(o.surface_error >= 0) || !std::isfinite(o.surface_error))
-    throw std::invalid_argument("surface_error must be >= 0 (got " + fmt(o.surface_error) + ")");
+    throw std::invalid_argument("surface_error must be >= 0 (got " + short_number(o.surface_error, 6) + ")");
   if (too_uncertain(o, margins(o, 0)))
     throw std::invalid_argument(
-        "surface_error " + fmt(o.surface_error) + " mm leaves too little of the scallop height " +
-        fmt(o.scallop_height) + " mm (times safety_factor " + fmt(o.safety_factor) +
+        "surface_error " + short_number(o.surface_error, 6) + " mm leaves too little of the scallop height " +
+        short_number(o.scallop_height, 6) + " mm (times safety_factor " + short_number(o.safety_factor, 6) +
         ") to plan for: raise scallop_height or lower surface_error");
   if (!(o.conformal_tolerance >= 0 && o.conformal_tolerance < 90))
     throw std::invalid_argument("conformal_tolerance must be in [0, 90) degrees (got " +
-                                fmt(o.conformal_tolerance) + ")");
+                                short_number(o.conformal_tolerance, 6) + ")");
 }
 
 // How much a plan will take, estimated before planning from the cloud's area and the side interval
@@ -941,8 +936,8 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   Coords co;
   if (want == "rectangle") {
     if (!(map.width > 0 && map.height > 0 && std::isfinite(map.width) && std::isfinite(map.height)))
-      throw std::invalid_argument("the rectangle map has no area (width " + fmt(map.width) +
-                                  ", height " + fmt(map.height) + ")");
+      throw std::invalid_argument("the rectangle map has no area (width " + short_number(map.width, 6) +
+                                  ", height " + short_number(map.height, 6) + ")");
     domain.kind = UVDomain::Kind::Rectangle;
     domain.width = map.width;
     domain.height = map.height;
@@ -950,7 +945,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     co.T = map.height;
   } else {
     if (!(map.radius > 0 && std::isfinite(map.radius)))
-      throw std::invalid_argument("the disk map has no area (radius " + fmt(map.radius) + ")");
+      throw std::invalid_argument("the disk map has no area (radius " + short_number(map.radius, 6) + ")");
     domain.kind = UVDomain::Kind::Disk;
     domain.radius = map.radius;
     co.polar = true;
@@ -1031,16 +1026,16 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   const double rim_height = plannable_scallop_height(o, rim_delta);
   auto whole_patch_advice = [&](double points_need) -> std::string {
     if (!(rim_height > std::max(points_need, o.scallop_height))) return "";
-    return "; " + fmt(rim_height) + " mm for a certificate of the whole patch, whose outline is known only to +-" +
-           fmt(rim_delta) + " mm";
+    return "; " + short_number(rim_height, 6) + " mm for a certificate of the whole patch, whose outline is known only to +-" +
+           short_number(rim_delta, 6) + " mm";
   };
   if (too_uncertain(o, margins(o, delta_median))) {
     const double points_need = plannable_scallop_height(o, p99_delta());
     throw std::invalid_argument(
-        "the cloud's surface is known only to +-" + fmt(delta_median) + " mm (median; cloud.denoise's "
-        "uncertainty or its height field's, the smaller), too much of the scallop height " + fmt(o.scallop_height) +
+        "the cloud's surface is known only to +-" + short_number(delta_median, 6) + " mm (median; cloud.denoise's "
+        "uncertainty or its height field's, the smaller), too much of the scallop height " + short_number(o.scallop_height, 6) +
         " mm to promise it: denoise with more neighbours, scan more finely or raise scallop_height (to at least " +
-        fmt(points_need) + " mm for 99 % of the points" + whole_patch_advice(points_need) + ")");
+        short_number(points_need, 6) + " mm for 99 % of the points" + whole_patch_advice(points_need) + ")");
   }
   // Where more than 1 % of the points are too uncertain, nearly every strip crosses some of
   // them and fails at every side step (measured on a noisy plane, sigma 0.02: at h 0.06, 28 % of
@@ -1049,19 +1044,19 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   if (uncertain > deltas.size() / kMostlyCertainDivisor) {
     const double delta_p99 = p99_delta(), points_need = plannable_scallop_height(o, delta_p99);
     throw std::invalid_argument(
-        fmt(100.0 * double(uncertain) / double(deltas.size())) + " % of the cloud's points are known "
-        "too poorly for the scallop height " + fmt(o.scallop_height) + " mm (99 % of them to +-" +
-        fmt(delta_p99) + " mm, cloud.denoise's uncertainty or its height field's, the smaller; more than 1 % leaves nearly every "
+        short_number(100.0 * double(uncertain) / double(deltas.size()), 6) + " % of the cloud's points are known "
+        "too poorly for the scallop height " + short_number(o.scallop_height, 6) + " mm (99 % of them to +-" +
+        short_number(delta_p99, 6) + " mm, cloud.denoise's uncertainty or its height field's, the smaller; more than 1 % leaves nearly every "
         "strip over the limit): scallop_height must be at least " +
-        fmt(points_need) + " mm for them" + whole_patch_advice(points_need) +
+        short_number(points_need, 6) + " mm for them" + whole_patch_advice(points_need) +
         ", or denoise with more neighbours or scan more finely");
   }
   const WorkEstimate work = estimate_work(cloud, neighbors, map, o, margins(o, delta_median));
   if (work.passes > o.max_passes)
     throw std::invalid_argument(
-        "these limits need at least " + fmt(work.passes) + " passes (a side interval of " +
-        fmt(work.side_interval) + " mm across a patch " + fmt(work.side_extent) +
-        " mm wide; at least " + fmt(std::round(work.points)) + " points), more than max_passes " +
+        "these limits need at least " + short_number(work.passes, 6) + " passes (a side interval of " +
+        short_number(work.side_interval, 6) + " mm across a patch " + short_number(work.side_extent, 6) +
+        " mm wide; at least " + short_number(std::round(work.points), 6) + " points), more than max_passes " +
         std::to_string(o.max_passes) + ": raise scallop_height or tool_radius, or max_passes if "
         "the time is worth it (planning takes roughly 0.01 to 0.2 s per pass)");
   std::optional<UVInterpolator> interp;
@@ -1200,8 +1195,8 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
           "the path needs more than " +
           (passes.size() > o.max_passes ? std::to_string(o.max_passes) + " passes"
                                         : std::to_string(o.max_points) + " points") +
-          " (stopped at s = " + fmt(s) + " of " + fmt(co.S) + ", side steps down to " +
-          fmt(ds_min) + "): the UV map is degenerate or the cloud too noisy for these limits "
+          " (stopped at s = " + short_number(s, 6) + " of " + short_number(co.S, 6) + ", side steps down to " +
+          short_number(ds_min, 6) + "): the UV map is degenerate or the cloud too noisy for these limits "
           "(check the map report, smooth or clean the cloud, or raise scallop_height)");
     if (o.progress) o.progress(s / co.S, "pass " + std::to_string(passes.size()));
   }
@@ -1323,10 +1318,10 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
                                        : std::vector<std::vector<Eigen::Vector2d>>{});
   }();
   auto place = [&](const Eigen::Vector3d& p) {
-    std::string text = "x " + fmt(p.x()) + ", y " + fmt(p.y());
+    std::string text = "x " + short_number(p.x(), 6) + ", y " + short_number(p.y(), 6);
     const double beyond = outer_outline.empty() ? 0.0 : outer_outline.beyond_outer(p.head<2>());
     if (beyond > 0)
-      text += ", " + fmt(beyond) + " mm beyond the cloud's outline, where the surface is extrapolated and the "
+      text += ", " + short_number(beyond, 6) + " mm beyond the cloud's outline, where the surface is extrapolated and the "
               "certificate does not measure";
     return text;
   };
@@ -1334,7 +1329,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     warnings.push_back(std::to_string(strips_over.size()) + " of " +
                        std::to_string(passes.size() - 1) +
                        " strips between passes leave more than the scallop limit at every side "
-                       "step tried (up to " + fmt(strip_over_worst) + " mm, near " + place(strip_over_where) +
+                       "step tried (up to " + short_number(strip_over_worst, 6) + " mm, near " + place(strip_over_where) +
                        "; strips_over_limit_at lists them): a concave place the ball cannot "
                        "reach, a kink, or a surface too uncertain there");
   if (planner.forward_floor_hits > 0)
@@ -1343,14 +1338,14 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
                        "off (a kink in the surface or the map?), the first near " +
                        place(planner.forward_floor_at));
   if (rim_height > o.scallop_height)
-    warnings.push_back("the cloud's outline is known only to +-" + fmt(rim_delta) +
+    warnings.push_back("the cloud's outline is known only to +-" + short_number(rim_delta, 6) +
                        " mm (its points' fits are one-sided, and between them the surface is extrapolated): "
-                       "the certificate's whole-patch bound there needs scallop_height " + fmt(rim_height) +
+                       "the certificate's whole-patch bound there needs scallop_height " + short_number(rim_height, 6) +
                        " mm or more, and may fail at the outline while the interior holds");
   if (uncertain > 0)
     warnings.push_back(std::to_string(uncertain) + " cloud points (" +
-                       fmt(100.0 * uncertain / cloud.size()) + " %) are known only to +-" +
-                       fmt(delta_max) + " mm at worst: too little of the scallop height is left "
+                       short_number(100.0 * uncertain / cloud.size(), 6) + " %) are known only to +-" +
+                       short_number(delta_max, 6) + " mm at worst: too little of the scallop height is left "
                        "there, so the side step is cut to a tenth and the limit may not hold");
   if (!concave_pts.empty())
     warnings.push_back(std::to_string(concave_pts.size()) +

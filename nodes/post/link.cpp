@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 #include "nodes/geom/kd_tree.h"
+#include "nodes/geom/point_text.h"
 #include "nodes/path/gouge_guard.h"
 #include "nodes/path/step_size.h"
 #include "nodes/post/centre_index.h"
@@ -17,12 +18,6 @@ namespace {
 
 using XY = PointsAdaptor<Eigen::Vector3d>;  // searched by xy
 using Tree = KdTree<Eigen::Vector3d, 2>;
-
-std::string mm(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.4g", v);
-  return b;
-}
 
 double seg_dist_xy(const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   Eigen::Vector2d e = (b - a).head<2>(), w = (q - a).head<2>();
@@ -76,10 +71,10 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
   // say): a clearance plane raised to them is not a result.
   const double limit = 10 * r + (part_top - bottom);
   if (highest.z() - part_top > limit)
-    throw std::runtime_error("the passes rise to z " + mm(highest.z()) + " near x " + mm(highest.x()) + ", y " +
-                             mm(highest.y()) + ", " + mm(highest.z() - part_top) + " mm above the part's top (z " +
-                             mm(part_top) + "): more than 10 tool radii + the part's height range (" + mm(limit) +
-                             " mm), so the clearance plane would be at z " + mm(highest.z() + o.safety) +
+    throw std::runtime_error("the passes rise to z " + short_number(highest.z()) + " near x " + short_number(highest.x()) + ", y " +
+                             short_number(highest.y()) + ", " + short_number(highest.z() - part_top) + " mm above the part's top (z " +
+                             short_number(part_top) + "): more than 10 tool radii + the part's height range (" + short_number(limit) +
+                             " mm), so the clearance plane would be at z " + short_number(highest.z() + o.safety) +
                              "; the passes do not follow the surface there (e.g. a gouge guard lift at a "
                              "fold-over of the (u,v) map)");
 
