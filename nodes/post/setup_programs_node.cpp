@@ -30,7 +30,7 @@ struct SetupProgramsOptions {
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 22;  // 21: down at rapid rate to 1 mm above a pass start, then the plunge (post.link v7); 22: the rapids stop where a ball of r + 1 mm would touch the part (post.link v8); 20: a pass end raised to where a ball of r - tolerance coming down from above the part first touches it, and a rest setup's way up tested the same way (MeshDistance::touch_along, one ray), not by a bisection of clear_along marches (to 1e-4); 19: balls dropped onto the part exactly (MeshDistance::touch_along: one ray through the triangles' boxes grown by r, ball_touch_triangle), not by steps of the distance less r (the rest rasters' drops took 10.8 steps a ball on the block); 18: a move's least distance from the part found exactly in one search (MeshDistance::least_on_segment), not bounded from samples: moves just clear of r - tolerance are no longer lifted by the bound's shortfall (the block's 200k cloud: 547 k lifts -> 467 k); 17: where the measured mesh (input measured, else mesh) crosses itself, the balls kept a margin farther from its tangled faces (crossing_pairs, tangled_faces, tangle_margin); 16: balls dropped by their distance less r again (15: plane steps on slopes, slower on the block: 218 -> 243 s); 14: moves, pass ends and rest setups tested clear by MeshDistance::clear_along (sooner, never less safe); 13: the balls, moves and links kept off the cloud's points too (input cloud); 12: a move lacking less than its ends' height difference goes up by what it lacks; 11: the rest search also refines the thin band beside concave edges a ball of 0.9 r reaches; 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
+  d.version = 23;  // 23: the lifts over r and the moves not kept off told in one line each, not a line per setup; 21: down at rapid rate to 1 mm above a pass start, then the plunge (post.link v7); 22: the rapids stop where a ball of r + 1 mm would touch the part (post.link v8); 20: a pass end raised to where a ball of r - tolerance coming down from above the part first touches it, and a rest setup's way up tested the same way (MeshDistance::touch_along, one ray), not by a bisection of clear_along marches (to 1e-4); 19: balls dropped onto the part exactly (MeshDistance::touch_along: one ray through the triangles' boxes grown by r, ball_touch_triangle), not by steps of the distance less r (the rest rasters' drops took 10.8 steps a ball on the block); 18: a move's least distance from the part found exactly in one search (MeshDistance::least_on_segment), not bounded from samples: moves just clear of r - tolerance are no longer lifted by the bound's shortfall (the block's 200k cloud: 547 k lifts -> 467 k); 17: where the measured mesh (input measured, else mesh) crosses itself, the balls kept a margin farther from its tangled faces (crossing_pairs, tangled_faces, tangle_margin); 16: balls dropped by their distance less r again (15: plane steps on slopes, slower on the block: 218 -> 243 s); 14: moves, pass ends and rest setups tested clear by MeshDistance::clear_along (sooner, never less safe); 13: the balls, moves and links kept off the cloud's points too (input cloud); 12: a move lacking less than its ends' height difference goes up by what it lacks; 11: the rest search also refines the thin band beside concave edges a ball of 0.9 r reaches; 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
                   // 3: moves and links kept off the part's faces exactly (then MeshDistance::least_along)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), kept off "
@@ -153,19 +153,39 @@ NodeDecl make_setup_programs_node() {
                                      [&](std::size_t p) { return p < counts.size() && counts[p] > 0; }))
         ctx.warn("setup '" + setups[i].name + "': no ball of its passes could be kept off the part: no program is "
                  "written for it, and its patches are stock the certificate counts");
-    for (const SetupProgram& p : programs)
-      if (p.high_lifts > 0) {
-        ctx.warn("setup '" + p.name + "': " + std::to_string(p.high_lifts) +
-                 " ball positions were lifted more than the tool's radius to keep them off the part (up to " +
-                 std::to_string(p.high_lift_max) + " mm, planned at " + point_text(p.high_lift_at, 2) +
-                 " in the part's frame): from this direction the part is in the way there, and what they were "
-                 "to cut is stock the certificate counts");
+    // Each kind in one line however many setups it concerns (the face bust: 17 lines), the worst
+    // setup named, every one in the report's setups.
+    {
+      std::size_t setups_lifting = 0, lifted = 0, setups_splitting = 0, splits = 0, dropped = 0;
+      const SetupProgram* highest = nullptr;
+      const SetupProgram* most_split = nullptr;
+      for (const SetupProgram& p : programs) {
+        if (p.high_lifts > 0) {
+          ++setups_lifting, lifted += p.high_lifts;
+          if (!highest || p.high_lift_max > highest->high_lift_max) highest = &p;
+        }
+        if (p.splits > 0) {
+          ++setups_splitting, splits += p.splits, dropped += p.dropped;
+          if (!most_split || p.splits > most_split->splits) most_split = &p;
+        }
       }
-    for (const SetupProgram& p : programs)
-      if (p.splits > 0)
-        ctx.warn("setup '" + p.name + "': " + std::to_string(p.splits) +
-                 " moves could not be kept off the part (under an overhang): the passes are cut there and " +
-                 std::to_string(p.dropped) + " ball positions left out (stock the certificate counts)");
+      if (highest)
+        ctx.warn((setups_lifting == 1 ? "setup '" + highest->name + "': " : "in " + std::to_string(setups_lifting) +
+                                                                               " setups: ") +
+                 std::to_string(lifted) + " ball positions were lifted more than the tool's radius to keep them off "
+                 "the part (up to " + std::to_string(highest->high_lift_max) + " mm" +
+                 (setups_lifting == 1 ? "" : " in setup '" + highest->name + "'") + ", planned at " +
+                 point_text(highest->high_lift_at, 2) + " in the part's frame" +
+                 (setups_lifting == 1 ? "" : "; the report's high_lifts per setup") +
+                 "): from that direction the part is in the way there, and what they were to cut is stock the "
+                 "certificate counts");
+      if (most_split)
+        ctx.warn((setups_splitting == 1 ? "setup '" + most_split->name + "': "
+                                        : "in " + std::to_string(setups_splitting) + " setups (the most in '" +
+                                              most_split->name + "'; the report's splits per setup): ") +
+                 std::to_string(splits) + " moves could not be kept off the part (under an overhang): the passes are "
+                 "cut there and " + std::to_string(dropped) + " ball positions left out (stock the certificate counts)");
+    }
     if (rest_result.inside_drops > 0)
       ctx.warn(std::to_string(rest_result.inside_drops) + " rest balls came to rest on the inside of a face (through "
                "a hole in the mesh) and were left out");

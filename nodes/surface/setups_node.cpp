@@ -14,7 +14,7 @@ namespace scallop::surface_nodes {
 NodeDecl make_setups_node() {
   NodeDecl d;
   d.type = "surface.setups";
-  d.version = 6;  // 2: the part hides patches from axes; 3: square axes win ties within 0.005; 4: hidden patches reached around the part; 5: hidden_patches; 6: normals held within the patch's cap
+  d.version = 7;  // 7: the hidden patches told in one line, the most hidden named; 2: the part hides patches from axes; 3: square axes win ties within 0.005; 4: hidden patches reached around the part; 5: hidden_patches; 6: normals held within the patch's cap
   d.description =
       "groups the patches into clampings by machining direction, as few as the directions allow (greedy set cover), "
       "each with the rigid transform from the part's frame to the machine's (tool axis +z); a patch the part hides from "
@@ -45,12 +45,25 @@ NodeDecl make_setups_node() {
     } catch (const std::invalid_argument& e) {
       throw NodeError(std::string("surface.setups: ") + e.what());
     }
+    // One line however many setups it concerns (the face bust's 22 setups: 8 lines), the most
+    // hidden patch named, every one in the report.
+    std::size_t hidden = 0;
+    const Setup* worst_setup = nullptr;
+    const HiddenPatch* worst = nullptr;
     for (const Setup& st : setups)
       for (const HiddenPatch& h : st.hidden_patches) {
-        ctx.warn("setup '" + st.name + "': the part hides " + std::to_string(h.samples) + " of 289 samples of patch " +
-                 std::to_string(h.patch) + " from this axis (around " + point_text(h.at, 2) +
-                 ", part frame): the ball does not reach those places from this clamping, they are left as stock");
+        ++hidden;
+        if (!worst || h.samples > worst->samples) worst = &h, worst_setup = &st;
       }
+    if (worst) {
+      const std::string most = "setup '" + worst_setup->name + "': the part hides " + std::to_string(worst->samples) +
+                               " of 289 samples of patch " + std::to_string(worst->patch) + " from this axis (around " +
+                               point_text(worst->at, 2) + ", part frame)";
+      ctx.warn(hidden == 1 ? most + ": the ball does not reach those places from this clamping, they are left as stock"
+                           : std::to_string(hidden) + " patches are partly hidden by the part from the axis of a setup "
+                             "that cuts them (the most, " + most + "; the report's hidden_patches per setup): the "
+                             "ball does not reach those places from that clamping, they are left as stock");
+    }
     Report report;
     report.data = {{"setups", setups_report(setups)}, {"patches", surfaces->patches.size()}, {"min_normal_dot", o.min_normal_dot}};
     ctx.set("report", std::move(report));
