@@ -92,15 +92,16 @@ SelfCrossings self_crossings(const Mesh& mesh) {
   return out;
 }
 
-TangleKeepOut tangle_keep_out(const Mesh& mesh, const SelfCrossings& crossings) {
+TangleKeepOut tangle_keep_out(const Mesh& mesh, const SelfCrossings& crossings, double margin) {
   TangleKeepOut out;
+  if (margin == 0 || crossings.tangled.empty()) return out;
   double length = 0;
   std::size_t edges = 0;
   for (std::size_t f : crossings.tangled)
     for (std::size_t k = 0; k < mesh.face_size(f); ++k, ++edges)
       length += (mesh.vertices[mesh.face(f)[(k + 1) % mesh.face_size(f)]] - mesh.vertices[mesh.face(f)[k]]).norm();
   if (edges == 0 || !(length > 0)) return out;
-  out.margin = 2 * length / double(edges);
+  out.margin = margin > 0 ? margin : 2 * length / double(edges);
   const double step = out.margin / 4;
   for (std::size_t f : crossings.tangled) {
     const std::uint32_t* c = mesh.face(f);

@@ -24,13 +24,20 @@ struct SetupProgramsOptions {
   int rest_rounds = 3;
   int rest_setups = 2;
   double base_angle = 10;
+  double tangle_margin = -1;
 };
+// How far beyond r balls are kept from where the measured mesh crosses itself (tangle_keep_out):
+// the option when given (>= 0); otherwise the reconstruction's rule where the mesh was made from a
+// cloud (input cloud), and none where the mesh is the part itself.
+double tangle_margin_for(const NodeContext& ctx, double option) {
+  return option >= 0 ? option : ctx.has_input("cloud") ? -1.0 : 0.0;
+}
 }  // namespace
 
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 23;  // 23: the lifts over r and the moves not kept off told in one line each, not a line per setup; 21: down at rapid rate to 1 mm above a pass start, then the plunge (post.link v7); 22: the rapids stop where a ball of r + 1 mm would touch the part (post.link v8); 20: a pass end raised to where a ball of r - tolerance coming down from above the part first touches it, and a rest setup's way up tested the same way (MeshDistance::touch_along, one ray), not by a bisection of clear_along marches (to 1e-4); 19: balls dropped onto the part exactly (MeshDistance::touch_along: one ray through the triangles' boxes grown by r, ball_touch_triangle), not by steps of the distance less r (the rest rasters' drops took 10.8 steps a ball on the block); 18: a move's least distance from the part found exactly in one search (MeshDistance::least_on_segment), not bounded from samples: moves just clear of r - tolerance are no longer lifted by the bound's shortfall (the block's 200k cloud: 547 k lifts -> 467 k); 17: where the measured mesh (input measured, else mesh) crosses itself, the balls kept a margin farther from its tangled faces (crossing_pairs, tangled_faces, tangle_margin); 16: balls dropped by their distance less r again (15: plane steps on slopes, slower on the block: 218 -> 243 s); 14: moves, pass ends and rest setups tested clear by MeshDistance::clear_along (sooner, never less safe); 13: the balls, moves and links kept off the cloud's points too (input cloud); 12: a move lacking less than its ends' height difference goes up by what it lacks; 11: the rest search also refines the thin band beside concave edges a ball of 0.9 r reaches; 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
+  d.version = 24;  // 24: where the mesh is the part itself (no input cloud), no margin off the faces where it crosses itself (tangle_margin; the block x 5 from its mesh: 12.7 mm, its bores left uncut, 8.2 %); 23: the lifts over r and the moves not kept off told in one line each, not a line per setup; 21: down at rapid rate to 1 mm above a pass start, then the plunge (post.link v7); 22: the rapids stop where a ball of r + 1 mm would touch the part (post.link v8); 20: a pass end raised to where a ball of r - tolerance coming down from above the part first touches it, and a rest setup's way up tested the same way (MeshDistance::touch_along, one ray), not by a bisection of clear_along marches (to 1e-4); 19: balls dropped onto the part exactly (MeshDistance::touch_along: one ray through the triangles' boxes grown by r, ball_touch_triangle), not by steps of the distance less r (the rest rasters' drops took 10.8 steps a ball on the block); 18: a move's least distance from the part found exactly in one search (MeshDistance::least_on_segment), not bounded from samples: moves just clear of r - tolerance are no longer lifted by the bound's shortfall (the block's 200k cloud: 547 k lifts -> 467 k); 17: where the measured mesh (input measured, else mesh) crosses itself, the balls kept a margin farther from its tangled faces (crossing_pairs, tangled_faces, tangle_margin); 16: balls dropped by their distance less r again (15: plane steps on slopes, slower on the block: 218 -> 243 s); 14: moves, pass ends and rest setups tested clear by MeshDistance::clear_along (sooner, never less safe); 13: the balls, moves and links kept off the cloud's points too (input cloud); 12: a move lacking less than its ends' height difference goes up by what it lacks; 11: the rest search also refines the thin band beside concave edges a ball of 0.9 r reaches; 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
                   // 3: moves and links kept off the part's faces exactly (then MeshDistance::least_along)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), kept off "
@@ -85,7 +92,11 @@ NodeDecl make_setup_programs_node() {
                "clampings the rest passes may add for places no setup's axis comes down to (each along the direction "
                "that comes down to the most of them); 0: such places are left as stock and reported")
       .number("base_angle", &SetupProgramsOptions::base_angle, 0, 90, "deg",
-              "faces within this of the base direction are on the table");
+              "faces within this of the base direction are on the table")
+      .number("tangle_margin", &SetupProgramsOptions::tangle_margin, -1, 1000, "mm",
+              "how much farther than r balls are kept from the faces where the measured mesh crosses itself: -1 "
+              "twice those faces' mean edge where the mesh was made from a cloud (input cloud: a gap finer than "
+              "its points), none where the mesh is the part itself (a CAD mesh whose facets fold)");
   d.run = [](NodeContext& ctx) {
     auto path = ctx.input<Toolpath>("toolpath");
     const auto& contours = ctx.input<Report>("contours")->data;
@@ -120,14 +131,21 @@ NodeDecl make_setup_programs_node() {
     // Where the mesh crosses itself its faces bound nothing: the balls are kept a margin off them.
     const auto measured = ctx.has_input("measured") ? ctx.input<Mesh>("measured") : mesh;
     const SelfCrossings crossings = self_crossings(*measured);
-    const TangleKeepOut keep_out = tangle_keep_out(*measured, crossings);
+    const TangleKeepOut keep_out = tangle_keep_out(*measured, crossings, tangle_margin_for(ctx, o.tangle_margin));
     if (!crossings.tangled.empty()) {
       const Eigen::Vector3d at = measured->vertices[measured->face(crossings.tangled.front())[0]];
-      char text[400];
-      std::snprintf(text, sizeof text,
-                    "the part's mesh crosses itself (%zu face pairs, %zu faces tangled, around %s): the part is not "
-                    "known there, so the balls are kept %.3g mm farther from those faces (stock the certificate counts)",
-                    crossings.pairs.size(), crossings.tangled.size(), point_text(at, 2).c_str(), keep_out.margin);
+      char text[500];
+      if (keep_out.margin > 0)
+        std::snprintf(text, sizeof text,
+                      "the part's mesh crosses itself (%zu face pairs, %zu faces tangled, around %s): the part is not "
+                      "known there, so the balls are kept %.3g mm farther from those faces (stock the certificate counts)",
+                      crossings.pairs.size(), crossings.tangled.size(), point_text(at, 2).c_str(), keep_out.margin);
+      else
+        std::snprintf(text, sizeof text,
+                      "the part's mesh crosses itself (%zu face pairs, %zu faces tangled, around %s): its faces there "
+                      "are taken as the part (a mesh given as the part; tangle_margin keeps the balls farther), and a "
+                      "judge's inside test may not hold there",
+                      crossings.pairs.size(), crossings.tangled.size(), point_text(at, 2).c_str());
       ctx.warn(text);
     }
     std::vector<Setup> setups;

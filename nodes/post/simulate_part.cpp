@@ -359,7 +359,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   // within half of it of a face: the gouge there is not bounded (post.setup_programs keeps the
   // balls r + margin off the samples). Not the outer mesh's: moved out, it crosses itself at every
   // concave edge, and its union still bounds the part.
-  const TangleKeepOut keep = tangle_keep_out(part, crossings);
+  const TangleKeepOut keep = tangle_keep_out(part, crossings, o.tangle_margin);
   std::size_t tangle_samples_reached = 0;
   Deepest tangle_nearest{-INFINITY, Eigen::Vector3d::Zero()};  // minus the distance, and where
   {

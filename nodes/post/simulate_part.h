@@ -62,6 +62,9 @@ struct PartSimulateOptions {
   Eigen::Vector3d base_normal = Eigen::Vector3d::Zero();  // outward normal of the base; 0: no base
   double base_angle = 10;     // degrees
   double feature_angle = 30;  // degrees
+  // mm beyond r a ball centre must keep from the faces where `part` crosses itself
+  // (tangle_keep_out's margin: < 0 its rule for a reconstruction, 0 none)
+  double tangle_margin = -1;
 };
 
 // part   the part's mesh in its own frame, faces outward; closed or open (an open mesh: a ball

@@ -13,7 +13,7 @@ namespace scallop::post_nodes {
 NodeDecl make_simulate_part_node() {
   NodeDecl d;
   d.type = "post.simulate_part";
-  d.version = 16;  // 2: the worst places begin with the moves that reach into the part; 3: faces folded onto a neighbour leave the side to the rays; 4: samples in strips along each face's longest edge, by area, as verify_part.py; 5: refinement seeded from the highest 1 %; 6: and from the samples a ball of 0.9 r reaches; 7: twice as densely where the edge of the reach may cross a seed's square; 8: the report says where the interior maximum stands (scallop_max_interior_at); 9: edge_uncertainty_edges, the cloud's points checked for gouges; 10: and for where the outer mesh does not hold them (gouge_unbounded_*); 11: faces of the outer mesh its moves turned over leave the side to the rays; 12: the reach radius of an unreachable place to r / 32768 (was r / 2^30); 13: faces of the outer mesh turned more than 10 degrees leave the side to the rays (was 90); 14: where the part's mesh crosses itself, a ball passing within r + 3/4 of the tangle margin of its tangled faces fails it (crossing_pairs, tangled_faces, tangle_*); 15: and its tangled faces leave the side to the rays; 16: a failing interior maximum says where, and over how much of the part
+  d.version = 17;  // 17: where the mesh is the part itself (no input cloud), no tangle margin (tangle_margin); 2: the worst places begin with the moves that reach into the part; 3: faces folded onto a neighbour leave the side to the rays; 4: samples in strips along each face's longest edge, by area, as verify_part.py; 5: refinement seeded from the highest 1 %; 6: and from the samples a ball of 0.9 r reaches; 7: twice as densely where the edge of the reach may cross a seed's square; 8: the report says where the interior maximum stands (scallop_max_interior_at); 9: edge_uncertainty_edges, the cloud's points checked for gouges; 10: and for where the outer mesh does not hold them (gouge_unbounded_*); 11: faces of the outer mesh its moves turned over leave the side to the rays; 12: the reach radius of an unreachable place to r / 32768 (was r / 2^30); 13: faces of the outer mesh turned more than 10 degrees leave the side to the rays (was 90); 14: where the part's mesh crosses itself, a ball passing within r + 3/4 of the tangle margin of its tangled faces fails it (crossing_pairs, tangled_faces, tangle_*); 15: and its tangled faces leave the side to the rays; 16: a failing interior maximum says where, and over how much of the part
   d.description =
       "the certificate of a whole part cut in several clampings: every setup's program taken back to the part, "
       "scallop left over the whole mesh, gouge and rapids against it (verify_part.py's definitions)";
@@ -56,7 +56,11 @@ NodeDecl make_simulate_part_node() {
       .number("edge_uncertainty_edges", &PartSimulateOptions::edge_uncertainty_edges, 0, 100, "mean edge lengths",
               "the same in mean edge lengths of `mesh` (a reconstruction's are its cloud's spacing); the larger counts")
       .integer("max_samples", &PartSimulateOptions::max_samples, 1000, 100000000, "",
-               "the spacing is raised to stay below this many samples");
+               "the spacing is raised to stay below this many samples")
+      .number("tangle_margin", &PartSimulateOptions::tangle_margin, -1, 1000, "mm",
+              "how much farther than r no ball centre may come to the faces where `mesh` crosses itself: -1 twice "
+              "those faces' mean edge where the mesh was made from a cloud (input cloud), none where the mesh is the "
+              "part itself (a CAD mesh whose facets fold)");
   d.run = [](NodeContext& ctx) {
     auto programs = ctx.input<SetupPaths>("programs");
     auto mesh = ctx.input<Mesh>("mesh");
@@ -64,6 +68,8 @@ NodeDecl make_simulate_part_node() {
     o.surface_uncertainty = ctx.number("surface_uncertainty");
     o.base_angle = ctx.number("base_angle");
     o.feature_angle = ctx.number("feature_angle");
+    // (as post.setup_programs keeps the balls off: the reconstruction's rule only for a mesh made from a cloud)
+    if (o.tangle_margin < 0 && !ctx.has_input("cloud")) o.tangle_margin = 0;
     if (ctx.has_input("base")) {
       try {
         o.base_normal = base_direction_of(ctx.input<Report>("base")->data);

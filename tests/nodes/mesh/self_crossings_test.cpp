@@ -99,6 +99,22 @@ TEST(SelfCrossings, TheKeepOutSamplesEveryTangledFaceWithinAQuarterOfItsMargin) 
   EXPECT_EQ(none.margin, 0);
 }
 
+TEST(SelfCrossings, AMeshGivenAsThePartKeepsNoMarginUnlessOneIsGiven) {
+  // margin 0: the faces are the part, nothing kept off; a margin of one's own: its samples as
+  // dense as that margin asks (a quarter of it), the rule's tangled faces the same.
+  std::set<std::size_t> spike;
+  const Mesh m = test::spiked_cube(spike);
+  const SelfCrossings c = self_crossings(m);
+  ASSERT_FALSE(c.tangled.empty());
+  const TangleKeepOut none = tangle_keep_out(m, c, 0.0);
+  EXPECT_TRUE(none.samples.empty());
+  EXPECT_EQ(none.margin, 0);
+  const TangleKeepOut rule = tangle_keep_out(m, c);
+  const TangleKeepOut given = tangle_keep_out(m, c, rule.margin / 2);
+  EXPECT_EQ(given.margin, rule.margin / 2);
+  EXPECT_GT(given.samples.size(), rule.samples.size());
+}
+
 TEST(SelfCrossings, PolygonsAreFannedAndFacesThatDoNotFitAreCounted) {
   // The quad cube: no crossing. A third face on one edge (non-manifold): left out, counted.
   Mesh m = test::unit_cube();

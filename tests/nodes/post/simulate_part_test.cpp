@@ -7,6 +7,7 @@
 
 #include "engine/node.h"
 #include "nodes/mesh/self_crossings.h"
+#include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
 #include "nodes/types/toolpath.h"
 #include "tests/nodes/mesh/mesh_test_util.h"
@@ -390,6 +391,39 @@ TEST(SimulatePart, BadInputIsNamed) {
   cuts[0].feed[0].b.x() = NAN;
   EXPECT_EQ(test::error_of<std::invalid_argument>([&] { simulate_part(box, cuts, options(3, 0.05)); }),
             "setup '1: +z' has a ball centre that is not finite");
+}
+
+TEST(SimulatePart, TheNodeKeepsATangleMarginOnlyForAMeshMadeFromACloud) {
+  // The spiked cube as the part, a pass over its top by the spike's faces: a mesh given as the
+  // part (no cloud) is where the part is, crossing or not, and no margin fails the pass; the same
+  // mesh made from a cloud (input cloud) keeps the reconstruction's margin, and the pass fails.
+  const double r = 1;
+  std::set<std::size_t> spike;
+  const Mesh part = test::spiked_cube(spike);
+  SetupPaths programs;
+  SetupPath& s = programs.setups.emplace_back();
+  s.name = "1: +z", s.file = "setup_1.ngc";
+  s.path.tool_radius = r, s.path.scallop_height = 0.05, s.path.chord_error = 0.01;
+  s.path.moves = {{MoveKind::Rapid, V(-1, 2, 4)}, {MoveKind::Feed, V(5, 2, 4)}};
+  auto cloud = std::make_shared<PointCloud>();
+  cloud->points = part.vertices;
+  std::map<std::string, ValuePtr> inputs{{"programs", std::make_shared<SetupPaths>(programs)},
+                                         {"mesh", std::make_shared<Mesh>(part)}};
+  const auto given = test::run_node(post_nodes::make_simulate_part_node(), {}, inputs);
+  const auto& g = std::dynamic_pointer_cast<const Report>(given.at("report"))->data;
+  EXPECT_GT(g["crossing_pairs"].get<int>(), 0);
+  EXPECT_EQ(g["tangle_margin"].get<double>(), 0);
+  EXPECT_EQ(g["tangle_samples_reached"].get<std::size_t>(), 0u);
+  inputs["cloud"] = cloud;
+  const auto made = test::run_node(post_nodes::make_simulate_part_node(), {}, inputs);
+  const auto& m = std::dynamic_pointer_cast<const Report>(made.at("report"))->data;
+  EXPECT_DOUBLE_EQ(m["tangle_margin"].get<double>(), tangle_keep_out(part, self_crossings(part)).margin);
+  EXPECT_GE(m["tangle_samples_reached"].get<std::size_t>(), 1u);
+  EXPECT_FALSE(m["pass"].get<bool>());
+  // and a margin asked for
+  inputs.erase("cloud");
+  const auto asked = test::run_node(post_nodes::make_simulate_part_node(), {{"tangle_margin", 0.25}}, inputs);
+  EXPECT_EQ(std::dynamic_pointer_cast<const Report>(asked.at("report"))->data["tangle_margin"].get<double>(), 0.25);
 }
 
 TEST(SimulatePart, TheNodeTakesEachProgramBackToThePartThroughItsPartToMachine) {
