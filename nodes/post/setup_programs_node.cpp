@@ -209,7 +209,7 @@ NodeDecl make_setup_programs_node() {
                "a hole in the mesh) and were left out");
     for (const Setup& s : rest_result.added_setups)
       ctx.warn("setup '" + s.name + "' added: no other setup's axis comes down to places its rest passes cut; one "
-               "more clamping for the machinist (rest_rounds=0 or max_new_setups=0 to leave them as stock)");
+               "more clamping for the machinist (rest_rounds=0 or rest_setups=0 to leave them as stock)");
     if (rest_result.unreached_area > 0)
       ctx.warn(std::to_string(rest_result.unreached_area) + " mm² of the part is left over the scallop limit where no "
                "setup's axis comes down to it clear of the part (around " +
