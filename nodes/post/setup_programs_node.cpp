@@ -191,7 +191,7 @@ NodeDecl make_setup_programs_node() {
         ctx.warn((setups_lifting == 1 ? "setup '" + highest->name + "': " : "in " + std::to_string(setups_lifting) +
                                                                                " setups: ") +
                  std::to_string(lifted) + " ball positions were lifted more than the tool's radius to keep them off "
-                 "the part (up to " + std::to_string(highest->high_lift_max) + " mm" +
+                 "the part (up to " + short_number(highest->high_lift_max) + " mm" +
                  (setups_lifting == 1 ? "" : " in setup '" + highest->name + "'") + ", planned at " +
                  point_text(highest->high_lift_at, 2) + " in the part's frame" +
                  (setups_lifting == 1 ? "" : "; the report's high_lifts per setup") +
@@ -211,7 +211,7 @@ NodeDecl make_setup_programs_node() {
       ctx.warn("setup '" + s.name + "' added: no other setup's axis comes down to places its rest passes cut; one "
                "more clamping for the machinist (rest_rounds=0 or rest_setups=0 to leave them as stock)");
     if (rest_result.unreached_area > 0)
-      ctx.warn(std::to_string(rest_result.unreached_area) + " mm² of the part is left over the scallop limit where no "
+      ctx.warn(short_number(rest_result.unreached_area) + " mm² of the part is left over the scallop limit where no "
                "setup's axis comes down to it clear of the part (around " +
                point_text(rest_result.unreached_at.front(), 2) +
                " in the part's frame): stock the certificate counts; a clamping facing it would reach it");
