@@ -236,7 +236,10 @@ RestResult add_rest_passes(const Mesh& part, std::vector<Setup>& setups, std::ve
     });
     const std::size_t best = std::max_element(score.begin(), score.end()) - score.begin();
     axis.resize(first_axis), highest.resize(first_axis);
-    if (score[best].first == 0) break;
+    if (score[best].first == 0) {
+      res.no_direction_left = true;
+      break;
+    }
     Setup s;
     s.axis = lattice[best];
     place_setup(s, part.vertices);  // as surface.setups places its setups

@@ -66,6 +66,9 @@ struct RestResult {
   double left_area_after = 0;        // mm² still left after the rest passes
   double unreached_area = 0;         // mm² of that no setup's axis comes down to
   std::vector<Eigen::Vector3d> unreached_at;  // up to 10 such places (part frame), 2 r apart
+  // the search for new clampings ended because no direction of its lattice came down to any of
+  // the places left (not because max_new_setups were added): another clamping would not help
+  bool no_direction_left = false;
   std::size_t inside_drops = 0;      // balls left out: they came to rest on the inside of a face
 };
 

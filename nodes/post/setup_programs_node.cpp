@@ -37,7 +37,7 @@ double tangle_margin_for(const NodeContext& ctx, double option) {
 NodeDecl make_setup_programs_node() {
   NodeDecl d;
   d.type = "post.setup_programs";
-  d.version = 24;  // 24: where the mesh is the part itself (no input cloud), no margin off the faces where it crosses itself (tangle_margin; the block x 5 from its mesh: 12.7 mm, its bores left uncut, 8.2 %); 23: the lifts over r and the moves not kept off told in one line each, not a line per setup; 21: down at rapid rate to 1 mm above a pass start, then the plunge (post.link v7); 22: the rapids stop where a ball of r + 1 mm would touch the part (post.link v8); 20: a pass end raised to where a ball of r - tolerance coming down from above the part first touches it, and a rest setup's way up tested the same way (MeshDistance::touch_along, one ray), not by a bisection of clear_along marches (to 1e-4); 19: balls dropped onto the part exactly (MeshDistance::touch_along: one ray through the triangles' boxes grown by r, ball_touch_triangle), not by steps of the distance less r (the rest rasters' drops took 10.8 steps a ball on the block); 18: a move's least distance from the part found exactly in one search (MeshDistance::least_on_segment), not bounded from samples: moves just clear of r - tolerance are no longer lifted by the bound's shortfall (the block's 200k cloud: 547 k lifts -> 467 k); 17: where the measured mesh (input measured, else mesh) crosses itself, the balls kept a margin farther from its tangled faces (crossing_pairs, tangled_faces, tangle_margin); 16: balls dropped by their distance less r again (15: plane steps on slopes, slower on the block: 218 -> 243 s); 14: moves, pass ends and rest setups tested clear by MeshDistance::clear_along (sooner, never less safe); 13: the balls, moves and links kept off the cloud's points too (input cloud); 12: a move lacking less than its ends' height difference goes up by what it lacks; 11: the rest search also refines the thin band beside concave edges a ball of 0.9 r reaches; 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
+  d.version = 25;  // 25: the places no clamping comes down to go with the programs (SetupPaths unreached_at), and whether any direction tried would; 24: where the mesh is the part itself (no input cloud), no margin off the faces where it crosses itself (tangle_margin; the block x 5 from its mesh: 12.7 mm, its bores left uncut, 8.2 %); 23: the lifts over r and the moves not kept off told in one line each, not a line per setup; 21: down at rapid rate to 1 mm above a pass start, then the plunge (post.link v7); 22: the rapids stop where a ball of r + 1 mm would touch the part (post.link v8); 20: a pass end raised to where a ball of r - tolerance coming down from above the part first touches it, and a rest setup's way up tested the same way (MeshDistance::touch_along, one ray), not by a bisection of clear_along marches (to 1e-4); 19: balls dropped onto the part exactly (MeshDistance::touch_along: one ray through the triangles' boxes grown by r, ball_touch_triangle), not by steps of the distance less r (the rest rasters' drops took 10.8 steps a ball on the block); 18: a move's least distance from the part found exactly in one search (MeshDistance::least_on_segment), not bounded from samples: moves just clear of r - tolerance are no longer lifted by the bound's shortfall (the block's 200k cloud: 547 k lifts -> 467 k); 17: where the measured mesh (input measured, else mesh) crosses itself, the balls kept a margin farther from its tangled faces (crossing_pairs, tangled_faces, tangle_margin); 16: balls dropped by their distance less r again (15: plane steps on slopes, slower on the block: 218 -> 243 s); 14: moves, pass ends and rest setups tested clear by MeshDistance::clear_along (sooner, never less safe); 13: the balls, moves and links kept off the cloud's points too (input cloud); 12: a move lacking less than its ends' height difference goes up by what it lacks; 11: the rest search also refines the thin band beside concave edges a ball of 0.9 r reaches; 10: rest passes where the others leave material, rest setups; 2: outputs the programs' moves as written; 4: pass ends raised until the ball goes up clear; 5: the moves stored without their padding bytes; 6: a move raised level that still reaches in goes up whole; 7: passes split where a move stays too near; 8: balls lowered onto the part where the surface stands above it; 9: the report counts balls lifted more than r
                   // 3: moves and links kept off the part's faces exactly (then MeshDistance::least_along)
   d.description =
       "one G-code program per clamping: each setup's passes taken into its machine frame (tool axis +z), kept off "
@@ -69,7 +69,8 @@ NodeDecl make_setup_programs_node() {
               "part frame), rest_passes (passes added where the others left material), rest_length (mm)}], rest: {rounds, inside_drops (rest balls left out: they fell through a hole in the mesh onto the inside of a face), new_setups (clampings added for places no other setup's axis comes down to), "
               "spacing, measured_area, left_area_before (mm² the setups' own passes leave over 0.8 h or uncut, by the "
               "rest search's samples), left_area_after, unreached_area (left where no setup's axis comes down clear), "
-              "unreached_at [[x, y, z], ...] (part frame)}, crossing_pairs and tangled_faces (where the mesh crosses "
+              "unreached_at [[x, y, z], ...] (part frame), unreached_by_any_direction (no direction the search for clampings "
+              "tried comes down to them)}, crossing_pairs and tangled_faces (where the mesh crosses "
               "itself, and the faces beside those turned into the part: nodes/mesh/self_crossings.h), tangle_margin "
               "(mm: the balls are kept that much farther from them)}")
       .param_output_path("path", "the setups file to write, relative to the output folder (-o); the programs "
@@ -214,7 +215,10 @@ NodeDecl make_setup_programs_node() {
       ctx.warn(short_number(rest_result.unreached_area) + " mm² of the part is left over the scallop limit where no "
                "setup's axis comes down to it clear of the part (around " +
                point_text(rest_result.unreached_at.front(), 2) +
-               " in the part's frame): stock the certificate counts; a clamping facing it would reach it");
+               " in the part's frame): stock the certificate counts; " +
+               (rest_result.no_direction_left ? "no direction the search tried comes down to it either: not for this "
+                                                "tool on a 3-axis machine"
+                                              : "another clamping would reach it (rest_setups)"));
     nlohmann::json list = nlohmann::json::array();
     for (const SetupProgram& p : programs)
       list.push_back({{"name", p.name}, {"gcode", p.file}, {"passes", p.passes}, {"moves", p.moves},
@@ -226,6 +230,9 @@ NodeDecl make_setup_programs_node() {
     SetupPaths paths;
     for (const SetupProgram& p : programs)
       paths.setups.push_back({p.name, p.file, setups[p.setup].rotation, setups[p.setup].translation, p.linked});
+    paths.unreached_at = rest_result.unreached_at;
+    paths.unreached_area = rest_result.unreached_area;
+    paths.unreached_by_any_direction = rest_result.no_direction_left;
     ctx.set("programs", std::move(paths));
     Report report;
     nlohmann::json unreached = nlohmann::json::array();
@@ -243,7 +250,8 @@ NodeDecl make_setup_programs_node() {
                      {"left_area_before", rest_result.left_area_before},
                      {"left_area_after", rest_result.left_area_after},
                      {"unreached_area", rest_result.unreached_area},
-                     {"unreached_at", unreached}}}};
+                     {"unreached_at", unreached},
+                     {"unreached_by_any_direction", rest_result.no_direction_left}}}};
     ctx.set("report", std::move(report));
   };
   return d;

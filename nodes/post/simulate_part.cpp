@@ -544,7 +544,21 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
                     spacing_area);
     std::snprintf(buf, sizeof buf, "interior scallop max %.4g > 1.01 H (whole part %.4g) at (%.3f, %.3f, %.3f); %s",
                   max_inner, max_all, at.x, at.y, at.z, extent);
-    reasons.push_back(buf);
+    std::string reason = buf;
+    // (the rest search keeps its unreached places 2 r apart: one stands for what lies around it)
+    const Eigen::Vector3d where(at.x, at.y, at.z);
+    if (std::any_of(o.unreached_at.begin(), o.unreached_at.end(),
+                    [&](const Eigen::Vector3d& q) { return (q - where).norm() <= 2 * r; })) {
+      std::snprintf(buf, sizeof buf,
+                    o.unreached_by_any_direction
+                        ? "; no clamping's axis comes down to it clear of the part, nor any direction the rest search "
+                          "tried (%.3g mm² such, post.setup_programs): not for this tool on a 3-axis machine"
+                        : "; no clamping's axis comes down to it clear of the part (%.3g mm² such, "
+                          "post.setup_programs): another clamping would (rest_setups)",
+                    o.unreached_area);
+      reason += buf;
+    }
+    reasons.push_back(reason);
   }
   if (gouge_max > tol) {
     std::snprintf(buf, sizeof buf, "gouge max %.4g > %.4g", gouge_max, tol);

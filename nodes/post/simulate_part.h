@@ -65,6 +65,11 @@ struct PartSimulateOptions {
   // mm beyond r a ball centre must keep from the faces where `part` crosses itself
   // (tangle_keep_out's margin: < 0 its rule for a reconstruction, 0 none)
   double tangle_margin = -1;
+  // Places no clamping's axis comes down to clear of the part (post.setup_programs' rest search,
+  // part frame) and their area (mm²): a failing interior maximum within 2 r of one says so.
+  std::vector<Eigen::Vector3d> unreached_at;
+  double unreached_area = 0;
+  bool unreached_by_any_direction = false;  // the search for clampings found no direction for them
 };
 
 // part   the part's mesh in its own frame, faces outward; closed or open (an open mesh: a ball

@@ -13,7 +13,7 @@ namespace scallop::post_nodes {
 NodeDecl make_simulate_part_node() {
   NodeDecl d;
   d.type = "post.simulate_part";
-  d.version = 17;  // 17: where the mesh is the part itself (no input cloud), no tangle margin (tangle_margin); 2: the worst places begin with the moves that reach into the part; 3: faces folded onto a neighbour leave the side to the rays; 4: samples in strips along each face's longest edge, by area, as verify_part.py; 5: refinement seeded from the highest 1 %; 6: and from the samples a ball of 0.9 r reaches; 7: twice as densely where the edge of the reach may cross a seed's square; 8: the report says where the interior maximum stands (scallop_max_interior_at); 9: edge_uncertainty_edges, the cloud's points checked for gouges; 10: and for where the outer mesh does not hold them (gouge_unbounded_*); 11: faces of the outer mesh its moves turned over leave the side to the rays; 12: the reach radius of an unreachable place to r / 32768 (was r / 2^30); 13: faces of the outer mesh turned more than 10 degrees leave the side to the rays (was 90); 14: where the part's mesh crosses itself, a ball passing within r + 3/4 of the tangle margin of its tangled faces fails it (crossing_pairs, tangled_faces, tangle_*); 15: and its tangled faces leave the side to the rays; 16: a failing interior maximum says where, and over how much of the part
+  d.version = 18;  // 18: a failing interior maximum where no clamping comes down says so (the programs\' unreached places); 17: where the mesh is the part itself (no input cloud), no tangle margin (tangle_margin); 2: the worst places begin with the moves that reach into the part; 3: faces folded onto a neighbour leave the side to the rays; 4: samples in strips along each face's longest edge, by area, as verify_part.py; 5: refinement seeded from the highest 1 %; 6: and from the samples a ball of 0.9 r reaches; 7: twice as densely where the edge of the reach may cross a seed's square; 8: the report says where the interior maximum stands (scallop_max_interior_at); 9: edge_uncertainty_edges, the cloud's points checked for gouges; 10: and for where the outer mesh does not hold them (gouge_unbounded_*); 11: faces of the outer mesh its moves turned over leave the side to the rays; 12: the reach radius of an unreachable place to r / 32768 (was r / 2^30); 13: faces of the outer mesh turned more than 10 degrees leave the side to the rays (was 90); 14: where the part's mesh crosses itself, a ball passing within r + 3/4 of the tangle margin of its tangled faces fails it (crossing_pairs, tangled_faces, tangle_*); 15: and its tangled faces leave the side to the rays; 16: a failing interior maximum says where, and over how much of the part
   d.description =
       "the certificate of a whole part cut in several clampings: every setup's program taken back to the part, "
       "scallop left over the whole mesh, gouge and rapids against it (verify_part.py's definitions)";
@@ -78,6 +78,9 @@ NodeDecl make_simulate_part_node() {
       }
     }
     if (programs->setups.empty()) throw NodeError("the input 'programs' has no setup");
+    o.unreached_at = programs->unreached_at;
+    o.unreached_area = programs->unreached_area;
+    o.unreached_by_any_direction = programs->unreached_by_any_direction;
     std::vector<PartSetupCut> cuts;
     const LinkedPath& first = programs->setups.front().path;
     o.tool_radius = first.tool_radius, o.scallop = first.scallop_height, o.chord = first.chord_error;

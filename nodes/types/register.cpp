@@ -29,8 +29,10 @@ void register_types(Registry& r) {
   v.add({"UVMap", "bin", "(u,v) parameterisation of the points", UVMap::deserialize});
   v.add({"Toolpath", "json", "passes of cutter-contact points for a ball-end tool", Toolpath::deserialize});
   v.add({"LinkedPath", "bin", "linked machine moves (tool tip)", LinkedPath::deserialize});
-  v.add({"SetupPaths", "bin", "a part's programs, one per clamping: name, file, part_to_machine and linked moves",
-         SetupPaths::deserialize});
+  v.add({"SetupPaths", "bin",
+         "a part's programs, one per clamping: name, file, part_to_machine and linked moves; the places no clamping "
+         "comes down to",
+         SetupPaths::deserialize, 2});  // 2: unreached_at, unreached_area, unreached_by_any_direction
   v.add({"GCode", "ngc", "a machine program", GCode::deserialize});
   v.add({"Report", "json", "a JSON report", Report::deserialize});
   v.add({"Simulation", "bin", "a cutting simulation: what the path left at every surface sample, its limits and its report",

@@ -102,6 +102,11 @@ void SetupPaths::serialize(std::ostream& out) const {
     for (int k = 0; k < 3; ++k) bin::write_f64(out, s.translation[k]);
     s.path.serialize(out);
   }
+  bin::write_u64(out, unreached_at.size());
+  for (const Eigen::Vector3d& p : unreached_at)
+    for (int k = 0; k < 3; ++k) bin::write_f64(out, p[k]);
+  bin::write_f64(out, unreached_area);
+  bin::write_u64(out, unreached_by_any_direction ? 1 : 0);
 }
 
 ValuePtr SetupPaths::deserialize(std::istream& in) {
@@ -117,6 +122,15 @@ ValuePtr SetupPaths::deserialize(std::istream& in) {
     s.path = *std::static_pointer_cast<const LinkedPath>(LinkedPath::deserialize(in));
     v->setups.push_back(std::move(s));
   }
+  const std::uint64_t m = bin::read_u64(in);
+  if (m > (1u << 20)) throw std::runtime_error("corrupt setup paths: " + std::to_string(m) + " unreached places");
+  for (std::uint64_t i = 0; i < m; ++i) {
+    Eigen::Vector3d p;
+    for (int k = 0; k < 3; ++k) p[k] = bin::read_f64(in);
+    v->unreached_at.push_back(p);
+  }
+  v->unreached_area = bin::read_f64(in);
+  v->unreached_by_any_direction = bin::read_u64(in) != 0;
   return v;
 }
 

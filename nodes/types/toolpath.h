@@ -74,6 +74,11 @@ struct SetupPath {
 };
 struct SetupPaths final : Value {
   std::vector<SetupPath> setups;
+  // Places left over the scallop limit where no setup's axis comes down clear of the part (part
+  // frame; post.setup_programs' rest search): the certificate names them when it fails there.
+  std::vector<Eigen::Vector3d> unreached_at;
+  double unreached_area = 0;  // mm²
+  bool unreached_by_any_direction = false;  // no clamping direction of the search comes down to them
 
   std::string type_name() const override { return "SetupPaths"; }
   void serialize(std::ostream& out) const override;

@@ -141,6 +141,7 @@ TEST(RestPasses, APlaceNoSetupComesDownToGetsAClampingOfItsOwn) {
   EXPECT_GT(res.passes[1], 0u);
   EXPECT_EQ(res.left_area_after, 0);
   EXPECT_EQ(res.unreached_area, 0);
+  EXPECT_FALSE(res.no_direction_left);
 }
 
 TEST(RestPasses, APlaceNoSetupComesDownToIsReportedUnreachedWithoutNewClampings) {
@@ -160,6 +161,7 @@ TEST(RestPasses, APlaceNoSetupComesDownToIsReportedUnreachedWithoutNewClampings)
   EXPECT_EQ(res.passes[0], 0u);
   EXPECT_TRUE(cuts[0].passes.empty());
   EXPECT_EQ(setups.size(), 1u);
+  EXPECT_FALSE(res.no_direction_left);  // none was looked for: another clamping would help
 }
 
 // A closed 20 x 20 x 10 box but for a 10 x 10 hole in the middle of its top (a 4 x 4 grid of

@@ -105,6 +105,21 @@ TEST(SimulatePart, AFailingInteriorMaximumSaysWhereAndOverHowMuch) {
                 rep["scallop_max_interior"].get<double>(), rep["scallop_max"].get<double>(), at["x"].get<double>(),
                 at["y"].get<double>(), at["z"].get<double>(), over, 100 * over / 1200);
   EXPECT_EQ(reason, expected);
+  // Where the programs found no clamping coming down to it (within 2 r of one of their unreached
+  // places), the reason says so; farther, it does not.
+  PartSimulateOptions o = on_its_base(options(r, h));
+  o.unreached_at = {V(at["x"].get<double>() + 1.5 * r, at["y"].get<double>(), at["z"].get<double>())};
+  o.unreached_area = 0.25;
+  EXPECT_EQ(simulate_part(box, cuts, o).report["fail_reasons"][0].get<std::string>(),
+            std::string(expected) + "; no clamping's axis comes down to it clear of the part (0.25 mm² such, "
+                                    "post.setup_programs): another clamping would (rest_setups)");
+  o.unreached_by_any_direction = true;
+  EXPECT_EQ(simulate_part(box, cuts, o).report["fail_reasons"][0].get<std::string>(),
+            std::string(expected) + "; no clamping's axis comes down to it clear of the part, nor any direction the "
+                                    "rest search tried (0.25 mm² such, post.setup_programs): not for this tool on a "
+                                    "3-axis machine");
+  o.unreached_at[0].x() += r;
+  EXPECT_EQ(simulate_part(box, cuts, o).report["fail_reasons"][0].get<std::string>(), expected);
 }
 
 // A mesh made from a cloud has its edges only near the part's: edge_uncertainty moves the

@@ -61,5 +61,26 @@ TEST(LinkedPathValue, AnUnknownMoveKindIsRefused) {
   }
 }
 
+TEST(SetupPathsValue, SetupsAndUnreachedPlacesReadBack) {
+  SetupPaths v;
+  SetupPath& s = v.setups.emplace_back();
+  s.name = "1: +z", s.file = "setup_1.ngc";
+  s.translation = Eigen::Vector3d(1, 2, 3);
+  s.path = linked_from_memory_filled_with(0x00);
+  v.unreached_at = {Eigen::Vector3d(-0.8, 1650.3, 96.47), Eigen::Vector3d(1, 2, 3)};
+  v.unreached_area = 0.141;
+  v.unreached_by_any_direction = true;
+  std::istringstream in(bytes_of(v));
+  const auto back = std::dynamic_pointer_cast<const SetupPaths>(SetupPaths::deserialize(in));
+  ASSERT_TRUE(back);
+  ASSERT_EQ(back->setups.size(), 1u);
+  EXPECT_EQ(back->setups[0].name, "1: +z");
+  EXPECT_EQ(back->setups[0].translation, Eigen::Vector3d(1, 2, 3));
+  EXPECT_EQ(back->setups[0].path.moves.size(), 3u);
+  EXPECT_EQ(back->unreached_at, v.unreached_at);
+  EXPECT_EQ(back->unreached_area, 0.141);
+  EXPECT_TRUE(back->unreached_by_any_direction);
+}
+
 }  // namespace
 }  // namespace scallop
