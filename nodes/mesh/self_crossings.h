@@ -46,5 +46,10 @@ struct TangleKeepOut {
   double margin = 0;  // mm
 };
 TangleKeepOut tangle_keep_out(const Mesh& mesh, const SelfCrossings& crossings, double margin = -1);
+// The margin a node's option `tangle_margin` asks for: the option when given (>= 0); otherwise the
+// reconstruction's rule (-1) for a mesh made from a cloud, none (0) for a mesh given as the part.
+inline double tangle_margin_for(double option, bool made_from_cloud) {
+  return option >= 0 ? option : made_from_cloud ? -1.0 : 0.0;
+}
 
 }  // namespace scallop

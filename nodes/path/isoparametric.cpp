@@ -1310,16 +1310,16 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   // band the real outline may reach into, over a surface extrapolated from the rim, and the
   // certificate measures up to the loop: said, so that a place off the part is not taken for one
   // on it (the bundled example's contour program warned of a strip 2.4 mm beyond its corner).
-  const Outline outer_outline = [&] {
-    std::vector<Eigen::Vector2d> polygon;
-    if (outer_usable)
-      for (int i : map.outer_loop) polygon.push_back(cloud.points[i].head<2>());
-    return Outline(polygon.size() >= 3 ? std::vector<std::vector<Eigen::Vector2d>>{polygon}
-                                       : std::vector<std::vector<Eigen::Vector2d>>{});
-  }();
+  std::optional<Outline> outer_outline;  // built only when a warning asks
   auto place = [&](const Eigen::Vector3d& p) {
+    if (!outer_outline) {
+      std::vector<std::vector<Eigen::Vector2d>> loops(outer_usable ? 1 : 0);
+      if (outer_usable)
+        for (int i : map.outer_loop) loops[0].push_back(cloud.points[i].head<2>());
+      outer_outline.emplace(std::move(loops));
+    }
     std::string text = "x " + short_number(p.x(), 6) + ", y " + short_number(p.y(), 6);
-    const double beyond = outer_outline.empty() ? 0.0 : outer_outline.beyond_outer(p.head<2>());
+    const double beyond = outer_outline->empty() ? 0.0 : outer_outline->beyond_outer(p.head<2>());
     if (beyond > 0)
       text += ", " + short_number(beyond, 6) + " mm beyond the cloud's outline, where the surface is extrapolated and the "
               "certificate does not measure";

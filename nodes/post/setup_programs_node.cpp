@@ -26,12 +26,6 @@ struct SetupProgramsOptions {
   double base_angle = 10;
   double tangle_margin = -1;
 };
-// How far beyond r balls are kept from where the measured mesh crosses itself (tangle_keep_out):
-// the option when given (>= 0); otherwise the reconstruction's rule where the mesh was made from a
-// cloud (input cloud), and none where the mesh is the part itself.
-double tangle_margin_for(const NodeContext& ctx, double option) {
-  return option >= 0 ? option : ctx.has_input("cloud") ? -1.0 : 0.0;
-}
 }  // namespace
 
 NodeDecl make_setup_programs_node() {
@@ -132,7 +126,7 @@ NodeDecl make_setup_programs_node() {
     // Where the mesh crosses itself its faces bound nothing: the balls are kept a margin off them.
     const auto measured = ctx.has_input("measured") ? ctx.input<Mesh>("measured") : mesh;
     const SelfCrossings crossings = self_crossings(*measured);
-    const TangleKeepOut keep_out = tangle_keep_out(*measured, crossings, tangle_margin_for(ctx, o.tangle_margin));
+    const TangleKeepOut keep_out = tangle_keep_out(*measured, crossings, tangle_margin_for(o.tangle_margin, ctx.has_input("cloud")));
     if (!crossings.tangled.empty()) {
       const Eigen::Vector3d at = measured->vertices[measured->face(crossings.tangled.front())[0]];
       char text[500];

@@ -2,6 +2,7 @@
 #include <stdexcept>
 
 #include "engine/node.h"
+#include "nodes/mesh/self_crossings.h"
 #include "nodes/mesh/setup_base.h"
 #include "nodes/post/simulate_part.h"
 #include "nodes/types/cloud.h"
@@ -69,7 +70,7 @@ NodeDecl make_simulate_part_node() {
     o.base_angle = ctx.number("base_angle");
     o.feature_angle = ctx.number("feature_angle");
     // (as post.setup_programs keeps the balls off: the reconstruction's rule only for a mesh made from a cloud)
-    if (o.tangle_margin < 0 && !ctx.has_input("cloud")) o.tangle_margin = 0;
+    o.tangle_margin = tangle_margin_for(o.tangle_margin, ctx.has_input("cloud"));
     if (ctx.has_input("base")) {
       try {
         o.base_normal = base_direction_of(ctx.input<Report>("base")->data);
