@@ -14,6 +14,13 @@ void Value::write_file(const std::string& path) const {
   serialize(out);
 }
 
+DerivedStore::Slot& DerivedStore::slot_of(const std::string& key) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::unique_ptr<Slot>& slot = slots_[key];
+  if (!slot) slot = std::make_unique<Slot>();
+  return *slot;
+}
+
 std::string Value::content_key() const {
   std::ostringstream s;
   serialize(s);

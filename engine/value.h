@@ -11,15 +11,50 @@
 #include <istream>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <ostream>
 #include <string>
 #include <vector>
 
 namespace scallop {
 
+// What nodes derive from a value alone (a search tree over a cloud's points, its height field),
+// kept with the value and built once however many nodes ask: a value never changes once made, so
+// neither does what is derived from it. Freed with the value. Copying or moving a value starts
+// its copy with none (they are derived again on demand).
+class DerivedStore {
+ public:
+  DerivedStore() = default;
+  DerivedStore(const DerivedStore&) : DerivedStore() {}
+  DerivedStore& operator=(const DerivedStore&) { return *this; }
+  // The entry `key`, made by make() on first use; callers asking meanwhile wait for it (other
+  // keys do not). A make() that throws leaves no entry, and the next caller tries again.
+  template <class T>
+  std::shared_ptr<const T> get(const std::string& key, const std::function<std::shared_ptr<const T>()>& make) const {
+    Slot& slot = slot_of(key);
+    std::lock_guard<std::mutex> lock(slot.mutex);
+    if (!slot.value) slot.value = make();
+    return std::static_pointer_cast<const T>(slot.value);
+  }
+
+ private:
+  struct Slot {
+    std::mutex mutex;
+    std::shared_ptr<const void> value;
+  };
+  Slot& slot_of(const std::string& key) const;
+  mutable std::mutex mutex_;
+  mutable std::map<std::string, std::unique_ptr<Slot>> slots_;
+};
+
 class Value {
  public:
   virtual ~Value() = default;
+  // Derived data built once per value (DerivedStore::get); thread-safe.
+  template <class T>
+  std::shared_ptr<const T> derived(const std::string& key, const std::function<std::shared_ptr<const T>()>& make) const {
+    return derived_.get<T>(key, make);
+  }
   // Name of the value type, e.g. "Cloud"; must match the ValueType it was registered under.
   virtual std::string type_name() const = 0;
   // Binary form for the disk cache.
@@ -28,6 +63,9 @@ class Value {
   virtual void write_file(const std::string& path) const;
   // Identity of the value for cache keys: by default the hash of its binary form.
   virtual std::string content_key() const;
+
+ private:
+  DerivedStore derived_;
 };
 
 using ValuePtr = std::shared_ptr<const Value>;

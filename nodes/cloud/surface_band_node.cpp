@@ -1,7 +1,7 @@
 #include <stdexcept>
 
 #include "engine/node.h"
-#include "nodes/geom/height_field_model.h"
+#include "nodes/geom/cloud_height_field.h"
 #include "nodes/geom/surface_band.h"
 #include "nodes/types/cloud.h"
 
@@ -23,9 +23,8 @@ NodeDecl make_surface_band_node() {
   d.run = [](NodeContext& ctx) {
     auto cloud = ctx.input<PointCloud>("cloud");
     try {
-      // the same surface path.gouge_guard and post.simulate fit: 20 neighbours
-      HeightFieldModel surface(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
-      SurfaceBand band = surface_band(surface, cloud->points);
+      // the same surface path.gouge_guard and post.simulate fit (the same model, shared)
+      SurfaceBand band = surface_band(*cloud_height_field(*cloud), cloud->points);
       PointCloud out;
       out.points = std::move(band.at);
       out.uncertainty = std::move(band.uncertainty);

@@ -110,9 +110,8 @@ struct HeightFieldModel::Impl {
     return std::size_t(grid->query(Eigen::Vector2d(x, y), k, idx, d2));
   }
   std::unique_ptr<PointsAdaptor<Eigen::Vector3d>> adaptor3;
-  // The 3-D tree of the steep fits, built on their first use: a patch gentle everywhere never
-  // needs it, and the planner, guard, certificate and preview each build their own model (half a
-  // second per million points, single-threaded).
+  // The 3-D tree of the steep fits (and of tree3d()'s other users), built on first use: a patch
+  // gentle everywhere may never need it (half a second per million points, single-threaded).
   mutable std::once_flag tree3_built;
   mutable std::unique_ptr<KdTree<Eigen::Vector3d, 3>> tree3;
   const KdTree<Eigen::Vector3d, 3>& steep_tree() const {
@@ -375,6 +374,9 @@ HeightFieldModel::HeightFieldModel(std::vector<Eigen::Vector3d>&& own, const std
 }
 
 HeightFieldModel::~HeightFieldModel() { delete impl_; }
+
+const std::vector<Eigen::Vector3d>& HeightFieldModel::points() const { return impl_->p; }
+const KdTree<Eigen::Vector3d, 3>& HeightFieldModel::tree3d() const { return impl_->steep_tree(); }
 
 double HeightFieldModel::Impl::mean_uncertainty(const std::uint32_t* idx, std::size_t got) const {
   if (!uncertainty || got == 0) return 0;

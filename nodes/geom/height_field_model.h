@@ -7,6 +7,8 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "nodes/geom/kd_tree.h"
+
 namespace scallop {
 
 // Height-field model of a cloud seen from +z: z(x, y) and the upward normal from a weighted
@@ -62,6 +64,11 @@ class HeightFieldModel {
   // per-point uncertainties, the misfit alone).
   double uncertainty(double x, double y) const;
   double uncertainty_max() const { return uncertainty_max_; }
+  // The cloud's points as the model reads them, and a 3-D k-d tree over them (leaf size 16; the
+  // steep places' fits search it), built on first use, once: other checks over the same points
+  // search it too rather than build their own (half a second per million points).
+  const std::vector<Eigen::Vector3d>& points() const;
+  const KdTree<Eigen::Vector3d, 3>& tree3d() const;
   double spacing() const { return spacing_; }  // mean cloud spacing in xy (mm)
   double min_x() const { return lo_.x(); }
   double min_y() const { return lo_.y(); }

@@ -2,7 +2,7 @@
 // of its cloud, the outline of its optional input "loops" and its optional input "band"
 // (cloud.surface_band). path.gouge_guard and post.link check balls alike, the rim band beyond
 // the outline included (rim_band_width: what the planner's band passes cut by default and the
-// certificate counts).
+// certificate counts), and share one check: it is built once per cloud, loops, band and radius.
 #pragma once
 
 #include <memory>
@@ -10,11 +10,9 @@
 #include <vector>
 
 #include "engine/node.h"
-#include "nodes/cloud/surface_band_input.h"
 #include "nodes/geom/height_field_model.h"
 #include "nodes/geom/outline.h"
 #include "nodes/path/gouge_guard.h"
-#include "nodes/path/step_size.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/param.h"
 
@@ -22,26 +20,23 @@ namespace scallop {
 
 // Holds what the check reads (it keeps references): neither copied nor moved.
 struct BallClearanceInputs {
-  // cloud  the node's cloud (must outlive this); r  the ball's radius (mm).
-  BallClearanceInputs(NodeContext& ctx, const PointCloud& cloud, double r)
-      : surface(cloud.points, 20, cloud.has_uncertainty() ? &cloud.uncertainty : nullptr),
-        outline(ctx.has_input("loops") ? loop_polygons_xy(*ctx.input<BoundaryLoops>("loops"), cloud.points)
-                                       : std::vector<std::vector<Eigen::Vector2d>>{}),
-        band_cloud(surface_band_input(ctx, cloud)) {
-    if (band_cloud) band.emplace(SurfaceBandView{band_cloud->points, band_cloud->uncertainty});
-    // (a spacing wider than the certificate's band: the outermost band pass runs along its edge,
-    // and its balls reach past it)
-    clearance.emplace(surface, cloud.points, r, outline.empty() ? nullptr : &outline, band ? &*band : nullptr,
-                      rim_band_width(surface.spacing()) + surface.spacing());
-  }
+  // cloud  must outlive this; loops, band  null or the node's inputs (kept); r  the ball's radius (mm).
+  BallClearanceInputs(const PointCloud& cloud, std::shared_ptr<const BoundaryLoops> loops,
+                      std::shared_ptr<const PointCloud> band, double r);
   BallClearanceInputs(const BallClearanceInputs&) = delete;
   BallClearanceInputs& operator=(const BallClearanceInputs&) = delete;
 
-  HeightFieldModel surface;  // what post.simulate certifies against: 20 neighbours
+  std::shared_ptr<const HeightFieldModel> surface;  // what post.simulate certifies against (shared)
+  std::shared_ptr<const BoundaryLoops> loops;
   Outline outline;
   std::shared_ptr<const PointCloud> band_cloud;
   std::optional<SurfaceBandView> band;
   std::optional<BallClearance> clearance;
 };
+
+// The check for the node's inputs "cloud" (given), "loops" and "band" (optional) and radius r,
+// made on the first call of a run and shared by the later ones with the same inputs and r (it
+// lives as long as the cloud value). Throws NodeError for a band that is not the cloud's.
+std::shared_ptr<const BallClearanceInputs> ball_clearance_inputs(NodeContext& ctx, const PointCloud& cloud, double r);
 
 }  // namespace scallop

@@ -29,7 +29,9 @@ struct BallClearance::Impl {
   double rim_band = 0;  // mm beyond the outline's outer loop still on the surface
   PointsAdaptor<Eigen::Vector3d> adaptor{points};
   KdTree<Eigen::Vector3d, 2> tree{2, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};   // by xy
-  KdTree<Eigen::Vector3d, 3> tree3{3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};  // in 3-D
+  // in 3-D: the height field's own when it is over these points (built once for both), else ours
+  std::unique_ptr<KdTree<Eigen::Vector3d, 3>> own_tree3;
+  const KdTree<Eigen::Vector3d, 3>* tree3 = nullptr;
   // The band the ball must clear, sampled above each cloud point (surface_band.h): computed
   // here when not given. Two tiers of it, so that a few very uncertain samples (an extrapolated
   // rim, a crest) do not widen every search.
@@ -68,7 +70,17 @@ struct BallClearance::Impl {
       t.index.push_back(static_cast<std::uint32_t>(i));
       t.uncertainty_max = std::max(t.uncertainty_max, band.uncertainty[i]);
     }
-    tbb::parallel_invoke([&] { tree.buildIndex(); }, [&] { tree3.buildIndex(); },
+    tbb::parallel_invoke([&] { tree.buildIndex(); },
+                         [&] {
+                           if (&points == &surface.points()) {
+                             tree3 = &surface.tree3d();
+                           } else {
+                             own_tree3 = std::make_unique<KdTree<Eigen::Vector3d, 3>>(
+                                 3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+                             own_tree3->buildIndex();
+                             tree3 = own_tree3.get();
+                           }
+                         },
                          [&] { if (!tier[0].index.empty()) tier[0].tree.buildIndex(); },
                          [&] { if (!tier[1].index.empty()) tier[1].tree.buildIndex(); });
   }
@@ -137,6 +149,8 @@ BallClearance::BallClearance(const HeightFieldModel& surface, const std::vector<
 BallClearance::~BallClearance() { delete impl_; }
 
 double BallClearance::spacing() const { return impl_->surface.spacing(); }
+const std::vector<Eigen::Vector3d>& BallClearance::points() const { return impl_->points; }
+const KdTree<Eigen::Vector3d, 2>& BallClearance::xy_tree() const { return impl_->tree; }
 
 BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const Eigen::Vector3d& hint) const {
   const double r = impl_->r;
@@ -242,7 +256,7 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     const double cap = r + res.clearance;
     if (cap > 0) {
       NearestInDisc nearest{impl_->points, c.head<2>(), r * r, cap * cap};
-      impl_->tree3.findNeighbors(nearest, c.data(), nanoflann::SearchParams(32, 0, false));
+      impl_->tree3->findNeighbors(nearest, c.data(), nanoflann::SearchParams(32, 0, false));
       if (nearest.size()) res.clearance = std::min(res.clearance, (c - impl_->points[nearest.best]).norm() - r);
     }
     return res;

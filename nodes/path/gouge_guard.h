@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "nodes/geom/height_field_model.h"
+#include "nodes/geom/kd_tree.h"
 #include "nodes/geom/outline.h"
 #include "nodes/geom/surface_band.h"
 #include "nodes/types/toolpath.h"
@@ -83,6 +84,10 @@ class BallClearance {
   Result operator()(const Eigen::Vector3d& centre, const Eigen::Vector3d& hint) const;
   // The surface's sampling step (mm): HeightFieldModel::spacing.
   double spacing() const;
+  // The cloud it checks against and its k-d tree by xy (leaf size 16), for other searches of
+  // the same points (post.link's), so that they need not build their own.
+  const std::vector<Eigen::Vector3d>& points() const;
+  const KdTree<Eigen::Vector3d, 2>& xy_tree() const;
 
  private:
   struct Impl;

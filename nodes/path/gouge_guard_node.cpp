@@ -49,8 +49,8 @@ NodeDecl make_gouge_guard_node() {
     GougeGuardOptions o = ctx.options<GougeGuardOptions>();
     o.progress = [&ctx](double f) { ctx.progress(f, "checking the ball against the surface"); };
     try {
-      const BallClearanceInputs check(ctx, *cloud, path->tool_radius);
-      auto res = guard_gouges(*path, *check.clearance, o);
+      const auto check = ball_clearance_inputs(ctx, *cloud, path->tool_radius);
+      auto res = guard_gouges(*path, *check->clearance, o);
       for (const auto& w : res.report["warnings"]) ctx.warn(w.get<std::string>());  // lifts, in one line each
       Report report;
       report.data = std::move(res.report);

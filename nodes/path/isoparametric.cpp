@@ -17,6 +17,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "nodes/geom/cloud_height_field.h"
 #include "nodes/geom/height_field_model.h"
 #include "nodes/geom/point_text.h"
 #include "nodes/path/step_size.h"
@@ -97,10 +98,9 @@ struct StripCheck {
 // material there (reported as a concave region) instead of gouging.
 class BallLifter {
  public:
-  BallLifter(const std::vector<Eigen::Vector3d>& P, double r)
-      : adaptor_{P}, tree_(3, adaptor_, nanoflann::KDTreeSingleIndexAdaptorParams(10)), r_(r) {
-    tree_.buildIndex();
-  }
+  // tree  a 3-D k-d tree over the cloud P (the height field's: HeightFieldModel::tree3d).
+  BallLifter(const std::vector<Eigen::Vector3d>& P, const KdTree<Eigen::Vector3d, 3>& tree, double r)
+      : points_(P), tree_(tree), r_(r) {}
   // The smallest d >= 0 such that every cloud point is at least r - tol from c + d n (n unit,
   // tol < r; a negative tol keeps the points |tol| outside the ball).
   double lift(const Eigen::Vector3d& c, const Eigen::Vector3d& n, double tol) const {
@@ -110,7 +110,7 @@ class BallLifter {
     double d = 0;
     for (const auto& [i, sq] : hits) {
       // |c + d n - q| = rr  <=>  d^2 + 2 b d + (|c - q|^2 - rr^2) = 0, b = (c - q).n
-      const Eigen::Vector3d w = c - adaptor_.pts[i];
+      const Eigen::Vector3d w = c - points_[i];
       const double b = w.dot(n), k = w.squaredNorm() - rr * rr;
       if (k >= 0) continue;
       d = std::max(d, -b + std::sqrt(b * b - k));
@@ -119,10 +119,8 @@ class BallLifter {
   }
 
  private:
-  using Adaptor = PointsAdaptor<Eigen::Vector3d>;
-  using Tree = KdTree<Eigen::Vector3d, 3>;
-  Adaptor adaptor_;
-  Tree tree_;
+  const std::vector<Eigen::Vector3d>& points_;
+  const KdTree<Eigen::Vector3d, 3>& tree_;
   double r_;
 };
 
@@ -956,12 +954,10 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   if (!cloud.uncertainty.empty() && !cloud.has_uncertainty())
     throw std::invalid_argument("the cloud has " + std::to_string(cloud.size()) + " points but " +
                                 std::to_string(cloud.uncertainty.size()) + " uncertainties");
-  // The cloud's height field (what the gouge guard and the certificate measure against) and the
-  // ball lifter: two k-d trees over the whole cloud, built side by side.
-  std::optional<BallLifter> lifter;
-  std::optional<HeightFieldModel> model;
-  tbb::parallel_invoke([&] { lifter.emplace(cloud.points, o.tool_radius); },
-                       [&] { model.emplace(cloud.points, 20, cloud.has_uncertainty() ? &cloud.uncertainty : nullptr); });
+  // The cloud's height field (what the gouge guard and the certificate measure against; shared
+  // with them) and the ball lifter, which searches the field's 3-D tree.
+  const std::shared_ptr<const HeightFieldModel> model = cloud_height_field(cloud);
+  const BallLifter lifter(cloud.points, model->tree3d(), o.tool_radius);
   // How well each point is known: the smaller of its own uncertainty and the height field's there
   // (the band the guard keeps the ball out of and the certificate adds). At a rim or a corner a
   // point's one-sided denoising fit may say 0.08 mm where the field over its neighbours knows
@@ -1078,7 +1074,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
       hole_polygons.push_back(std::move(poly));
     }
   const Holes holes(std::move(hole_polygons));
-  Planner planner(*interp, *lifter, &*model, co, o, holes);
+  Planner planner(*interp, lifter, model.get(), co, o, holes);
   std::vector<double> nn;
   for (std::size_t i = 0; i < neighbors.size(); i += std::max<std::size_t>(1, neighbors.size() / 4096))
     if (neighbors.k > 0) nn.push_back(std::sqrt(neighbors.sq_dist(i, 0)));

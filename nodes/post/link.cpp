@@ -83,12 +83,17 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
   // searched: it checks the whole part, which holds them (a part's vertices lie on its faces;
   // post.setup_programs' distance holds the cloud's points outside them), and the columns of
   // points under a link in xy were a tenth of the block's programs node.
+  // (the clearance check's own tree when it searches the same points)
   std::unique_ptr<XY> adaptor;
-  std::unique_ptr<Tree> tree;
-  if (!o.link_clear || !o.drop) {
+  std::unique_ptr<Tree> own_tree;
+  const Tree* tree = nullptr;
+  if (clearance && &clearance->points() == &surface) {
+    tree = &clearance->xy_tree();
+  } else if (!o.link_clear || !o.drop) {
     adaptor = std::make_unique<XY>(XY{surface});
-    tree = std::make_unique<Tree>(2, *adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-    tree->buildIndex();
+    own_tree = std::make_unique<Tree>(2, *adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    own_tree->buildIndex();
+    tree = own_tree.get();
   }
   auto safe = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     if (o.link_clear) {

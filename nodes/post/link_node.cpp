@@ -37,8 +37,8 @@ NodeDecl make_link_node() {
     const LinkOptions o = ctx.options<LinkOptions>();
     try {
       // What the certificate measures against, checked as the gouge guard checks a ball.
-      std::unique_ptr<BallClearanceInputs> check;
-      if (cloud && cloud->size() >= 10) check = std::make_unique<BallClearanceInputs>(ctx, *cloud, path->tool_radius);
+      std::shared_ptr<const BallClearanceInputs> check;
+      if (cloud && cloud->size() >= 10) check = ball_clearance_inputs(ctx, *cloud, path->tool_radius);
       ctx.set("linked", link_passes(*path, cloud ? cloud->points : none, o, check ? &*check->clearance : nullptr));
     } catch (const std::invalid_argument& e) {
       throw NodeError(e.what());

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "engine/node.h"
+#include "nodes/geom/cloud_height_field.h"
 #include "nodes/post/simulate.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
@@ -73,8 +74,8 @@ NodeDecl make_simulate_node() {
       RapidClearance rc;
       tbb::parallel_invoke(
           [&] {
-            HeightFieldModel surf(cloud->points, 20, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr);
-            sim = simulate_cut(surf, feed, rapid, o, [&](double f) { ctx.progress(f, "simulating"); });
+            sim = simulate_cut(*cloud_height_field(*cloud), feed, rapid, o,
+                               [&](double f) { ctx.progress(f, "simulating"); });
           },
           [&] {
             if (ctx.has_input("linked"))
