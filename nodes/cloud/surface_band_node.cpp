@@ -1,7 +1,7 @@
 #include <stdexcept>
 
 #include "engine/node.h"
-#include "nodes/geom/cloud_height_field.h"
+#include "nodes/cloud/cloud_height_field.h"
 #include "nodes/geom/surface_band.h"
 #include "nodes/types/cloud.h"
 

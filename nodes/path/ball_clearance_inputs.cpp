@@ -3,7 +3,7 @@
 #include <cstdio>
 
 #include "nodes/cloud/surface_band_input.h"
-#include "nodes/geom/cloud_height_field.h"
+#include "nodes/cloud/cloud_height_field.h"
 #include "nodes/path/step_size.h"
 
 namespace scallop {

@@ -17,7 +17,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "nodes/geom/cloud_height_field.h"
+#include "nodes/cloud/cloud_height_field.h"
 #include "nodes/geom/height_field_model.h"
 #include "nodes/geom/point_text.h"
 #include "nodes/path/step_size.h"

@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "engine/node.h"
-#include "nodes/geom/cloud_height_field.h"
+#include "nodes/cloud/cloud_height_field.h"
 #include "nodes/post/simulate.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"

@@ -1,4 +1,4 @@
-#include "nodes/geom/cloud_height_field.h"
+#include "nodes/cloud/cloud_height_field.h"
 
 namespace scallop {
 
