@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <random>
 #include <set>
@@ -39,6 +40,54 @@ TEST(MeshDistance, DistancesRaysAndSidesOfTheUnitCube) {
     EXPECT_LT(cube.signed_distance(on), 1e-9);
   }
   EXPECT_TRUE(std::isinf(MeshDistance(Mesh()).signed_distance(V(0, 0, 0))));
+}
+
+TEST(MeshDistance, BesideEdgesAndCornersConvexOrConcaveTheSideIsThePartsOwn) {
+  // An L-shaped prism (a concave edge along x = y = 1, its top and bottom non-convex hexagons
+  // fanned from (0, 0)) and the triangulated cube: where the nearest point is on an edge or at a
+  // corner, the pseudo-normal there decides the side; every sign must be the solid's own.
+  Mesh l;
+  const double xy[6][2] = {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};
+  for (double z : {0.0, 1.0})
+    for (const auto& c : xy) l.vertices.push_back(V(c[0], c[1], z));
+  l.add_face({0, 5, 4, 3, 2, 1});    // bottom, seen from below
+  l.add_face({6, 7, 8, 9, 10, 11});  // top
+  for (std::uint32_t i = 0; i < 6; ++i) l.add_face({i, (i + 1) % 6, 6 + (i + 1) % 6, 6 + i});
+  const auto in_l = [](const V& p) {
+    return p.z() > 0 && p.z() < 1 && p.x() > 0 && p.y() > 0 && ((p.x() < 2 && p.y() < 1) || (p.x() < 1 && p.y() < 2));
+  };
+  const auto in_cube = [](const V& p) { return (p.array() > 0).all() && (p.array() < 1).all(); };
+  std::mt19937 rng(5);
+  struct Case {
+    Mesh mesh;
+    std::function<bool(const V&)> inside;
+    V lo, hi;
+  };
+  const Case cases[] = {{l, in_l, V(-0.5, -0.5, -0.5), V(2.5, 2.5, 1.5)},
+                        {test::cube_mesh(3), in_cube, V(-0.5, -0.5, -0.5), V(1.5, 1.5, 1.5)}};
+  for (const Case& c : cases) {
+    const MeshDistance d(c.mesh);
+    std::uniform_real_distribution<double> u(0, 1);
+    int checked = 0;
+    for (int i = 0; i < 20000; ++i) {
+      V p = c.lo + (c.hi - c.lo).cwiseProduct(V(u(rng), u(rng), u(rng)));
+      if (i % 2) p = p.cwiseMax(c.lo + V::Constant(0.5)).cwiseMin(c.hi - V::Constant(0.5)) +  // near edges
+                     0.05 * (V(u(rng), u(rng), u(rng)) - V::Constant(0.5));
+      const double dist = d.signed_distance(p);
+      if (std::abs(dist) < 1e-6) continue;
+      ASSERT_EQ(dist < 0, c.inside(p)) << p.transpose() << " read " << dist;
+      ++checked;
+    }
+    EXPECT_GT(checked, 19000);
+  }
+  // the concave edge's own neighbourhood, inside and out
+  const MeshDistance d(l);
+  EXPECT_NEAR(d.signed_distance(V(0.9, 0.9, 0.5)), -std::sqrt(0.02), 1e-12);    // inside, nearest the concave edge
+  EXPECT_NEAR(d.signed_distance(V(1.1, 1.1, 0.5)), 0.1, 1e-12);                  // in the notch, two walls
+  EXPECT_NEAR(d.signed_distance(V(1.1, 1.1, 1.2)), std::hypot(0.1, 0.2), 1e-12);  // above it, the top's edges
+  EXPECT_NEAR(d.signed_distance(V(1.95, 0.95, 0.5)), -0.05, 1e-12);              // inside, a convex edge
+  EXPECT_NEAR(d.signed_distance(V(0.95, 1.95, 0.98)), -0.02, 1e-12);             // inside, a corner's faces
+  EXPECT_NEAR(d.signed_distance(V(2.3, -0.4, 1.2)), std::sqrt(0.09 + 0.16 + 0.04), 1e-12);  // a corner
 }
 
 TEST(MeshDistance, TheClosestFaceIsThePolygonNotItsFannedTriangle) {
