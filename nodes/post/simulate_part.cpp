@@ -159,12 +159,14 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
       return;
     }
     const Eigen::Vector3d from = inner_mesh ? same_place(tris[s.tri], s.p, inner_mesh->vertices) : s.p;
-    centres.trace(from, n, r, T, delta, out.gouge, out.scallop, cand);
+    // The setup that finished it: the one whose piece the ray entered first (or that holds p):
+    // trace names it (asking for the piece nearest the entry point, as before, searched every
+    // piece within r of it, a quarter of the certificate's time on the block's cloud).
+    std::uint32_t piece_at = std::numeric_limits<std::uint32_t>::max();
+    centres.trace(from, n, r, T, delta, out.gouge, out.scallop, cand, &piece_at);
     out.interior = !std::isfinite(keep_off.distance(s.p, margin, cand));
-    if (!std::isnan(out.scallop)) {
-      const std::uint32_t piece_at = centres.nearest(from + std::max(0.0, out.scallop - delta) * n, r + spacing, cand);
-      if (piece_at != std::numeric_limits<std::uint32_t>::max()) out.finisher = feed_setup[centres.segment_of(piece_at)];
-    }
+    if (!std::isnan(out.scallop) && piece_at != std::numeric_limits<std::uint32_t>::max())
+      out.finisher = feed_setup[centres.segment_of(piece_at)];
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size(), 512), [&](const tbb::blocked_range<std::size_t>& rg) {
     std::vector<std::uint32_t> cand;
