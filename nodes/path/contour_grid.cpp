@@ -84,6 +84,7 @@ class ContourPlanner {
 
   double chord_max = 0;
   std::size_t unreachable = 0;  // side samples where the ball cannot reach the bottom of a concave section
+  double concave_radius_min = kInf;  // the tightest such section's radius (mm): a smaller ball would
 
   Contour contour(const Rect& r) {
     Contour c;
@@ -117,6 +118,7 @@ class ContourPlanner {
       double interval = side_interval(h, r_, kappa);
       if (!std::isfinite(interval)) {
         ++unreachable;
+        concave_radius_min = std::min(concave_radius_min, -1 / kappa);
         interval = side_interval(h, r_, 0);  // the check between contours decides
       }
       const double sample_step = side_step_corrected(interval, std::sqrt(across), theta);
@@ -434,6 +436,7 @@ ContourGridResult plan_contour_grid(const ParametricSurface& surface, const Cont
                    {"scallop_limit_min", limit_least},
                    {"chord_max", planner.chord_max},
                    {"unreachable_samples", planner.unreachable}};
+  if (planner.unreachable > 0) result.report["concave_radius_min"] = planner.concave_radius_min;
   if (!warning.empty()) result.report["warning"] = warning;
   return result;
 }

@@ -66,7 +66,10 @@ struct ContourGridOptions {
 struct ContourGridResult {
   std::vector<ToolpathPass> passes;  // one per contour, outermost first, each closed (last point = first)
   nlohmann::json report;             // contours, points, grid lines, steps across u and v (parameter
-                                     // units), scallop and chord found by the checks
+                                     // units), scallop and chord found by the checks; where the patch
+                                     // curves concave tighter than the ball across the contours,
+                                     // unreachable_samples and concave_radius_min (mm: a ball of a
+                                     // smaller radius would follow it)
 };
 
 // surface  a rectangle domain (UVDomain::Kind::Rectangle, width and height > 0).

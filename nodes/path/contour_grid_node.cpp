@@ -20,7 +20,7 @@ namespace scallop::path_nodes {
 NodeDecl make_contour_grid_node() {
   NodeDecl d;
   d.type = "path.contour_grid";
-  d.version = 8;  // 8: the patches' warnings said in a line each kind, not a line each patch; 4: normals held within the patch's cap (machining_surface); 5: each side starts from the share of its formula step the last contour kept; 6: steps aim at 0.94 h, not 0.99 h; 7: each contour held to h less the surface's distance from the part in its ring, not in the whole patch
+  d.version = 9;  // 9: the report says how tight a concave patch curves (concave_radius_min) and a warning what smaller ball would follow it; 8: the patches' warnings said in a line each kind, not a line each patch; 4: normals held within the patch's cap (machining_surface); 5: each side starts from the share of its formula step the last contour kept; 6: steps aim at 0.94 h, not 0.99 h; 7: each contour held to h less the surface's distance from the part in its ring, not in the whole patch
   d.description =
       "contour-parallel passes on every B-spline patch (the second paper's Algorithm 1): nested rectangles of the "
       "patch's (u, v) square, each side stepped in from the scallop limit and the scallop between every two "
@@ -95,8 +95,8 @@ NodeDecl make_contour_grid_node() {
     double scallop_max = 0, chord_max = 0;
     // What the patches warn of, a line each kind (the face bust's 78 patches had said it in 72
     // lines), the list in the report.
-    std::size_t off_part = 0, off_worst = 0, stuck = 0;
-    double off_max = 0;
+    std::size_t off_part = 0, off_worst = 0, stuck = 0, tight = 0, tight_worst = 0;
+    double off_max = 0, tight_radius = INFINITY;
     std::string first_stuck;
     for (std::size_t p = 0; p < np; ++p) {
       nlohmann::json r = results[p].report;
@@ -111,6 +111,11 @@ NodeDecl make_contour_grid_node() {
         }
       }
 
+      if (r.contains("concave_radius_min")) {
+        ++tight;
+        if (const double radius = r["concave_radius_min"].get<double>(); radius < tight_radius)
+          tight_radius = radius, tight_worst = p;
+      }
       contours += r["contours"].get<std::size_t>();
       points += r["points"].get<std::size_t>();
       scallop_max = std::max(scallop_max, r["scallop_max"].get<double>());
@@ -124,6 +129,12 @@ NodeDecl make_contour_grid_node() {
                "faces (up to " + short_number(off_max) + " mm, patch " + std::to_string(off_worst) +
                "; the report's part_distance_max per patch): their contours there are planned to h / 2 and may "
                "leave more than h on the part (the certificate measures it)");
+    if (tight > 0)
+      ctx.warn(std::to_string(tight) + " of " + std::to_string(np) + " patches curve concave tighter than the tool (radius " +
+               short_number(o.tool_radius) + " mm) across their contours: the tightest, patch " + std::to_string(tight_worst) +
+               ", to a radius of " + short_number(tight_radius) + " mm, which a ball of a smaller radius would follow "
+               "(the report's concave_radius_min per patch); this one is kept off such places, and the certificate "
+               "measures what it leaves");
     if (stuck == 1) ctx.warn(first_stuck);
     if (stuck > 1)
       ctx.warn(std::to_string(stuck) + " patches have contours whose scallop stayed above h after 60 shrinks (" +

@@ -215,6 +215,23 @@ TEST(ContourGrid, ARidgeAndATroughStayWithinHTheTroughWithWiderSteps) {
   EXPECT_LT(first_u_step[+1], first_u_step[-1]);
 }
 
+TEST(ContourGrid, ATroughTighterThanTheBallSaysWhatRadiusWouldFollowIt) {
+  // A trough of radius 2.5 mm under a ball of 3: across it 1 + r kappa = 1 - 3 / 2.5 < 0, the ball
+  // cannot reach its bottom. The report names the radius a smaller ball would follow; the
+  // ridge of the same radius, convex, has none.
+  Exact trough(-1), ridge(+1);
+  for (Exact* s : {&trough, &ridge}) {
+    s->R = 2.5;
+    s->d.width = s->R * 80 * M_PI / 180;
+  }
+  const ContourGridResult t = plan_contour_grid(trough, options());
+  EXPECT_GT(t.report["unreachable_samples"].get<std::size_t>(), 0u);
+  EXPECT_NEAR(t.report["concave_radius_min"].get<double>(), 2.5, 1e-3);  // (curvature from differences)
+  const ContourGridResult g = plan_contour_grid(ridge, options());
+  EXPECT_EQ(g.report["unreachable_samples"].get<std::size_t>(), 0u);
+  EXPECT_FALSE(g.report.contains("concave_radius_min"));
+}
+
 TEST(ContourGrid, BadInputIsNamed) {
   const Exact plane(0);
   auto error = [&](ContourGridOptions o) {
