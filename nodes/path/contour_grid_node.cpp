@@ -129,11 +129,13 @@ NodeDecl make_contour_grid_node() {
                "faces (up to " + short_number(off_max) + " mm, patch " + std::to_string(off_worst) +
                "; the report's part_distance_max per patch): their contours there are planned to h / 2 and may "
                "leave more than h on the part (the certificate measures it)");
+    // (a radius under 0.01 mm is a crease the patch folds along, not a curve a ball follows)
     if (tight > 0)
       ctx.warn(std::to_string(tight) + " of " + std::to_string(np) + " patches curve concave tighter than the tool (radius " +
-               short_number(o.tool_radius) + " mm) across their contours: the tightest, patch " + std::to_string(tight_worst) +
-               ", to a radius of " + short_number(tight_radius) + " mm, which a ball of a smaller radius would follow "
-               "(the report's concave_radius_min per patch); this one is kept off such places, and the certificate "
+               short_number(o.tool_radius) + " mm) across their contours, the tightest patch " + std::to_string(tight_worst) +
+               (tight_radius >= 0.01 ? " to a radius of " + short_number(tight_radius) + " mm, which a smaller ball would follow"
+                                     : " in a concave crease (radius " + short_number(tight_radius, 2) + " mm) that no ball follows") +
+               " (the report's concave_radius_min per patch): this ball is kept off such places, and the certificate "
                "measures what it leaves");
     if (stuck == 1) ctx.warn(first_stuck);
     if (stuck > 1)

@@ -6,11 +6,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <tuple>
 
 #include "nodes/geom/bspline_surface.h"
+#include "nodes/geom/point_text.h"
 #include "nodes/path/step_size.h"
 #include "nodes/types/document.h"
 #include "nodes/types/mesh.h"
@@ -230,6 +232,32 @@ TEST(ContourGrid, ATroughTighterThanTheBallSaysWhatRadiusWouldFollowIt) {
   const ContourGridResult g = plan_contour_grid(ridge, options());
   EXPECT_EQ(g.report["unreachable_samples"].get<std::size_t>(), 0u);
   EXPECT_FALSE(g.report.contains("concave_radius_min"));
+}
+
+TEST(ContourGrid, TheNodeSaysWhichPatchCurvesTighterThanTheBallAndWhatWouldFollowIt) {
+  // A parabolic trough z = (x - 1)^2 over x in [0, 2], y in [0, 10] (a quadratic Bezier across):
+  // its bottom curves to a radius of 0.5 mm, under a ball of 2.
+  auto s = std::make_shared<Surfaces>();
+  SurfacePatch p;
+  p.surface.degree_u = 2, p.surface.degree_v = 1;
+  p.surface.knots_u = {0, 0, 0, 1, 1, 1}, p.surface.knots_v = {0, 0, 1, 1};
+  p.surface.poles_u = 3, p.surface.poles_v = 2;
+  p.surface.poles = {{0, 0, 1}, {1, 0, -1}, {2, 0, 1}, {0, 10, 1}, {1, 10, -1}, {2, 10, 1}};
+  s->patches.push_back(p);
+  std::vector<std::string> warnings;
+  auto out = test::run_node(path_nodes::make_contour_grid_node(),
+                            {{"tool_radius", 2}, {"scallop_height", 0.01}, {"chord_error", 0.005}}, {{"surfaces", s}},
+                            nullptr, &warnings);
+  const auto& r = std::dynamic_pointer_cast<const Report>(out.at("report"))->data["patches"][0];
+  const double radius = r["concave_radius_min"].get<double>();
+  EXPECT_GE(radius, 0.5 - 1e-3);  // the parabola's least radius
+  EXPECT_LT(radius, 0.75);        // where the samples come nearest its bottom
+  const std::string prefix = "1 of 1 patches curve concave tighter than the tool (radius 2 mm) across their contours, "
+                             "the tightest patch 0 to a radius of " + short_number(radius) + " mm, which a smaller ball "
+                             "would follow (the report's concave_radius_min per patch)";
+  EXPECT_EQ(std::count_if(warnings.begin(), warnings.end(),
+                          [&](const std::string& w) { return w.rfind(prefix, 0) == 0; }),
+            1);
 }
 
 TEST(ContourGrid, BadInputIsNamed) {
