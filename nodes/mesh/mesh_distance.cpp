@@ -547,8 +547,8 @@ double MeshDistance::faces_signed(const Eigen::Vector3d& p) const {
     return inside_in_mesh(p) ? -d : d;
   }
   // On an edge or at a corner: its pseudo-normal's side where its faces are trusted (the same as
-  // the rays' on a closed surface, and a tenth of the time: the rays were a sixth of the block
-  // cloud's certificate, mostly beside edges), the rays where not or where it is too near level.
+  // the rays' on a closed surface, without them: the rays were a sixth of the block cloud's
+  // certificate, mostly beside edges), the rays where not or where it is too near level.
   const int k = int(std::min_element(bary, bary + 3) - bary);
   Eigen::Vector3d side;
   if (on_side == 1) {
