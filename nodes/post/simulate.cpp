@@ -18,12 +18,12 @@
 #include "nodes/geom/outline.h"
 #include "nodes/post/clearance_march.h"
 #include "nodes/path/step_size.h"
+#include "nodes/geom/point_text.h"
+#include "nodes/post/surface_grid.h"
 
 namespace scallop {
 namespace {
 
-constexpr double kAngle = 0.3;                 // grid rotation (rad), as verify.py ...
-constexpr double kPhaseU = 0.37, kPhaseV = 0.71;  // ... and its shift, in spacings
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 
@@ -96,112 +96,65 @@ RapidClearance rapid_clearance(const std::vector<Eigen::Vector3d>& points, const
 }
 
 // ----------------------------------------------------------------------------- simulation
-Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSegment>& feed,
-                        double rapid_length, const SimulateOptions& o,
-                        const std::function<void(double)>& progress) {
-  const double r = o.tool_radius, H = o.scallop;
-  if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
-  if (!(H > 0)) throw std::invalid_argument("scallop limit must be > 0");
+SurfaceGridOptions surface_grid_options(const SimulateOptions& o) {
+  SurfaceGridOptions g;
+  g.tool_radius = o.tool_radius;
+  g.scallop = o.scallop;
+  g.spacing = o.spacing;
+  g.max_samples = o.max_samples;
+  g.loops = o.loops;
+  g.rim_band = o.rim_band;
+  return g;
+}
+
+namespace {
+void check_simulation_inputs(const std::vector<CentreSegment>& feed, const SimulateOptions& o) {
+  if (!(o.tool_radius > 0)) throw std::invalid_argument("tool radius must be > 0");
+  if (!(o.scallop > 0)) throw std::invalid_argument("scallop limit must be > 0");
   if (feed.empty()) throw std::invalid_argument("the path has no feed moves");
   for (const auto& s : feed)
     if (!s.a.allFinite() || !s.b.allFinite()) throw std::invalid_argument("the path has a non-finite point");
+}
+std::string describe(const SurfaceGridOptions& g) {
+  std::size_t loop_points = 0;
+  for (const auto& L : g.loops) loop_points += L.size();
+  return "r " + short_number(g.tool_radius, 6) + ", h " + short_number(g.scallop, 6) + ", spacing " +
+         short_number(g.spacing, 6) + ", max_samples " + std::to_string(g.max_samples) + ", rim_band " +
+         short_number(g.rim_band, 6) + ", " + std::to_string(g.loops.size()) + " loops of " +
+         std::to_string(loop_points) + " points";
+}
+}  // namespace
+
+Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSegment>& feed,
+                        double rapid_length, const SimulateOptions& o,
+                        const std::function<void(double)>& progress) {
+  check_simulation_inputs(feed, o);
+  const SurfaceSamples grid = sample_surface_grid(surf, surface_grid_options(o));
+  return simulate_cut(surf, grid, feed, rapid_length, o, progress);
+}
+
+Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid,
+                        const std::vector<CentreSegment>& feed, double rapid_length, const SimulateOptions& o,
+                        const std::function<void(double)>& progress) {
+  check_simulation_inputs(feed, o);
+  const double r = o.tool_radius, H = o.scallop;
+  if (!(grid.options == surface_grid_options(o)))
+    throw std::invalid_argument("the surface samples were taken for " + describe(grid.options) +
+                                ", this simulation is for " + describe(surface_grid_options(o)) +
+                                ": take them with the same tool radius, scallop limit, spacing, max_samples, rim_band "
+                                "and loops");
+  if (grid.cloud_points != surf.points().size())
+    throw std::invalid_argument("the surface samples were taken from a cloud of " + std::to_string(grid.cloud_points) +
+                                " points, this simulation's cloud has " + std::to_string(surf.points().size()));
   const bool use_loops = !o.loops.empty();
-  if (use_loops) {
-    if (o.loops[0].size() < 3)
-      throw std::invalid_argument("the outer loop has " + std::to_string(o.loops[0].size()) +
-                                  " points; an outline needs at least 3");
-    for (const auto& L : o.loops)
-      for (const auto& q : L)
-        if (!q.allFinite()) throw std::invalid_argument("a loop has a non-finite point");
-  }
   const double stepover = std::sqrt(8 * r * H);
   const double margin = o.margin > 0 ? o.margin : stepover;
   const double gouge_tol = std::max(o.chord, 1e-3);
   const double T = 20 * H;
-  double spacing = o.spacing > 0 ? o.spacing : stepover / 12;
-  {
-    // Keep the grid over the cloud's bounding box within max_samples.
-    double area = (surf.max_x() - surf.min_x()) * (surf.max_y() - surf.min_y());
-    if (o.spacing <= 0 && area / (spacing * spacing) > double(o.max_samples))
-      spacing = std::sqrt(area / double(o.max_samples));
-  }
-
-  // Grid in (u, v), rotated by kAngle about the centre of the cloud's bounding box.
-  const double cx = 0.5 * (surf.min_x() + surf.max_x()), cy = 0.5 * (surf.min_y() + surf.max_y());
-  const double Rg = 0.5 * std::hypot(surf.max_x() - surf.min_x(), surf.max_y() - surf.min_y()) + 3 * spacing;
-  const double ca = std::cos(kAngle), sa = std::sin(kAngle);
-  const int nu = static_cast<int>(std::ceil(2 * Rg / spacing));
-  auto to_xy = [&](double u, double v) { return Eigen::Vector2d(cx + ca * u - sa * v, cy + sa * u + ca * v); };
-  auto grid_u = [&](int i) { return -Rg + (i + kPhaseU) * spacing; };
-  auto grid_v = [&](int j) { return -Rg + (j + kPhaseV) * spacing; };
-
-  struct Raw {
-    Eigen::Vector3d p, n;
-    double w;
-    double u;  // the surface's uncertainty there (mm)
-    bool beyond = false;  // in the rim band beyond the outer loop
-  };
-  // Which grid nodes fall on the patch; holes in the cloud (not connected to the outside of the
-  // grid through other missing nodes) are part of the patch too.
-  std::vector<std::uint8_t> inside(std::size_t(nu) * nu, 0);
-  if (use_loops) {
-    // Scanline fill with the even-odd rule over all loops at once (inside the outer loop and
-    // outside the holes): per grid row, the u where each polygon edge crosses the row's v,
-    // sorted; grid nodes between the 1st and 2nd, 3rd and 4th ... crossing are inside.
-    std::vector<std::array<double, 4>> edges;  // (u0, v0, u1, v1) in grid coordinates
-    for (const auto& L : o.loops)
-      for (std::size_t k = 0; k < L.size(); ++k) {
-        const Eigen::Vector2d a = L[k] - Eigen::Vector2d(cx, cy), b = L[(k + 1) % L.size()] - Eigen::Vector2d(cx, cy);
-        edges.push_back({ca * a.x() + sa * a.y(), -sa * a.x() + ca * a.y(), ca * b.x() + sa * b.y(), -sa * b.x() + ca * b.y()});
-      }
-    tbb::parallel_for(tbb::blocked_range<int>(0, nu), [&](const tbb::blocked_range<int>& rg) {
-      std::vector<double> cross;
-      for (int j = rg.begin(); j < rg.end(); ++j) {
-        const double v = grid_v(j);
-        cross.clear();
-        for (const auto& e : edges)
-          if ((e[1] <= v) != (e[3] <= v)) cross.push_back(e[0] + (v - e[1]) / (e[3] - e[1]) * (e[2] - e[0]));
-        std::sort(cross.begin(), cross.end());
-        for (std::size_t c = 0; c + 1 < cross.size(); c += 2) {
-          // grid_u(i) = -Rg + (i + kPhaseU) spacing; nodes with cross[c] <= u < cross[c+1]
-          const int i0 = std::max(0, static_cast<int>(std::ceil((cross[c] + Rg) / spacing - kPhaseU)));
-          const int i1 = std::min(nu - 1, static_cast<int>(std::ceil((cross[c + 1] + Rg) / spacing - kPhaseU)) - 1);
-          for (int i = i0; i <= i1; ++i) inside[std::size_t(j) * nu + i] = 1;
-        }
-      }
-    });
-  } else {
-  tbb::parallel_for(tbb::blocked_range<int>(0, nu), [&](const tbb::blocked_range<int>& rg) {
-    for (int j = rg.begin(); j < rg.end(); ++j)
-      for (int i = 0; i < nu; ++i) {
-        Eigen::Vector2d q = to_xy(grid_u(i), grid_v(j));
-        if (q.x() < surf.min_x() - spacing || q.x() > surf.max_x() + spacing || q.y() < surf.min_y() - spacing ||
-            q.y() > surf.max_y() + spacing)
-          continue;
-        inside[std::size_t(j) * nu + i] = surf.inside(q.x(), q.y());
-      }
-  });
-  {
-    std::vector<std::uint8_t> outside(inside.size(), 0);
-    std::vector<std::size_t> stack;
-    for (int i = 0; i < nu; ++i)
-      for (std::size_t id : {std::size_t(i), std::size_t(nu - 1) * nu + i, std::size_t(i) * nu, std::size_t(i) * nu + nu - 1})
-        if (!inside[id] && !outside[id]) outside[id] = 1, stack.push_back(id);
-    while (!stack.empty()) {
-      std::size_t id = stack.back();
-      stack.pop_back();
-      int i = int(id % nu), j = int(id / nu);
-      const int di[4] = {1, -1, 0, 0}, dj[4] = {0, 0, 1, -1};
-      for (int t = 0; t < 4; ++t) {
-        int ii = i + di[t], jj = j + dj[t];
-        if (ii < 0 || jj < 0 || ii >= nu || jj >= nu) continue;
-        std::size_t nid = std::size_t(jj) * nu + ii;
-        if (!inside[nid] && !outside[nid]) outside[nid] = 1, stack.push_back(nid);
-      }
-    }
-    for (std::size_t id = 0; id < inside.size(); ++id) inside[id] = !outside[id];
-  }
-  }
+  const GridFrame g = grid_frame(grid);
+  const double spacing = g.spacing;
+  const int nu = g.nodes;
+  const std::vector<std::uint8_t>& inside = grid.inside;
 
   // With loops the margin is measured from their edges, resampled every quarter spacing (the
   // nearest resampled point is at most an eighth of a spacing farther than the edge).
@@ -213,55 +166,9 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
         const int m = std::max(1, static_cast<int>(std::ceil((b - a).norm() / (0.25 * spacing))));
         for (int t = 0; t < m; ++t) edge_points.push_back(a + (b - a) * (double(t) / m));
       }
-  const double rim_band = !use_loops ? 0.0 : o.rim_band >= 0 ? o.rim_band : certified_rim_band(surf.spacing());
+  const double rim_band = grid.rim_band;
   const Outline outline_polygons(rim_band > 0 ? o.loops : std::vector<std::vector<Eigen::Vector2d>>{});
-  std::vector<std::vector<Raw>> rows(nu);
-  tbb::parallel_for(tbb::blocked_range<int>(0, nu), [&](const tbb::blocked_range<int>& rg) {
-    for (int j = rg.begin(); j < rg.end(); ++j) {
-      for (int i = 0; i < nu; ++i) {
-        Eigen::Vector2d q = to_xy(grid_u(i), grid_v(j));
-        double z, u;
-        Eigen::Vector3d n;
-        if (!inside[std::size_t(j) * nu + i]) {
-          // the rim band: within rim_band along the surface of the outer loop
-          if (rim_band <= 0) continue;
-          // (0: inside the outer loop, in a hole)
-          const double d = outline_polygons.beyond_outer(q);
-          if (!(d > 0 && d <= rim_band) || !surf.eval(q.x(), q.y(), z, n, true, &u) || d > rim_band * n.z())
-            continue;
-          inside[std::size_t(j) * nu + i] = 2;
-          rows[j].push_back({{q.x(), q.y(), z}, n, spacing * spacing / n.z(), u, true});
-          continue;
-        }
-        if (!surf.eval(q.x(), q.y(), z, n, true, &u)) continue;
-        // Steep cells are split k×k so the spacing along the surface stays near `spacing`.
-        int k = std::clamp(static_cast<int>(std::lround(1.0 / n.z())), 1, 4);
-        if (k == 1) {
-          rows[j].push_back({{q.x(), q.y(), z}, n, spacing * spacing / n.z(), u});
-          continue;
-        }
-        for (int a = 0; a < k; ++a)
-          for (int b = 0; b < k; ++b) {
-            Eigen::Vector2d s = to_xy(grid_u(i) + ((a + 0.5) / k - 0.5) * spacing,
-                                      grid_v(j) + ((b + 0.5) / k - 0.5) * spacing);
-            double zs, us;
-            Eigen::Vector3d ns;
-            if (surf.eval(s.x(), s.y(), zs, ns, true, &us))
-              rows[j].push_back({{s.x(), s.y(), zs}, ns, spacing * spacing / (k * k * ns.z()), us});
-          }
-      }
-    }
-  });
-  // The samples are traced row by row into one array in row order (copying the rows into one
-  // array first took an eighth of the node at 860 000 samples).
-  std::vector<std::size_t> row_start(nu + 1, 0);
-  double sampled_uncertainty_max = 0;
-  for (int j = 0; j < nu; ++j) {
-    row_start[j + 1] = row_start[j] + rows[j].size();
-    for (const Raw& s : rows[j]) sampled_uncertainty_max = std::max(sampled_uncertainty_max, s.u);
-  }
-  const std::size_t n_grid = row_start[nu];
-  if (n_grid == 0) throw std::invalid_argument("no grid sample falls on the surface");
+  const std::size_t n_grid = grid.points.size();
   if (progress) progress(0.1);
 
   // Outline: grid nodes outside the patch next to one inside; interior = farther than the margin.
@@ -275,7 +182,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
           int ii = i + di, jj = j + dj;
           near = ii >= 0 && jj >= 0 && ii < nu && jj < nu && inside[std::size_t(jj) * nu + ii];
         }
-      if (near) outline.push_back(to_xy(grid_u(i), grid_v(j)));
+      if (near) outline.push_back(g.xy(g.u(i), g.v(j)));
     }
   const std::vector<Eigen::Vector2d>& edge_set = use_loops ? edge_points : outline;
   PointsAdaptor<Eigen::Vector2d> outline_adaptor{edge_set};
@@ -310,9 +217,8 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
   // With loops, a refinement sample is on the patch when its nearest grid node is, and in the
   // rim band when that node is.
   auto nearest_node = [&](double x, double y) -> std::uint8_t {
-    const double dx = x - cx, dy = y - cy, u = ca * dx + sa * dy, v = -sa * dx + ca * dy;
-    const long i = std::lround((u + Rg) / spacing - kPhaseU), j = std::lround((v + Rg) / spacing - kPhaseV);
-    return i >= 0 && j >= 0 && i < nu && j < nu ? inside[std::size_t(j) * nu + std::size_t(i)] : 0;
+    const std::ptrdiff_t at = g.nearest(x, y);
+    return at >= 0 ? inside[std::size_t(at)] : 0;
   };
   auto on_patch_grid = [&](double x, double y) { return nearest_node(x, y) != 0; };
   auto in_band = [&](double x, double y) { return use_loops && nearest_node(x, y) == 2; };
@@ -332,19 +238,18 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
     for (int j = rg.begin(); j < rg.end(); ++j) {
       std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();  // the last sample's piece
       OutlineDistance outline_distance;
-      for (std::size_t i = 0; i < rows[j].size(); ++i) {
-        const Raw& s = rows[j][i];
-        SimSample& out = res.samples[row_start[j] + i];
-        out.x = s.p.x(), out.y = s.p.y(), out.z = s.p.z(), out.weight = s.w;
-        index.trace(s.p, s.n, r, T, s.u, out.gouge, out.scallop, cand, &hint);
+      const std::size_t from = grid.row_start[j], to = grid.row_start[j + 1];
+      for (std::size_t i = from; i < to; ++i) {
+        const SurfacePoint& s = grid.points[i];
+        SimSample& out = res.samples[i];
+        out.x = s.p.x(), out.y = s.p.y(), out.z = s.p.z(), out.weight = s.weight;
+        index.trace(s.p, s.n, r, T, s.uncertainty, out.gouge, out.scallop, cand, &hint);
         out.interior = !s.beyond && is_interior(s.p.x(), s.p.y(), outline_distance);
       }
-      std::vector<Raw>().swap(rows[j]);
-      const std::size_t d = done.fetch_add(row_start[j + 1] - row_start[j]) + row_start[j + 1] - row_start[j];
+      const std::size_t d = done.fetch_add(to - from) + to - from;
       if (progress) progress(0.1 + 0.7 * double(d) / n_grid);
     }
   });
-  rows.clear();
   bool no_interior = std::none_of(res.samples.begin(), res.samples.end(), [](const SimSample& s) { return s.interior; });
   if (no_interior)
     for (auto& s : res.samples) s.interior = true;
@@ -386,7 +291,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
         for (int a = -m; a <= m; ++a)
           for (int b = -m; b <= m; ++b) {
             double du = halfw * spacing * a / m, dv = halfw * spacing * b / m;
-            double x = c.x + ca * du - sa * dv, y = c.y + sa * du + ca * dv, z, u;
+            double x = c.x + g.ca * du - g.sa * dv, y = c.y + g.sa * du + g.ca * dv, z, u;
             Eigen::Vector3d n;
             std::size_t slot = (si * (2 * m + 1) + (a + m)) * (2 * m + 1) + (b + m);
             if (use_loops ? !(on_patch_grid(x, y) && surf.eval(x, y, z, n, true, &u))
@@ -460,7 +365,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const std::vector<CentreSe
   // how far the cloud may be off the real surface: scallop and gouge above include it
   rep["surface_uncertainty_max"] = surf.uncertainty_max();
   // and the largest the bounds used at a grid sample: the model's, its fit's misfit counted
-  rep["surface_uncertainty_max_sampled"] = sampled_uncertainty_max;
+  rep["surface_uncertainty_max_sampled"] = grid.uncertainty_max;
 
   nlohmann::json reasons = nlohmann::json::array();
   char buf[160];

@@ -27,6 +27,7 @@
 #include "nodes/geom/height_field_model.h"
 #include "nodes/post/centre_index.h"
 #include "nodes/types/simulation.h"
+#include "nodes/types/surface_samples.h"
 #include "nodes/types/toolpath.h"
 
 namespace scallop {
@@ -95,5 +96,14 @@ struct SimulateOptions {
 Simulation simulate_cut(const HeightFieldModel& surface, const std::vector<CentreSegment>& feed,
                         double rapid_length, const SimulateOptions& options,
                         const std::function<void(double)>& progress = {});
+// The same at samples taken before (sample_surface_grid, post.surface_samples) with
+// surface_grid_options(options) from a cloud of surface's size: the same simulation. Throws
+// std::invalid_argument as above, and where the samples were taken for other options or another
+// cloud's size (saying which).
+Simulation simulate_cut(const HeightFieldModel& surface, const SurfaceSamples& samples,
+                        const std::vector<CentreSegment>& feed, double rapid_length, const SimulateOptions& options,
+                        const std::function<void(double)>& progress = {});
+// The grid options (r, h, spacing, max_samples, loops, rim_band) a simulation with `options` samples on.
+SurfaceGridOptions surface_grid_options(const SimulateOptions& options);
 
 }  // namespace scallop

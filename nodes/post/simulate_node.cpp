@@ -28,6 +28,10 @@ NodeDecl make_simulate_node() {
       .input("loops", "Loops", "the patch's boundary loops (outer first, then holes; indices into 'cloud'): "
              "the patch is what lies inside them in xy, and the margin is measured from them; "
              "absent: the outline is guessed from the cloud", false)
+      .input("samples", "SurfaceSamples",
+             "the surface sampled before (post.surface_samples, given the same cloud, loops, tool radius, scallop "
+             "limit and grid parameters: the same simulation); absent: sampled here",
+             false)
       .output("report", "Report", "scallop/gouge/uncut statistics (whole patch, rim included, and interior), with a linked path the rapids' least clearance from the cloud (rapid_min_clearance, rapids_through_part), pass (the whole patch within the limits, no rapid through it) and fail reasons, the 10 worst places")
       .output("simulation", "Simulation",
               "what the path left at every surface sample and the limits judged against, for "
@@ -74,8 +78,11 @@ NodeDecl make_simulate_node() {
       RapidClearance rc;
       tbb::parallel_invoke(
           [&] {
-            sim = simulate_cut(*cloud_height_field(*cloud), feed, rapid, o,
-                               [&](double f) { ctx.progress(f, "simulating"); });
+            const auto progress = [&](double f) { ctx.progress(f, "simulating"); };
+            sim = ctx.has_input("samples")
+                      ? simulate_cut(*cloud_height_field(*cloud), *ctx.input<SurfaceSamples>("samples"), feed, rapid, o,
+                                     progress)
+                      : simulate_cut(*cloud_height_field(*cloud), feed, rapid, o, progress);
           },
           [&] {
             if (ctx.has_input("linked"))

@@ -7,6 +7,7 @@
 #include "nodes/types/param.h"
 #include "nodes/types/segments.h"
 #include "nodes/types/simulation.h"
+#include "nodes/types/surface_samples.h"
 #include "nodes/types/surfaces.h"
 #include "nodes/types/svg.h"
 #include "nodes/types/toolpath.h"
@@ -37,6 +38,9 @@ void register_types(Registry& r) {
   v.add({"Report", "json", "a JSON report", Report::deserialize});
   v.add({"Simulation", "bin", "a cutting simulation: what the path left at every surface sample, its limits and its report",
          Simulation::deserialize, 2});  // 2: the face of each sample (whole parts)
+  v.add({"SurfaceSamples", "bin",
+         "the cloud's height field sampled on the certificate's grid: place, normal, area and uncertainty of each sample",
+         SurfaceSamples::deserialize});
   v.add({"Image", "png", "a PNG picture", Image::deserialize});
   v.add({"Svg", "svg", "an SVG picture", Svg::deserialize});
 }
