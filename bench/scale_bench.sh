@@ -59,5 +59,18 @@ print(f'   without planner, guard and simulation ({own:.2f} s): {wall - own:.2f}
 PY
   run warm
   run scallop_height=0.04 --set scallop_height=0.04
+  # What the rerun loads from the cache and what it computes again, node by node (a cached node's
+  # time is its entry's load: size on disk beside it).
+  /usr/bin/python3 - "$work/events-$n-scallop_height=0.04.jsonl" "$work/cache-$n" <<'PY'
+import json, os, sys
+print(f'   {"node":<14} {"type":<22} {"seconds":>8} {"from":>6} {"entry MiB":>10}')
+for line in open(sys.argv[1]):
+    e = json.loads(line)
+    if e["event"] != "node_finish" or e["seconds"] < 0.01:
+        continue
+    entry = os.path.join(sys.argv[2], e["key"][:2], e["key"] + ".entry")
+    size = f'{os.path.getsize(entry) / 2**20:10.0f}' if e["status"] == "cached" and os.path.exists(entry) else ""
+    print(f'   {e["node"]:<14} {e["type"]:<22} {e["seconds"]:8.3f} {"cache" if e["status"] == "cached" else "run":>6} {size}')
+PY
   run tool_radius=3 --set scallop_height=0.04 --set tool_radius=3
 done
