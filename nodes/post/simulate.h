@@ -2,7 +2,8 @@
 //
 // The product's own certificate, with the definitions of ../shared/tools/verify.py (README
 // there): the surface is a height field z(x, y) fitted to the cloud; it is sampled on a square xy
-// grid rotated by 0.3 rad; for every sample p with upward unit normal n, with C the polyline of
+// grid rotated by 0.3 rad (nodes/post/surface_grid.h: the samples need no path, so a graph may
+// take them beforehand); for every sample p with upward unit normal n, with C the polyline of
 // ball centres of the feed moves and d the exact distance to C,
 //   gouge   = max(0, r − d(p)),
 //   scallop = smallest t ≥ 0 with d(p + t·n) ≤ r   (exact: first entry of the ray into the
