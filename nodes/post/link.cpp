@@ -1,5 +1,7 @@
 #include "nodes/post/link.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -159,26 +161,38 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
     mv.push_back({MoveKind::Rapid, {tip.x(), tip.y(), out.clearance_z}});
   };
 
-  bool started = false;
-  Eigen::Vector3d last_tip, last_centre;
-  for (const auto& p : path.passes) {
-    if (p.contact.empty()) continue;
-    Eigen::Vector3d c0 = path.centre(p.contact[0], p.normal[0]);
-    Eigen::Vector3d t0 = path.tip(p.contact[0], p.normal[0]);
-    if (!started) {
+  // Whether each pass is joined to the one before it by a straight feed. Each pair is decided
+  // alone, so the pairs are checked side by side (at a million points the links' ball checks
+  // held one core for half a second); a part's own link_clear is called from one thread.
+  std::vector<const ToolpathPass*> cut;
+  for (const auto& p : path.passes)
+    if (!p.contact.empty()) cut.push_back(&p);
+  std::vector<std::uint8_t> joined(cut.size(), 0);
+  auto decide = [&](std::size_t j) {
+    const Eigen::Vector3d from = path.centre(cut[j - 1]->contact.back(), cut[j - 1]->normal.back());
+    const Eigen::Vector3d to = path.centre(cut[j]->contact.front(), cut[j]->normal.front());
+    joined[j] = (to - from).norm() <= max_link && safe(from, to);
+  };
+  if (o.link_clear) {
+    for (std::size_t j = 1; j < cut.size(); ++j) decide(j);
+  } else if (cut.size() > 1) {
+    tbb::parallel_for(std::size_t(1), cut.size(), decide);
+  }
+
+  for (std::size_t j = 0; j < cut.size(); ++j) {
+    const ToolpathPass& p = *cut[j];
+    const Eigen::Vector3d t0 = path.tip(p.contact[0], p.normal[0]);
+    if (j == 0) {
       come_down(t0);
-    } else if ((c0 - last_centre).norm() <= max_link && safe(last_centre, c0)) {
+    } else if (joined[j]) {
       mv.push_back({MoveKind::Feed, t0});
     } else {
-      go_up(last_tip);
+      go_up(path.tip(cut[j - 1]->contact.back(), cut[j - 1]->normal.back()));
       come_down(t0);
     }
-    started = true;
     for (std::size_t i = 1; i < p.contact.size(); ++i) mv.push_back({MoveKind::Feed, path.tip(p.contact[i], p.normal[i])});
-    last_tip = path.tip(p.contact.back(), p.normal.back());
-    last_centre = path.centre(p.contact.back(), p.normal.back());
   }
-  go_up(last_tip);
+  if (!cut.empty()) go_up(path.tip(cut.back()->contact.back(), cut.back()->normal.back()));
   return out;
 }
 
