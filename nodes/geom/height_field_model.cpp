@@ -490,6 +490,28 @@ bool HeightFieldModel::foot_point(const Eigen::Vector3d& c, const Eigen::Vector2
   return found;
 }
 
+bool HeightFieldModel::eval_before_growth(double x, double y, double& z, Eigen::Vector3d& normal,
+                                          double& before_growth, double& growth_max) const {
+  std::uint32_t idx[64];
+  double d2[64];
+  const std::size_t got = impl_->nearest_xy(x, y, std::min(k_, 64), idx, d2);
+  if (got == 0) return false;
+  const double points_uncertainty = impl_->mean_uncertainty(idx, got);
+  const double gap = std::sqrt(d2[0]) - 0.5 * spacing_;  // as edge_growth, with beyond_edge at most 1
+  growth_max = gap > 0 ? 1 + gap / (2 * spacing_) : 1.0;
+  double misfit = 0;
+  if (!impl_->fit(x, y, idx, d2, got, k_, z, normal, misfit)) return false;
+  before_growth = points_uncertainty + kMisfitFactor * misfit;
+  return true;
+}
+
+double HeightFieldModel::edge_growth(double x, double y) const {
+  std::uint32_t idx[64];
+  double d2[64];
+  const std::size_t got = impl_->nearest_xy(x, y, std::min(k_, 64), idx, d2);
+  return got == 0 ? 1.0 : impl_->edge_growth(x, y, idx, d2, got, spacing_);
+}
+
 bool HeightFieldModel::inside(double x, double y) const {
   double z;
   Eigen::Vector3d n;

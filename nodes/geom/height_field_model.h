@@ -42,6 +42,15 @@ class HeightFieldModel {
   // when eval returns false for a place outside the patch (the fit there, extrapolated).
   bool eval(double x, double y, double& z, Eigen::Vector3d& normal, bool force = false,
             double* uncertainty = nullptr) const;
+  // eval(x, y, z, normal, force = true, &uncertainty) in two steps, for a caller that may not
+  // need the uncertainty where it is small: all but the growth beyond the cloud's edge (whose
+  // angular test over the 64 nearest points is the costly part at a rim), with the largest
+  // growth possible there (1 inside the edge, else 1 + (d − spacing / 2) / (2 spacing), d the
+  // nearest point's distance); false where eval is. The uncertainty eval gives is then
+  // before_growth × edge_growth(x, y), to the last bit.
+  bool eval_before_growth(double x, double y, double& z, Eigen::Vector3d& normal, double& before_growth,
+                          double& growth_max) const;
+  double edge_growth(double x, double y) const;
   bool inside(double x, double y) const;
   // The foot point of c: the place (x, y) of the field nearest c, looked for from `start` by steps
   // to the projection of c onto the tangent plane (at most max_step long), a step that ends

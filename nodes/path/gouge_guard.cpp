@@ -226,28 +226,40 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
   // which the planner had not planned for, took the exact whole-patch scallop 0.0492 -> 0.0509
   // (0.0527 with the ring in the points' gaps too, 0.0532 beyond the edge as well), over h, and
   // the 1 mm crest's 0.0827 -> 0.0866. Not kept.
-  if (res.on_surface && nearest_point_d2(s) > 0.25 * sp * sp &&
-      impl_->surface.uncertainty_may_grow(s.x(), s.y(), kUncertaintyFloor)) {
-    for (double rho : {0.5, 1.0})
-      for (int k = 0; k < 8; ++k) {
-        const double a = k * (kPi / 4);
-        const Eigen::Vector2d q = s + rho * sp * Eigen::Vector2d(std::cos(a), std::sin(a));
-        double zq, uq = 0;
-        Eigen::Vector3d nq;
-        if (!in_band(q) || !impl_->surface.eval(q.x(), q.y(), zq, nq, /*force=*/true, &uq)) continue;
-        const Eigen::Vector3d to_c = c - Eigen::Vector3d(q.x(), q.y(), zq);
-        const double d = to_c.norm(), reach = uq - (d - r);
-        if (reach > res.band_reach) res.band_reach = reach, res.band_up = d > 0 ? to_c.z() / d : 1.0;
-      }
-  }
   // The band sampled above the cloud's points, every sample within reach.
+  double samples_reach = -INFINITY, samples_up = 1;
   for (const auto& tier : impl_->tier) {
     if (tier.index.empty()) continue;
     const double radius = r + tier.uncertainty_max;
     DeepestIntoBand deepest{c, impl_->band, tier.index, r, radius * radius};
     tier.tree.findNeighbors(deepest, c.data(), nanoflann::SearchParams(32, 0, false));
-    if (deepest.deepest > res.band_reach) res.band_reach = deepest.deepest, res.band_up = deepest.up;
+    if (deepest.deepest > samples_reach) samples_reach = deepest.deepest, samples_up = deepest.up;
   }
+  if (res.on_surface && nearest_point_d2(s) > 0.25 * sp * sp &&
+      impl_->surface.uncertainty_may_grow(s.x(), s.y(), kUncertaintyFloor)) {
+    // A place of the ring changes the result only where it reaches deeper than the band's
+    // samples and the foot (whose reach can only grow below, as the witness lowers the
+    // clearance): whether it lies in the band and how much its uncertainty grows beyond the
+    // edge (the 64 nearest points' angular gap) are asked only where it could, its uncertainty
+    // grown the most it can. The same programs and reports, the guard 1.2 to 2 times as quick
+    // (the bundled example 0.90 -> 0.44 s; the catalog's noisy plane and dome, clean freeform,
+    // canopy and 1 mm crest, both patterns; stop 88).
+    const double deeper_than = std::max(samples_reach, res.foot_reach());
+    for (double rho : {0.5, 1.0})
+      for (int k = 0; k < 8; ++k) {
+        const double a = k * (kPi / 4);
+        const Eigen::Vector2d q = s + rho * sp * Eigen::Vector2d(std::cos(a), std::sin(a));
+        double zq, before_growth, growth_max;
+        Eigen::Vector3d nq;
+        if (!impl_->surface.eval_before_growth(q.x(), q.y(), zq, nq, before_growth, growth_max)) continue;
+        const Eigen::Vector3d to_c = c - Eigen::Vector3d(q.x(), q.y(), zq);
+        const double d = to_c.norm();
+        if (before_growth * growth_max - (d - r) < deeper_than || !in_band(q)) continue;
+        const double reach = before_growth * impl_->surface.edge_growth(q.x(), q.y()) - (d - r);
+        if (reach > res.band_reach) res.band_reach = reach, res.band_up = d > 0 ? to_c.z() / d : 1.0;
+      }
+  }
+  if (samples_reach > res.band_reach) res.band_reach = samples_reach, res.band_up = samples_up;
   // The cloud's own points within r of the centre in xy: a witness that needs no fit. Only those
   // nearer the centre than r + the clearance found can lower it, so where one was found the
   // nearest such point is looked for in 3-D below that bound (a million-point cloud has thousands

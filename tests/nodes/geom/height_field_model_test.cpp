@@ -243,6 +243,38 @@ TEST(HeightFieldModel, UncertaintyMayGrowBeyondTheEdgeAndOnACrestNotInsideASmoot
   EXPECT_FALSE(crest.uncertainty_may_grow(8.13, -0.27, 1e-4));  // far down a flank, a plane
 }
 
+// eval's uncertainty in two steps (what the gouge guard's ring asks): the part before the
+// edge's growth times the growth is eval's to the last bit, and the growth never exceeds the
+// bound given with the first step: inside, in a hole, on the edge, beyond it (on a row and at
+// the corner), on a ridge whose fit misfits.
+TEST(HeightFieldModel, UncertaintyInTwoStepsIsEvalsAndItsGrowthWithinItsBound) {
+  for (double hole : {0.0, 1.0}) {
+    const auto P = grid(ridge(0.5, 0.8), 20, hole);
+    std::vector<double> u(P.size());
+    for (std::size_t i = 0; i < P.size(); ++i) u[i] = 0.002 + 0.001 * std::sin(double(i));
+    const HeightFieldModel m(P, 20, &u);
+    const double s = m.spacing();
+    int grew = 0;
+    for (const auto& q : std::vector<Eigen::Vector2d>{{0.13, -0.27}, {0, 0}, {0.2, 0.3}, {9.9, 0.1},
+                                                      {10 + 0.4 * s, 1.5}, {10 + 1.0, 1.5}, {10 + 4.0, 1.5},
+                                                      {10.8, 10.9}, {-12, -3}, {0.05, 10.6}}) {
+      double z, ue = 0, zb, before = 0, bound = 0;
+      Eigen::Vector3d n, nb;
+      const bool ok = m.eval(q.x(), q.y(), z, n, /*force=*/true, &ue);
+      ASSERT_EQ(m.eval_before_growth(q.x(), q.y(), zb, nb, before, bound), ok) << q.transpose();
+      if (!ok) continue;
+      const double growth = m.edge_growth(q.x(), q.y());
+      EXPECT_EQ(before * growth, ue) << q.transpose();
+      EXPECT_EQ(zb, z);
+      EXPECT_EQ(nb, n);
+      EXPECT_GE(growth, 1.0);
+      EXPECT_LE(growth, bound) << q.transpose();
+      if (growth > 1) ++grew;
+    }
+    EXPECT_GE(grew, 3);  // beyond the edge
+  }
+}
+
 TEST(HeightFieldModel, KeepsATemporaryCloudAndReadsAGivenOneInPlace) {
   // A model reads the caller's cloud where it is (no copy); given a temporary it keeps it: the
   // same surface either way, also after the temporary's expression has ended.
