@@ -10,7 +10,7 @@ namespace scallop::cloud_nodes {
 NodeDecl make_surface_band_node() {
   NodeDecl d;
   d.type = "cloud.surface_band";
-  d.version = 2;  // 2: the height field takes a quartic over 40 points (of z over xy, or in the tangent frame where steep) where its quadratic misfits (HeightFieldModel, kQuarticFrom)
+  d.version = 3;  // 3: a residual within the points' uncertainty floor counts as the height field's misfit (HeightFieldModel, stop 88); 2: the height field takes a quartic over 40 points (of z over xy, or in the tangent frame where steep) where its quadratic misfits (HeightFieldModel, kQuarticFrom)
   d.description =
       "the cloud's height field (seen from +z) sampled above every point, with how far it may be off "
       "the real surface there: the band path.gouge_guard keeps every ball out of; independent of the "

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cmath>
+#include <random>
 #include <functional>
 #include <vector>
 
@@ -187,6 +188,43 @@ TEST(HeightFieldModel, UncertaintyBoundsTheFitsErrorOnAnExactCrest) {
   EXPECT_LT(r.ratio_max, 1.0);
   EXPECT_GT(m.uncertainty(0.013, 0.0), 0.005);  // counted at the crest's top
   EXPECT_NEAR(m.uncertainty(7.013, 0.0), 1e-4, 2e-4);  // barely on a flank
+}
+
+// A gentle crest (radius 3 mm, flanks of slope 0.3, turned 30 degrees) from exact clouds of
+// random points stored as floats (as a PLY file keeps them), each known to the floor, 1e-4 mm:
+// there the quadratic's residuals stay within that floor, yet between the points its value was
+// off by up to 1.3 times it (the catalog's clean crests of slope 0.3, bench/extra_surfaces.py
+// model-error; 1.07 over these eight clouds). The floor is a resolution, not a noise the
+// fit averages out, so residuals within it count as misfit.
+TEST(HeightFieldModel, ResidualsWithinTheFloorCountOnAnExactGentleCrest) {
+  const double t = 30 * M_PI / 180, a = 0.3, c = 3 * a;
+  auto f = [&](double x, double y) {
+    const double s = x * std::cos(t) + y * std::sin(t);
+    return 20 - a * std::sqrt(s * s + c * c);
+  };
+  double ratio_max = 0;
+  for (unsigned seed = 1; seed <= 8; ++seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> U(-12, 12);
+    std::vector<Eigen::Vector3d> P;
+    for (int i = 0; i < 7000; ++i) {  // spacing about 0.29 mm
+      const double x = U(rng), y = U(rng);
+      P.emplace_back(float(x), float(y), float(f(x, y)));
+    }
+    const std::vector<double> u(P.size(), 1e-4);
+    const HeightFieldModel m(P, 20, &u);
+    std::normal_distribution<double> jitter(0, 0.1);
+    for (int i = 0; i < 20000; ++i) {
+      const Eigen::Vector3d& p = P[i % P.size()];
+      const double x = p.x() + jitter(rng), y = p.y() + jitter(rng);
+      if (std::abs(x) > 10 || std::abs(y) > 10) continue;
+      double z, unc = 0;
+      Eigen::Vector3d n;
+      if (!m.eval(x, y, z, n, false, &unc)) continue;
+      ratio_max = std::max(ratio_max, std::abs(z - f(x, y)) / unc);
+    }
+  }
+  EXPECT_LE(ratio_max, 1.0);
 }
 
 TEST(HeightFieldModel, OnA3mmCrestTheQuarticKnowsTheTopTenTimesBetter) {
