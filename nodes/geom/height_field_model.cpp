@@ -148,8 +148,15 @@ struct HeightFieldModel::Impl {
   // idx, d2 its nearest points, ascending.
   double edge_growth(double x, double y, const std::uint32_t* idx, const double* d2, std::size_t got,
                      double spacing) const {
-    const double gap = std::sqrt(d2[0]) - 0.5 * spacing;
+    const double gap = edge_gap(d2, spacing);
     return gap > 0 ? 1 + beyond_edge(x, y, idx, got) * gap / (2 * spacing) : 1.0;
+  }
+  // How far the nearest point (squared distance d2[0]) lies beyond the half spacing a
+  // well-sampled edge has; and the largest factor edge_growth can give there (beyond_edge <= 1).
+  static double edge_gap(const double* d2, double spacing) { return std::sqrt(d2[0]) - 0.5 * spacing; }
+  static double edge_growth_max(const double* d2, double spacing) {
+    const double gap = edge_gap(d2, spacing);
+    return gap > 0 ? 1 + gap / (2 * spacing) : 1.0;
   }
   // The local fit where the surface is steep, else the fit of z over (x, y); either replaced by
   // a quartic where it misfits (see kQuarticFrom).
@@ -508,8 +515,7 @@ bool HeightFieldModel::eval_before_growth(double x, double y, double& z, Eigen::
   const std::size_t got = impl_->nearest_xy(x, y, std::min(k_, 64), idx, d2);
   if (got == 0) return false;
   const double points_uncertainty = impl_->mean_uncertainty(idx, got);
-  const double gap = std::sqrt(d2[0]) - 0.5 * spacing_;  // as edge_growth, with beyond_edge at most 1
-  growth_max = gap > 0 ? 1 + gap / (2 * spacing_) : 1.0;
+  growth_max = Impl::edge_growth_max(d2, spacing_);
   double misfit = 0;
   if (!impl_->fit(x, y, idx, d2, got, k_, z, normal, misfit)) return false;
   before_growth = points_uncertainty + kMisfitFactor * misfit;
