@@ -63,27 +63,73 @@ std::vector<CentreSegment> feed_centres(const LinkedPath& path, double& rapid_le
   return out;
 }
 
-RapidClearance rapid_clearance(const std::vector<Eigen::Vector3d>& points, const std::vector<double>* uncertainty,
-                               const std::vector<CentreSegment>& rapids, double r, double tol) {
+namespace {
+void check_rapid_inputs(const std::vector<Eigen::Vector3d>& points, double r, double tol) {
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
   if (!(tol > 0)) throw std::invalid_argument("the rapids' tolerance must be > 0");
   if (points.empty()) throw std::invalid_argument("no points to check the rapids against");
-  RapidClearance out;
-  if (rapids.empty()) return out;
-  // The points raised by their uncertainty: a copy only where there is one to add.
-  std::vector<Eigen::Vector3d> raised;
-  if (uncertainty && uncertainty->size() == points.size()) {
-    raised = points;
-    for (std::size_t i = 0; i < raised.size(); ++i) raised[i].z() += (*uncertainty)[i];
+}
+
+// A nanoflann result set for the point nearest a query once each point is raised by its
+// uncertainty: a point farther than the nearest raised one found plus the largest raise cannot
+// be nearer raised. Distances summed as nanoflann's L2_Simple_Adaptor sums them.
+struct NearestRaised {
+  const Eigen::Vector3d& query;
+  const std::vector<Eigen::Vector3d>& points;
+  const std::vector<double>& raise;
+  double raise_max;
+  double best2 = INFINITY;  // the nearest raised point's squared distance
+  double reach2 = INFINITY;  // (sqrt(best2) + raise_max)², a little more for rounding
+  void init() {}
+  std::size_t size() const { return std::isfinite(best2) ? 1 : 0; }
+  bool full() const { return true; }
+  bool addPoint(double, std::uint32_t i) {
+    const Eigen::Vector3d& p = points[i];
+    double d2 = 0, diff = query.x() - p.x();
+    d2 += diff * diff;
+    diff = query.y() - p.y();
+    d2 += diff * diff;
+    diff = query.z() - (p.z() + raise[i]);
+    d2 += diff * diff;
+    if (d2 < best2) {
+      best2 = d2;
+      const double reach = std::sqrt(d2) + raise_max;
+      reach2 = reach * reach * (1 + 1e-12);
+    }
+    return true;
   }
-  const PointsAdaptor<Eigen::Vector3d> adaptor{raised.empty() ? points : raised};
+  double worstDist() const { return reach2; }
+};
+}  // namespace
+
+RapidClearance rapid_clearance(const std::vector<Eigen::Vector3d>& points, const std::vector<double>* uncertainty,
+                               const std::vector<CentreSegment>& rapids, double r, double tol) {
+  check_rapid_inputs(points, r, tol);
+  if (rapids.empty()) return {};
+  const PointsAdaptor<Eigen::Vector3d> adaptor{points};
   KdTree<Eigen::Vector3d, 3> tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
+  return rapid_clearance(points, uncertainty, tree, rapids, r, tol);
+}
+
+RapidClearance rapid_clearance(const std::vector<Eigen::Vector3d>& points, const std::vector<double>* uncertainty,
+                               const KdTree<Eigen::Vector3d, 3>& tree, const std::vector<CentreSegment>& rapids,
+                               double r, double tol) {
+  check_rapid_inputs(points, r, tol);
+  RapidClearance out;
+  if (rapids.empty()) return out;
+  const bool raised = uncertainty && uncertainty->size() == points.size();
+  const double raise_max = raised ? *std::max_element(uncertainty->begin(), uncertainty->end()) : 0.0;
   const auto nearest_point = [&](const Eigen::Vector3d& c) {
-    std::uint32_t nearest;
-    double d2;
-    tree.knnSearch(c.data(), 1, &nearest, &d2);
-    return std::sqrt(d2);
+    if (!raised) {
+      std::uint32_t nearest;
+      double d2;
+      tree.knnSearch(c.data(), 1, &nearest, &d2);
+      return std::sqrt(d2);
+    }
+    NearestRaised set{c, points, *uncertainty, raise_max};
+    tree.findNeighbors(set, c.data(), nanoflann::SearchParams(32, 0, false));
+    return std::sqrt(set.best2);
   };
   for (const CentreSegment& s : rapids) {
     if (!s.a.allFinite() || !s.b.allFinite()) throw std::invalid_argument("a rapid has a non-finite point");

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "nodes/geom/height_field_model.h"
+#include "nodes/geom/kd_tree.h"
 #include "nodes/post/centre_index.h"
 #include "nodes/types/simulation.h"
 #include "nodes/types/surface_samples.h"
@@ -54,6 +55,12 @@ struct RapidClearance {
 // tol <= 0, no points, or a non-finite centre.
 RapidClearance rapid_clearance(const std::vector<Eigen::Vector3d>& points, const std::vector<double>* uncertainty,
                                const std::vector<CentreSegment>& rapids, double r, double tol);
+// The same with a k-d tree over `points` at hand (HeightFieldModel::tree3d): none is built. The
+// nearest raised point is searched among the points no farther than the nearest found so far
+// plus the largest uncertainty (a point is raised by at most that): the same answer.
+RapidClearance rapid_clearance(const std::vector<Eigen::Vector3d>& points, const std::vector<double>* uncertainty,
+                               const KdTree<Eigen::Vector3d, 3>& tree, const std::vector<CentreSegment>& rapids,
+                               double r, double tol);
 
 struct SimulateOptions {
   double tool_radius = 0;   // r (mm)

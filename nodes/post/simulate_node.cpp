@@ -86,8 +86,8 @@ NodeDecl make_simulate_node() {
           },
           [&] {
             if (ctx.has_input("linked"))
-              rc = rapid_clearance(cloud->points, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr, rapids, r,
-                                   tol);
+              rc = rapid_clearance(cloud->points, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr,
+                                   cloud_height_field(*cloud)->tree3d(), rapids, r, tol);
           });
       if (ctx.has_input("linked")) {
         nlohmann::json& j = sim.report;

@@ -1,4 +1,5 @@
 #include "nodes/post/simulate.h"
+#include "nodes/post/clearance_march.h"
 
 #include <gtest/gtest.h>
 
@@ -343,6 +344,47 @@ TEST(Simulate, TheRapidsAreCheckedAgainstThePointsRaisedByTheirUncertainty) {
   EXPECT_NEAR((rapids[0].a - Eigen::Vector3d(5, 5, 22)).norm(), 0, 1e-12);
   EXPECT_NEAR((rapids[0].b - Eigen::Vector3d(5, 5, 3)).norm(), 0, 1e-12);
   EXPECT_NEAR(rapid_clearance(plane, nullptr, rapids, r, 0.005).least, 1, 1e-12);
+}
+
+// With a k-d tree of the unraised points at hand, the nearest raised point is the one a brute
+// force finds, to the last bit: a bumpy cloud whose points are raised by 0 to 0.4 mm, a raise
+// larger than their spacing, so that the nearest unraised point is often not the nearest raised
+// one; rapids over it, along it, and down through it.
+TEST(Simulate, TheRapidsFindTheNearestRaisedPointWithTheUnraisedPointsTree) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(0, 1);
+  std::vector<Eigen::Vector3d> cloud;
+  std::vector<double> raise;
+  for (int i = 0; i < 3000; ++i) {
+    const double x = 10 * unit(rng), y = 10 * unit(rng);
+    cloud.emplace_back(x, y, 0.5 * std::sin(x) * std::cos(1.3 * y));
+    raise.push_back(0.4 * unit(rng) * unit(rng));
+  }
+  const PointsAdaptor<Eigen::Vector3d> adaptor{cloud};
+  KdTree<Eigen::Vector3d, 3> tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  const double r = 1.5, tol = 0.005;
+  const std::vector<CentreSegment> rapids = {{{1, 1, 3}, {9, 8, 2.2}}, {{0, 5, 1.9}, {10, 5, 1.9}},
+                                             {{4, 6, 6}, {4, 6, 0.5}}, {{-3, -3, 2}, {13, 12, 2}}};
+  for (const CentreSegment& s : rapids) {
+    const RapidClearance fast = rapid_clearance(cloud, &raise, tree, {s}, r, tol);
+    const auto brute_nearest = [&](const Eigen::Vector3d& c) {
+      double best = INFINITY;
+      for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const Eigen::Vector3d p(cloud[i].x(), cloud[i].y(), cloud[i].z() + raise[i]);
+        best = std::min(best, (c - p).squaredNorm());
+      }
+      return std::sqrt(best);
+    };
+    Eigen::Vector3d at;
+    const double least = least_clearance_along(s.a, s.b, r, tol, brute_nearest, &at);
+    EXPECT_EQ(fast.least, least);
+    EXPECT_EQ(fast.at, at);
+    EXPECT_EQ(fast.through, least < -tol ? 1u : 0u);
+    // the tree built inside gives the same
+    EXPECT_EQ(rapid_clearance(cloud, &raise, {s}, r, tol).least, least);
+  }
+  EXPECT_LT(rapid_clearance(cloud, &raise, tree, {rapids[2]}, r, tol).least, -tol);  // down through it
 }
 
 // The node's certificate counts the rapids: a linked raster over the plane z = 0 whose one way
