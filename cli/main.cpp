@@ -462,25 +462,9 @@ std::string batch_arguments_error(const CLI::App& batch, const std::string& exec
   return "";
 }
 
-// Large arrays (a million points' columns, a simulation's samples) on transparent huge pages:
-// the page faults of filling fresh memory were a sixth of a rerun at 1M points (h changed: 8.5 ->
-// 7.25 s; cold 19.8 -> 18.4 s). glibc reads its tunables only when a process starts, so scallop
-// starts itself again once with glibc.malloc.hugetlb=1 set (where the kernel's transparent huge
-// pages are "madvise", malloc then asks for them). SCALLOP_NO_HUGEPAGES=1 leaves it as it is; if
-// the new start fails, this one goes on.
-void restart_with_huge_pages(char** argv) {
-  const char* tunables = std::getenv("GLIBC_TUNABLES");
-  if (std::getenv("SCALLOP_NO_HUGEPAGES") || (tunables && std::strstr(tunables, "glibc.malloc.hugetlb"))) return;
-  const std::string value = tunables && *tunables ? std::string(tunables) + ":glibc.malloc.hugetlb=1"
-                                                  : std::string("glibc.malloc.hugetlb=1");
-  if (::setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
-  ::execv("/proc/self/exe", argv);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  restart_with_huge_pages(argv);
   CLI::App app{"scallop: certified ball-end finishing tool paths straight from point clouds"};
   app.require_subcommand(1);
 
