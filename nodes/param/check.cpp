@@ -39,25 +39,28 @@ MapCheck check_map(const std::vector<Eigen::Vector3d>& P, const std::vector<Eige
   const int k = nbrs.k;
   const double cos_lo = std::cos(10 * std::numbers::pi / 180), cos_hi = std::cos(170 * std::numbers::pi / 180);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
-    Eigen::MatrixXd X(2, k), Y(2, k);
+    // Each neighbour's offset in the tangent plane (X) and in (u,v) (Y), by columns; fixed-size
+    // 2 x 2 sums below (Eigen's general products of 2 x k blocks took three quarters of the node).
+    std::vector<Eigen::Vector2d> X(k), Y(k);
     std::vector<std::pair<double, int>> ang(k);
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       Eigen::Vector3d t1, t2;
       tangent_frame(N[i], t1, t2);
+      Eigen::Matrix2d XXt = Eigen::Matrix2d::Zero(), YXt = Eigen::Matrix2d::Zero();
       for (int j = 0; j < k; ++j) {
         int q = nbrs.index(i, j);
         Eigen::Vector3d d = P[q] - P[i];
-        X(0, j) = d.dot(t1);
-        X(1, j) = d.dot(t2);
-        Y.col(j) = uv[q] - uv[i];
-        ang[j] = {pseudo_angle(X(0, j), X(1, j)), j};
+        X[j] = {d.dot(t1), d.dot(t2)};
+        Y[j] = uv[q] - uv[i];
+        XXt += X[j] * X[j].transpose();
+        YXt += Y[j] * X[j].transpose();
+        ang[j] = {pseudo_angle(X[j].x(), X[j].y()), j};
       }
       // Angle distortion from the least-squares Jacobian J = Y X^T (X X^T)^-1.
-      Eigen::Matrix2d XXt = X * X.transpose();
       double ratio = std::numeric_limits<double>::infinity();
       double det = 0;
       if (XXt.determinant() > 1e-12 * XXt.trace() * XXt.trace()) {
-        Eigen::Matrix2d J = (Y * X.transpose()) * XXt.inverse();
+        Eigen::Matrix2d J = YXt * XXt.inverse();
         det = J.determinant();
         Eigen::JacobiSVD<Eigen::Matrix2d> svd(J);
         double s1 = svd.singularValues()(0), s2 = svd.singularValues()(1);
@@ -70,11 +73,11 @@ MapCheck check_map(const std::vector<Eigen::Vector3d>& P, const std::vector<Eige
       int tri = 0, flipped = 0;
       for (int j = 0; j < k; ++j) {
         const int a = ang[j].second, b = ang[(j + 1) % k].second;
-        const double cross = X(0, a) * X(1, b) - X(1, a) * X(0, b), dot = X.col(a).dot(X.col(b));
-        const double lengths = X.col(a).norm() * X.col(b).norm();
+        const double cross = X[a].x() * X[b].y() - X[a].y() * X[b].x(), dot = X[a].dot(X[b]);
+        const double lengths = X[a].norm() * X[b].norm();
         if (a == b || !(lengths > 0) || cross < 0 || dot > cos_lo * lengths || dot < cos_hi * lengths) continue;
         ++tri;
-        if (Y(0, a) * Y(1, b) - Y(1, a) * Y(0, b) < 0) ++flipped;
+        if (Y[a].x() * Y[b].y() - Y[a].y() * Y[b].x() < 0) ++flipped;
       }
       c.folded[i] = (det < 0 || 2 * flipped > tri) ? 1 : 0;
       flipped_triangles[i] = flipped;
