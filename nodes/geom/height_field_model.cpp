@@ -162,17 +162,32 @@ struct HeightFieldModel::Impl {
   // a quartic where it misfits (see kQuarticFrom).
   bool fit(double x, double y, const std::uint32_t* idx, const double* d2, std::size_t got, int k, double& z,
            Eigen::Vector3d& normal, double& misfit) const {
-    if (local_fit(x, y, idx, d2, got, k, z, normal, misfit)) return true;
-    if (!xy_fit(x, y, idx, d2, got, z, normal, misfit)) return false;
+    XyWeights xw;
+    xy_weights(x, y, idx, d2, got, xw);
+    if (!surely_gentle(idx, got, xw) && local_fit(x, y, idx, d2, got, k, z, normal, misfit)) return true;
+    if (!xy_fit(idx, got, xw, z, normal, misfit)) return false;
     if (kMisfitFactor * misfit > kQuarticFrom) quartic_fit(x, y, got, z, normal, misfit);
     return true;
   }
+  // The xy fit's basis and Gaussian weights at (x, y) over its nearest points: the test for a
+  // gentle slope takes the same weights (each costs an exp; a fifth of an evaluation's time
+  // went to the two sets, which differed only in rounding).
+  struct XyWeights {
+    double h;                                          // the farthest neighbour's distance (mm)
+    std::array<Eigen::Matrix<double, 6, 1>, 64> basis;  // 1, u, v, u², uv, v² in units of h
+    std::array<double, 64> w;
+  };
+  void xy_weights(double x, double y, const std::uint32_t* idx, const double* d2, std::size_t got,
+                  XyWeights& out) const;
+  // Whether a bound already puts the least-variance direction of the weighted points within 37
+  // degrees of +z, where the xy fit is as good as the local one and cheaper.
+  bool surely_gentle(const std::uint32_t* idx, std::size_t got, const XyWeights& xw) const;
   // The fits: z and normal at (x, y), and their misfit (mm; see kMisfitFactor); idx, d2 the
   // nearest points in xy and their squared distances, ascending, as the search gave them.
   bool local_fit(double x, double y, const std::uint32_t* idx, const double* d2, std::size_t got, int k,
                  double& z, Eigen::Vector3d& normal, double& misfit) const;
-  bool xy_fit(double x, double y, const std::uint32_t* idx, const double* d2, std::size_t got,
-              double& z, Eigen::Vector3d& normal, double& misfit) const;
+  bool xy_fit(const std::uint32_t* idx, std::size_t got, const XyWeights& xw, double& z, Eigen::Vector3d& normal,
+              double& misfit) const;
   // Replaces the quadratic xy fit (z, normal, misfit, over its `got` nearest points) by a quartic
   // over twice as many when the quartic misfits those points less and agrees with the quadratic
   // (see kQuarticFrom); the misfit then counts the two fits' difference too.
@@ -280,15 +295,6 @@ bool HeightFieldModel::Impl::local_fit(double x, double y, const std::uint32_t* 
     }
     c /= wsum;
     for (std::size_t j = 0; j < got_xy; ++j) C += w[j] * (p[idx_xy[j]] - c) * (p[idx_xy[j]] - c).transpose();
-    // Gentle almost everywhere: skip the eigensolver when a bound already puts the normal within
-    // 37 degrees of +z (the answer below would be the same). For the least-variance direction n
-    // at an angle t from +z: sin^2 t <= C_zz / (mu - C_zz), mu the smaller eigenvalue of C's xy
-    // block (Rayleigh quotients and Cauchy interlacing); sin^2 t < 0.3 gives n_z > 0.83 > 0.8.
-    {
-      const double half_trace = 0.5 * (C(0, 0) + C(1, 1));
-      const double mu = half_trace - std::hypot(0.5 * (C(0, 0) - C(1, 1)), C(0, 1));
-      if (mu > C(2, 2) && C(2, 2) < 0.3 * (mu - C(2, 2))) return false;
-    }
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
     Eigen::Vector3d n = es.eigenvectors().col(0);
     if (n.z() < 0) n = -n;
@@ -672,20 +678,40 @@ void HeightFieldModel::Impl::local_quartic_fit(double x, double y, const Eigen::
 // Weighted least squares of z = c0 + c1 u + c2 v + c3 u² + c4 uv + c5 v², (u, v) = (dx, dy)/h,
 // Gaussian weights of width h = the farthest neighbour (Lancaster & Šalkauskas, moving least
 // squares): the fit for gentle slopes (or where the local fit failed).
-bool HeightFieldModel::Impl::xy_fit(double x, double y, const std::uint32_t* idx, const double* d2,
-                                    std::size_t got, double& z_out, Eigen::Vector3d& n_out,
-                                    double& misfit) const {
+void HeightFieldModel::Impl::xy_weights(double x, double y, const std::uint32_t* idx, const double* d2,
+                                        std::size_t got, XyWeights& out) const {
   const double h = std::sqrt(d2[got - 1]) + 1e-12;
-  Eigen::Matrix<double, 6, 6> M = Eigen::Matrix<double, 6, 6>::Zero();
-  Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
-  std::array<Eigen::Matrix<double, 6, 1>, 64> basis;  // got <= 64; kept for the misfit below
+  out.h = h;
   for (std::size_t j = 0; j < got; ++j) {
     const double u = (xy(idx[j]).x() - x) / h, v = (xy(idx[j]).y() - y) / h;
-    Eigen::Matrix<double, 6, 1>& b = basis[j];
+    Eigen::Matrix<double, 6, 1>& b = out.basis[j];
     b << 1, u, v, u * u, u * v, v * v;
-    const double w = std::exp(-2.0 * (b[3] + b[5]));
-    add_weighted_outer_lower(M, b, w);
-    rhs += w * p[idx[j]].z() * b;
+    out.w[j] = std::exp(-2.0 * (b[3] + b[5]));
+  }
+}
+
+bool HeightFieldModel::Impl::surely_gentle(const std::uint32_t* idx, std::size_t got, const XyWeights& xw) const {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  double wsum = 0;
+  for (std::size_t j = 0; j < got; ++j) c += xw.w[j] * p[idx[j]], wsum += xw.w[j];
+  c /= wsum;
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (std::size_t j = 0; j < got; ++j) C += xw.w[j] * (p[idx[j]] - c) * (p[idx[j]] - c).transpose();
+  // For the least-variance direction n at an angle t from +z: sin^2 t <= C_zz / (mu - C_zz), mu
+  // the smaller eigenvalue of C's xy block (Rayleigh quotients and Cauchy interlacing);
+  // sin^2 t < 0.3 gives n_z > 0.83 > 0.8, local_fit's own test.
+  const double half_trace = 0.5 * (C(0, 0) + C(1, 1));
+  const double mu = half_trace - std::hypot(0.5 * (C(0, 0) - C(1, 1)), C(0, 1));
+  return mu > C(2, 2) && C(2, 2) < 0.3 * (mu - C(2, 2));
+}
+
+bool HeightFieldModel::Impl::xy_fit(const std::uint32_t* idx, std::size_t got, const XyWeights& xw, double& z_out,
+                                    Eigen::Vector3d& n_out, double& misfit) const {
+  Eigen::Matrix<double, 6, 6> M = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
+  for (std::size_t j = 0; j < got; ++j) {
+    add_weighted_outer_lower(M, xw.basis[j], xw.w[j]);
+    rhs += xw.w[j] * p[idx[j]].z() * xw.basis[j];
   }
   Eigen::Matrix<double, 6, 1> c;
   if (!solve_positive_definite(M, rhs, c, 1e-10)) {  // degenerate neighbourhood (collinear points): a plane
@@ -698,9 +724,9 @@ bool HeightFieldModel::Impl::xy_fit(double x, double y, const std::uint32_t* idx
   }
   misfit = 0;
   for (std::size_t j = 0; j < got; ++j)
-    misfit = std::max(misfit, std::abs(p[idx[j]].z() - basis[j].dot(c)) - explained(idx[j]));
+    misfit = std::max(misfit, std::abs(p[idx[j]].z() - xw.basis[j].dot(c)) - explained(idx[j]));
   z_out = c[0];
-  n_out = Eigen::Vector3d(-c[1] / h, -c[2] / h, 1.0).normalized();
+  n_out = Eigen::Vector3d(-c[1] / xw.h, -c[2] / xw.h, 1.0).normalized();
   return true;
 }
 
