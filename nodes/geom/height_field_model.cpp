@@ -691,18 +691,22 @@ void HeightFieldModel::Impl::xy_weights(double x, double y, const std::uint32_t*
 }
 
 bool HeightFieldModel::Impl::surely_gentle(const std::uint32_t* idx, std::size_t got, const XyWeights& xw) const {
+  // The weighted covariance C of the points; only its xy block and C_zz are asked.
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   double wsum = 0;
   for (std::size_t j = 0; j < got; ++j) c += xw.w[j] * p[idx[j]], wsum += xw.w[j];
   c /= wsum;
-  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-  for (std::size_t j = 0; j < got; ++j) C += xw.w[j] * (p[idx[j]] - c) * (p[idx[j]] - c).transpose();
+  double cxx = 0, cyy = 0, cxy = 0, czz = 0;
+  for (std::size_t j = 0; j < got; ++j) {
+    const Eigen::Vector3d d = p[idx[j]] - c;
+    const double w = xw.w[j];
+    cxx += w * d.x() * d.x(), cyy += w * d.y() * d.y(), cxy += w * d.x() * d.y(), czz += w * d.z() * d.z();
+  }
   // For the least-variance direction n at an angle t from +z: sin^2 t <= C_zz / (mu - C_zz), mu
   // the smaller eigenvalue of C's xy block (Rayleigh quotients and Cauchy interlacing);
   // sin^2 t < 0.3 gives n_z > 0.83 > 0.8, local_fit's own test.
-  const double half_trace = 0.5 * (C(0, 0) + C(1, 1));
-  const double mu = half_trace - std::hypot(0.5 * (C(0, 0) - C(1, 1)), C(0, 1));
-  return mu > C(2, 2) && C(2, 2) < 0.3 * (mu - C(2, 2));
+  const double mu = 0.5 * (cxx + cyy) - std::hypot(0.5 * (cxx - cyy), cxy);
+  return mu > czz && czz < 0.3 * (mu - czz);
 }
 
 bool HeightFieldModel::Impl::xy_fit(const std::uint32_t* idx, std::size_t got, const XyWeights& xw, double& z_out,
