@@ -146,7 +146,10 @@ class AtomicWriter {
   void raw(const char* p, std::size_t n) {
     while (n > 0) {
       ssize_t w = ::write(fd_, p, n);
-      if (w <= 0) throw std::runtime_error("cannot write cache file '" + tmp_ + "'");
+      if (w < 0 && errno == EINTR) continue;
+      if (w <= 0)
+        throw std::runtime_error("cannot write cache file '" + tmp_ + "': " +
+                                 (w < 0 ? std::strerror(errno) : "nothing written"));
       p += w;
       n -= static_cast<std::size_t>(w);
     }

@@ -154,6 +154,7 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
   // The memory high-water mark restarts whenever a node starts with no other running, so each
   // node's peak is its own when nodes run one at a time.
   std::atomic<int> running{0};
+  tbb::task_group stores;  // cache entries being written
   auto run_node = [&](int i) {
     const PlanNode& pn = plan.nodes[i];
     NodeRun& rec = result.nodes[i];
@@ -240,12 +241,27 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
           if (!out.count(od.name) || !out[od.name])
             throw std::logic_error("node did not produce its output '" + od.name + "'");
         rec.status = "ok";
-        if (options.cache && pn.decl->cache_on_disk) {
-          options.cache->store(keys[i], out);
-          options.cache->write_manifest(identity, manifests[i]);
-          if (!rec.warnings.empty())
-            options.cache->write_manifest(warnings_identity(keys[i]), json{{"warnings", rec.warnings}});
-        }
+        // The entry is written beside the nodes that follow, not before them: a million points'
+        // entries took a cold run 2 to 3 s, most of it waiting for the disk (each entry is
+        // synced before it is renamed into place).
+        if (options.cache && pn.decl->cache_on_disk)
+          stores.run([&, i, out, identity] {
+            NodeRun& done = result.nodes[i];
+            try {
+              options.cache->store(keys[i], out);
+              options.cache->write_manifest(identity, manifests[i]);
+              if (!done.warnings.empty())
+                options.cache->write_manifest(warnings_identity(keys[i]), json{{"warnings", done.warnings}});
+            } catch (const std::exception& e) {
+              // The outputs are sound; only a later run loses them.
+              const std::string msg = std::string("its result could not be kept in the cache: ") + e.what();
+              {
+                std::lock_guard lock(error_mutex);
+                done.warnings.push_back(msg);
+              }
+              emit({{"event", "node_warning"}, {"node", done.id}, {"type", done.type}, {"message", msg}});
+            }
+          });
       } catch (const InputError& e) {
         rec.status = "failed";
         rec.error = e.what();
@@ -298,6 +314,7 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
   for (int i = 0; i < n; ++i)
     if (plan.nodes[i].deps.empty() || have[i]) launch(i);
   group.wait();
+  stores.wait();
 
   for (const auto& [name, src] : plan.outputs)
     if (good[src.node]) {

@@ -145,6 +145,28 @@ TEST(Cache, SecondCacheObjectOnTheSameFolderReusesEntries) {
   EXPECT_EQ(run(reg, kChain, &again).executed(), 0);
 }
 
+// Entries are written beside the nodes that follow. One that cannot be written (a full disk)
+// leaves the run and its outputs sound: each node says so in a warning, and the next run
+// computes again what was not kept.
+TEST(Cache, AnEntryThatCannotBeWrittenIsAWarningNotAFailure) {
+  Registry reg = test::make_test_registry();
+  test::TempDir dir;
+  {
+    DiskCache full(dir.str());
+    full.after_partial_write = [](const std::string&) { throw std::runtime_error("No space left on device"); };
+    const RunResult r = run(reg, kChain, &full);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(total(r), 10.0);
+    for (const NodeRun& node : r.nodes) {
+      ASSERT_EQ(node.warnings.size(), 1u) << node.id;
+      EXPECT_EQ(node.warnings[0], "its result could not be kept in the cache: No space left on device");
+    }
+  }
+  DiskCache cache(dir.str());
+  EXPECT_EQ(run(reg, kChain, &cache).executed(), 4);
+  EXPECT_EQ(run(reg, kChain, &cache).executed(), 0);  // kept this time
+}
+
 TEST(Cache, EntryWhoseWriterWasKilledIsNeverReadBack) {
   Registry reg = test::make_test_registry();
   test::TempDir dir;
