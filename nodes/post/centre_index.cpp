@@ -79,6 +79,28 @@ void CentreIndex::near(const Eigen::Vector3d& m, double radius, std::vector<std:
   if (!a_.empty()) tree_->findNeighbors(rs, m.data(), nanoflann::SearchParams(32, 0, false));
 }
 
+void CentreIndex::near(const Eigen::Vector3d& m, double radius, std::vector<std::uint32_t>& out,
+                       CandidateCache* cache) const {
+  if (!cache || !(cache->slack > 0)) return near(m, radius, out);
+  constexpr double kSpare = 1e-9;  // mm, beyond the rounding of the distances compared
+  if (!((m - cache->centre).norm() + radius + kSpare <= cache->radius)) {
+    near(m, radius + cache->slack, cache->pieces);
+    cache->centre = m, cache->radius = radius + cache->slack;
+  }
+  // The tree's own test: the squared distance summed over x, y, z, below the radius squared.
+  const double r2 = radius * radius;
+  out.clear();
+  for (std::uint32_t i : cache->pieces) {
+    double d2 = 0, diff = m.x() - mid_[i].x();
+    d2 += diff * diff;
+    diff = m.y() - mid_[i].y();
+    d2 += diff * diff;
+    diff = m.z() - mid_[i].z();
+    d2 += diff * diff;
+    if (d2 < r2) out.push_back(i);
+  }
+}
+
 double CentreIndex::distance(const Eigen::Vector3d& p, double cap, std::vector<std::uint32_t>& cand) const {
   near(p, cap + half_, cand);
   double d = INFINITY;
@@ -96,7 +118,8 @@ std::uint32_t CentreIndex::nearest(const Eigen::Vector3d& p, double cap, std::ve
 }
 
 void CentreIndex::trace(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double r, double T, double delta,
-                        double& gouge, double& scallop, std::vector<std::uint32_t>& cand, std::uint32_t* hint) const {
+                        double& gouge, double& scallop, std::vector<std::uint32_t>& cand, std::uint32_t* hint,
+                        CandidateCache* cache) const {
   // With a hint whose capsule the ray enters at t_h <= T/2 (or whose centre is within r of p),
   // every piece that matters lies within r + max(t_h, delta) (r + delta) of p, so its midpoint
   // within that plus half a piece: the pieces entered sooner, and those near enough for the
@@ -105,14 +128,14 @@ void CentreIndex::trace(const Eigen::Vector3d& p, const Eigen::Vector3d& n, doub
   if (hint && *hint < a_.size()) {
     constexpr double kSpare = 1e-9;  // rounding of the distances compared
     if (segment_distance(p, a_[*hint], b_[*hint]) <= r) {
-      near(p, r + delta + half_ + kSpare, cand);
+      near(p, r + delta + half_ + kSpare, cand, cache);
       narrowed = true;
     } else if (const double th = capsule_entry(p, n, a_[*hint], b_[*hint], r); th <= 0.5 * T) {
-      near(p, r + std::max(th, delta) + half_ + kSpare, cand);
+      near(p, r + std::max(th, delta) + half_ + kSpare, cand, cache);
       narrowed = true;
     }
   }
-  if (!narrowed || cand.empty()) near(p + 0.5 * T * n, r + 0.5 * T + half_, cand);
+  if (!narrowed || cand.empty()) near(p + 0.5 * T * n, r + 0.5 * T + half_, cand, cache);
   thread_local std::vector<double> dist;  // to each candidate
   dist.resize(cand.size());
   double d = INFINITY;

@@ -42,8 +42,19 @@ class CentreIndex {
   // hint, when given, is a piece to start from (UINT32_MAX: none), set on return to the piece
   // the answer came from: for the next of a row of nearby points, whose ray enters that piece
   // early, a search only as wide as that entry needs (the same answer, fewer candidates).
+  //
+  // cache, when given, keeps the pieces of a search made `slack` wider than asked; the next
+  // searches it contains (a row's next places, a slack apart or less) pick theirs from it by the
+  // same distance test the tree makes: the same candidates, without a descent of the tree.
+  struct CandidateCache {
+    double slack = 0;  // mm
+    Eigen::Vector3d centre = Eigen::Vector3d::Constant(NAN);
+    double radius = -1;
+    std::vector<std::uint32_t> pieces;
+  };
   void trace(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double r, double T, double delta, double& gouge,
-             double& scallop, std::vector<std::uint32_t>& scratch, std::uint32_t* hint = nullptr) const;
+             double& scallop, std::vector<std::uint32_t>& scratch, std::uint32_t* hint = nullptr,
+             CandidateCache* cache = nullptr) const;
   // The index of the segment (given to the constructor) a piece came from.
   std::uint32_t segment_of(std::uint32_t piece) const { return owner_[piece]; }
   // The piece nearest to p within `cap` (UINT32_MAX when none).
@@ -51,6 +62,7 @@ class CentreIndex {
 
  private:
   void near(const Eigen::Vector3d& m, double radius, std::vector<std::uint32_t>& out) const;
+  void near(const Eigen::Vector3d& m, double radius, std::vector<std::uint32_t>& out, CandidateCache* cache) const;
   std::vector<Eigen::Vector3d> a_, b_, mid_;
   std::vector<std::uint32_t> owner_;
   double half_ = 0;

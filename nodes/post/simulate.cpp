@@ -25,6 +25,9 @@ namespace scallop {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// A trace's search for pieces is made this many grid spacings wider than it asks, and the next
+// places of the row pick theirs from what it found (CentreIndex::CandidateCache).
+constexpr double kCandidateSlack = 8;
 
 
 
@@ -283,13 +286,14 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
     std::vector<std::uint32_t> cand;
     for (int j = rg.begin(); j < rg.end(); ++j) {
       std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();  // the last sample's piece
+      CentreIndex::CandidateCache pieces{kCandidateSlack * spacing};
       OutlineDistance outline_distance;
       const std::size_t from = grid.row_start[j], to = grid.row_start[j + 1];
       for (std::size_t i = from; i < to; ++i) {
         const SurfacePoint& s = grid.points[i];
         SimSample& out = res.samples[i];
         out.x = s.p.x(), out.y = s.p.y(), out.z = s.p.z(), out.weight = s.weight;
-        index.trace(s.p, s.n, r, T, s.uncertainty, out.gouge, out.scallop, cand, &hint);
+        index.trace(s.p, s.n, r, T, s.uncertainty, out.gouge, out.scallop, cand, &hint, &pieces);
         out.interior = !s.beyond && is_interior(s.p.x(), s.p.y(), outline_distance);
       }
       const std::size_t d = done.fetch_add(to - from) + to - from;
@@ -333,6 +337,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
       for (std::size_t si = rg.begin(); si < rg.end(); ++si) {
         const SimSample c = res.samples[seeds[si]];
         std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();
+        CentreIndex::CandidateCache pieces{kCandidateSlack * halfw * spacing};
         OutlineDistance outline_distance;
         for (int a = -m; a <= m; ++a)
           for (int b = -m; b <= m; ++b) {
@@ -350,7 +355,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
             }
             SimSample& out = extra[slot];
             out.x = x, out.y = y, out.z = z, out.weight = 0;
-            index.trace({x, y, z}, n, r, T, u, out.gouge, out.scallop, cand, &hint);
+            index.trace({x, y, z}, n, r, T, u, out.gouge, out.scallop, cand, &hint, &pieces);
             out.interior = no_interior || (!in_band(x, y) && is_interior(x, y, outline_distance));
             valid[slot] = 1;
           }

@@ -109,6 +109,37 @@ TEST(CentreIndex, AHintGivesTheSameAnswerAsNone) {
   EXPECT_GT(inside, 100);
 }
 
+TEST(CentreIndex, CandidatesKeptFromAWiderSearchGiveTheSameAnswer) {
+  // The same rows, each with a cache of pieces kept from searches 0.05, 0.8 or 5 mm wider than
+  // asked (a row's next places, and those of the next row, pick theirs from it): the brute
+  // force's answers to the last bit.
+  const double r = 4, T = 1.0;
+  const std::vector<CentreSegment> segs = wavy_zigzag(r, 10, 50, 1.3, 0.25, 4);
+  CentreIndex index(segs, 0.5);
+  std::vector<std::uint32_t> scratch;
+  for (const double slack : {0.05, 0.8, 5.0}) {
+    CentreIndex::CandidateCache cache{slack};
+    int rows = 0, traced = 0;
+    for (double y = -6; y < 19; y += 0.37, ++rows) {
+      std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();
+      for (double x = -6; x < 21; x += 0.1, ++traced) {
+        const Eigen::Vector3d p(x, y, 0.2 * std::sin(0.7 * x) + (rows % 3 == 0 ? 0.3 : 0.0));
+        const Eigen::Vector3d n = Eigen::Vector3d(-0.14 * std::cos(0.7 * x), 0.05, 1).normalized();
+        const double delta = rows % 2 ? 0.01 : 0.0;
+        double want_gouge, want_scallop, gouge, scallop;
+        brute_force(segs, p, n, r, T, delta, want_gouge, want_scallop);
+        index.trace(p, n, r, T, delta, gouge, scallop, scratch, &hint, &cache);
+        EXPECT_EQ(gouge, want_gouge) << slack << " " << x << " " << y;
+        if (std::isnan(want_scallop))
+          EXPECT_TRUE(std::isnan(scallop)) << slack << " " << x << " " << y;
+        else
+          EXPECT_EQ(scallop, want_scallop) << slack << " " << x << " " << y;
+      }
+    }
+    EXPECT_GT(traced, 10000);
+  }
+}
+
 TEST(CentreIndex, NothingNearIsUncutAndNotGouged) {
   CentreIndex index({{{0, 0, 4}, {10, 0, 4}}}, 1.0);
   std::vector<std::uint32_t> scratch;
