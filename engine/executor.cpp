@@ -241,9 +241,9 @@ RunResult execute(const Plan& plan, const Registry& registry, const std::map<std
           if (!out.count(od.name) || !out[od.name])
             throw std::logic_error("node did not produce its output '" + od.name + "'");
         rec.status = "ok";
-        // The entry is written beside the nodes that follow, not before them: a million points'
-        // entries took a cold run 2 to 3 s, most of it waiting for the disk (each entry is
-        // synced before it is renamed into place).
+        // The entry is written beside the nodes that follow, not before them (at a million
+        // points cloud.trim_steep's 206 MiB entry held its successors 0.8 s: serialised, hashed
+        // and synced to disk before it is renamed into place).
         if (options.cache && pn.decl->cache_on_disk)
           stores.run([&, i, out, identity] {
             NodeRun& done = result.nodes[i];
