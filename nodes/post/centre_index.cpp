@@ -87,18 +87,11 @@ void CentreIndex::near(const Eigen::Vector3d& m, double radius, std::vector<std:
     near(m, radius + cache->slack, cache->pieces);
     cache->centre = m, cache->radius = radius + cache->slack;
   }
-  // The tree's own test: the squared distance summed over x, y, z, below the radius squared.
+  // The tree's own test (CollectWithin): its squared distance below the radius squared.
   const double r2 = radius * radius;
   out.clear();
-  for (std::uint32_t i : cache->pieces) {
-    double d2 = 0, diff = m.x() - mid_[i].x();
-    d2 += diff * diff;
-    diff = m.y() - mid_[i].y();
-    d2 += diff * diff;
-    diff = m.z() - mid_[i].z();
-    d2 += diff * diff;
-    if (d2 < r2) out.push_back(i);
-  }
+  for (std::uint32_t i : cache->pieces)
+    if (tree_distance2(m, mid_[i]) < r2) out.push_back(i);
 }
 
 double CentreIndex::distance(const Eigen::Vector3d& p, double cap, std::vector<std::uint32_t>& cand) const {

@@ -75,7 +75,7 @@ void check_rapid_inputs(const std::vector<Eigen::Vector3d>& points, double r, do
 
 // A nanoflann result set for the point nearest a query once each point is raised by its
 // uncertainty: a point farther than the nearest raised one found plus the largest raise cannot
-// be nearer raised. Distances summed as nanoflann's L2_Simple_Adaptor sums them.
+// be nearer raised.
 struct NearestRaised {
   const Eigen::Vector3d& query;
   const std::vector<Eigen::Vector3d>& points;
@@ -88,12 +88,7 @@ struct NearestRaised {
   bool full() const { return true; }
   bool addPoint(double, std::uint32_t i) {
     const Eigen::Vector3d& p = points[i];
-    double d2 = 0, diff = query.x() - p.x();
-    d2 += diff * diff;
-    diff = query.y() - p.y();
-    d2 += diff * diff;
-    diff = query.z() - (p.z() + raise[i]);
-    d2 += diff * diff;
+    const double d2 = tree_distance2(query, Eigen::Vector3d(p.x(), p.y(), p.z() + raise[i]));
     if (d2 < best2) {
       best2 = d2;
       const double reach = std::sqrt(d2) + raise_max;
