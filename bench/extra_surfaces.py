@@ -11,6 +11,8 @@ exactly as they measure the catalog.
   bench/extra_surfaces.py names
 
 steepcap: a sphere cap with rim slopes from 75 to 88 degrees along an irregular outline.
+holed_waves, holed_dome, slot_plane: catalog surfaces with holes (round, rectangular, a slot, one
+2 mm from the outline).
 Crest family: z = 20 - a sqrt(s^2 + c^2), s = x cos(t) + y sin(t), on a 100 x 60 rectangle: a
 rounded ridge with flanks of slope a and radius c / a at its top (a hyperbola across it).
 """
@@ -74,6 +76,45 @@ EXTRA["steepcap75"] = surfaces.Surface(
     lambda x, y: surfaces.sqrt(CAP_R * CAP_R - x * x - y * y),
     surfaces._circle(CAP_R * math.sin(math.radians(75))),
     lambda x, y: np.hypot(x, y) <= CAP_R * math.sin(math.radians(75)))
+
+
+# Patches with holes: the edge of a hole lies beyond the cloud's points around it, as the outline
+# does beyond its outermost ones (measured to the holes' real edges, as verify.py measures).
+def _off_circle(x, y, cx, cy, r):
+    return np.hypot(x - cx, y - cy) > r
+
+
+def _off_rect(x, y, cx, cy, hw, hh):
+    return ~((np.abs(x - cx) <= hw) & (np.abs(y - cy) <= hh))
+
+
+def _holed_waves_inside(x, y):
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    return ((np.abs(x) <= 60) & (np.abs(y) <= 40) & _off_circle(x, y, -25, 10, 8) &
+            _off_rect(x, y, 30, -15, 7.5, 5))
+
+
+def _holed_dome_inside(x, y):
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    return (np.hypot(x, y) <= 50) & _off_circle(x, y, 15, -10, 5) & _off_circle(x, y, -20, 20, 1.5)
+
+
+def _slot_plane_inside(x, y):
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    return ((np.abs(x) <= 50) & (np.abs(y) <= 30) & _off_rect(x, y, 0, 10, 15, 1) &
+            _off_circle(x, y, 44, 0, 4))
+
+
+_cat = surfaces.CATALOG
+EXTRA["holed_waves"] = surfaces.Surface(
+    "holed_waves", "the catalog's waves with a round hole (radius 8) and a 15 x 10 one",
+    _cat["waves"].f, _cat["waves"].boundary, _holed_waves_inside)
+EXTRA["holed_dome"] = surfaces.Surface(
+    "holed_dome", "the catalog's dome with round holes of radius 5 and 1.5",
+    _cat["dome"].f, _cat["dome"].boundary, _holed_dome_inside)
+EXTRA["slot_plane"] = surfaces.Surface(
+    "slot_plane", "the catalog's plane with a 30 x 2 slot and a round hole 2 mm from its edge",
+    _cat["plane"].f, _cat["plane"].boundary, _slot_plane_inside)
 surfaces.CATALOG.update(EXTRA)
 
 

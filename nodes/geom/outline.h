@@ -24,26 +24,25 @@ class Outline {
   bool contains(const Eigen::Vector2d& q) const;
   // inside any one of the loops (their union: e.g. a set of holes)
   bool any_contains(const Eigen::Vector2d& q) const;
-  // How far q lies outside the first loop (the outer one, as the boundary loops come), in xy:
-  // 0 inside it; +infinity without loops. Found from the nearest edge (a k-d tree search), not
-  // by walking the loop: the guard asks it for every foot beyond the outline. The band beyond it is what path.isoparametric's band
-  // passes cut and post.simulate counts (rim_band_width, nodes/path/step_size.h).
-  double beyond_outer(const Eigen::Vector2d& q) const;
-  // The distance from q to the first loop's edges, inside or out (+infinity without loops).
-  double distance_to_outer(const Eigen::Vector2d& q) const;
+  // How far q lies off the patch in xy: outside the outer loop or inside a hole, the distance to
+  // the nearest loop's edges; 0 on the patch; +infinity without loops. Found from the nearest
+  // edge (a k-d tree search over every loop's edges), not by walking the loops: the guard asks it
+  // for every foot off the patch. The band off the patch is what path.isoparametric's band
+  // passes cut, beyond the outer loop and into the holes, and post.simulate counts
+  // (rim_band_width, nodes/path/step_size.h): a hole's edge lies beyond the cloud's points
+  // around it as the outline does beyond its outermost ones.
+  double beyond(const Eigen::Vector2d& q) const;
 
  private:
   struct Loop {
     std::vector<Eigen::Vector2d> polygon;
     Eigen::AlignedBox2d box;
+    double orientation = 1;  // +1 counter-clockwise, -1 clockwise
+    bool patch_inside = true;  // the patch lies inside it (the outer loop), not outside (a hole)
   };
-  struct EdgeIndex;  // the outer loop's edges, sampled, in a k-d tree
-  // The distance from q to the outer loop's nearest edge, and (given inside) whether q lies
-  // inside the loop, from the side of that edge.
-  double nearest_on_outer(const Eigen::Vector2d& q, bool* inside) const;
+  struct EdgeIndex;  // every loop's edges, sampled, in a k-d tree
   std::vector<Loop> loops_;
-  std::shared_ptr<const EdgeIndex> outer_edges_;
-  double outer_orientation_ = 1;  // +1 counter-clockwise, -1 clockwise
+  std::shared_ptr<const EdgeIndex> edges_;
 };
 
 }  // namespace scallop

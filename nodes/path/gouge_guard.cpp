@@ -180,11 +180,9 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
   };
   auto in_band = [&](const Eigen::Vector2d& q) {
     if (impl_->outline) {
-      // beyond the outer loop (a quick search: the band passes' feet are all there), in the rim
-      // band or not; inside it, on the patch unless in a hole
-      const double beyond = impl_->rim_band > 0 ? impl_->outline->beyond_outer(q) : 0.0;
-      if (beyond > 0 && beyond <= impl_->rim_band) return true;
-      if (beyond == 0 && impl_->outline->contains(q)) return true;
+      // on the patch, or off it (beyond the outer loop or in a hole) within the rim band
+      const double off = impl_->outline->beyond(q);
+      if (off == 0 || off <= impl_->rim_band) return true;
     }
     const double d2 = nearest_point_d2(q);
     return d2 <= sp * sp || (d2 <= 4 * sp * sp && impl_->surface.reach_beyond(q.x(), q.y()) <= 0.5 * sp);

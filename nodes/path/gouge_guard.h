@@ -51,8 +51,8 @@ class BallClearance {
   // outline in xy (post.simulate's, from the boundary loops): a foot point inside it is on the
   // surface however far from the points (a gap between rim points that the certificate counts).
   // band  optional: surface_band(surface, points), when it is at hand (cached); computed here
-  // otherwise. rim_band  with an outline: a foot point up to this far beyond its outer loop in
-  // xy is on the surface too (mm; the band path.isoparametric's band passes cut and
+  // otherwise. rim_band  with an outline: a foot point up to this far off the patch in xy
+  // (beyond its outer loop or into a hole) is on the surface too (mm; the band path.isoparametric's band passes cut and
   // post.simulate counts). All must outlive this.
   BallClearance(const HeightFieldModel& surface, const std::vector<Eigen::Vector3d>& points, double r,
                 const Outline* outline = nullptr, const SurfaceBandView* band = nullptr, double rim_band = 0);

@@ -66,8 +66,9 @@ struct IsoparametricOptions {
   int interpolation_k = 20;          // neighbours per local fit (see uv_interpolation.h)
   bool outline = true;               // a last closed pass through the outline's own points
   // With `outline`, closed passes offset outward from the outer loop cut this band beyond it
-  // (mm along the surface; the real outline lies beyond the cloud's outermost points); -1:
-  // rim_band_width (step_size.h), three of the cloud's spacings; 0: none.
+  // (mm along the surface; the real outline lies beyond the cloud's outermost points), and
+  // passes offset into each hole from its loop the same band (no deeper than half the hole's
+  // radius); -1: rim_band_width (step_size.h), three of the cloud's spacings; 0: none.
   double rim_band = -1;
   // Bounds on the work (a degenerate map or a noisy cloud makes the steps vanish): more passes
   // or points than these, or more than min(200000, max_points) points in one pass, stop the
@@ -92,8 +93,8 @@ struct IsoparametricResult {
 // the largest scallop and chord deviations found by the checks, concave regions whose normal
 // curvature radius is below r (count, location, size), the margins kept for the cloud's
 // uncertainty (surface_error: median, max, stock, too-uncertain points), the rim passes
-// (outline_passes) and the band passes beyond the outer loop (rim_band: width, passes; cut
-// after the rim pass, innermost first), and warnings.
+// (outline_passes) and the band passes beyond the outer loop and into the holes (rim_band:
+// width, passes; cut after the rim passes, innermost first), and warnings.
 // Throws std::invalid_argument with a clear message for bad input (empty cloud, no normals,
 // size mismatch, wrong domain for the pattern, bad options, a cloud too uncertain for h).
 // loops      optional: the patch's boundary loops (outer first, then holes; indices into cloud).

@@ -281,7 +281,8 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
     std::vector<std::uint32_t> cand;
     for (int j = rg.begin(); j < rg.end(); ++j) {
       std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();  // the last sample's piece
-      CentreIndex::CandidateCache pieces{kCandidateSlack * spacing};
+      CentreIndex::CandidateCache pieces;
+      pieces.slack = kCandidateSlack * spacing;
       OutlineDistance outline_distance;
       const std::size_t from = grid.row_start[j], to = grid.row_start[j + 1];
       for (std::size_t i = from; i < to; ++i) {
@@ -332,7 +333,8 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
       for (std::size_t si = rg.begin(); si < rg.end(); ++si) {
         const SimSample c = res.samples[seeds[si]];
         std::uint32_t hint = std::numeric_limits<std::uint32_t>::max();
-        CentreIndex::CandidateCache pieces{kCandidateSlack * halfw * spacing};
+        CentreIndex::CandidateCache pieces;
+        pieces.slack = kCandidateSlack * halfw * spacing;
         OutlineDistance outline_distance;
         for (int a = -m; a <= m; ++a)
           for (int b = -m; b <= m; ++b) {
@@ -345,7 +347,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
               continue;
             // in the rim band, no farther out than the band (as its grid samples)
             if (in_band(x, y)) {
-              const double d = outline_polygons.beyond_outer({x, y});
+              const double d = outline_polygons.beyond({x, y});
               if (d > rim_band * n.z()) continue;
             }
             SimSample& out = extra[slot];

@@ -75,10 +75,11 @@ struct SimulateOptions {
   // and the interior margin is measured from the polygons' edges. Empty: the outline is guessed
   // from the cloud (HeightFieldModel::inside), which on sparse clouds reaches past the real rim.
   std::vector<std::vector<Eigen::Vector2d>> loops;
-  // With loops: the band beyond the outer loop also counted as the patch, its width along the
-  // surface (mm; a sample beyond the loop is on the patch within rim_band × n_z of the loop in
-  // xy, and never interior): part of what path.isoparametric's band passes cut (the real
-  // outline lies beyond a cloud's outermost points). < 0: certified_rim_band of the cloud's
+  // With loops: the band off the patch, beyond the outer loop and into the holes, also counted
+  // as the patch, its width along the surface (mm; a sample off the patch is on it within
+  // rim_band × n_z of the nearest loop in xy, and never interior): part of what
+  // path.isoparametric's band passes cut (the real outline, and a hole's real edge, lie beyond a
+  // cloud's outermost points). < 0: certified_rim_band of the cloud's
   // spacing (nodes/path/step_size.h), one spacing; 0: none (the default: measured on the clean
   // canopy's 68 degree rim, one spacing out the extrapolation's uncertainty changes faster than
   // the guard samples it, and the contour program's gouge bound came out 0.0137 > e there while

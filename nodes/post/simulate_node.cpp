@@ -17,7 +17,7 @@ namespace scallop::post_nodes {
 NodeDecl make_simulate_node() {
   NodeDecl d;
   d.type = "post.simulate";
-  d.version = 14;  // 14: a residual within the points' uncertainty floor counts as the height field's misfit (HeightFieldModel, stop 88); 13: the height field's quartic where its quadratic misfits (HeightFieldModel, kQuarticFrom); 12: rim_band, the band beyond the outer loop counted too when asked (samples_beyond_outline);  11: a gouge bound below the uncertainty says the ball stays clear of the surface by less than it; 10: a failing bound says how much of it is the surface's uncertainty, and the worst places carry it; 9: the rapids checked against the cloud (rapid_min_clearance, rapids_through_part); 3: scallop and gouge are bounds that include the cloud's uncertainty; 7: and the height field's misfit; 8: the height field solved by a fixed-size Cholesky (the same to rounding)
+  d.version = 15;  // 15: the rim band reaches into the holes too (stop 90); 14: a residual within the points' uncertainty floor counts as the height field's misfit (HeightFieldModel, stop 88); 13: the height field's quartic where its quadratic misfits (HeightFieldModel, kQuarticFrom); 12: rim_band, the band beyond the outer loop counted too when asked (samples_beyond_outline);  11: a gouge bound below the uncertainty says the ball stays clear of the surface by less than it; 10: a failing bound says how much of it is the surface's uncertainty, and the worst places carry it; 9: the rapids checked against the cloud (rapid_min_clearance, rapids_through_part); 3: scallop and gouge are bounds that include the cloud's uncertainty; 7: and the height field's misfit; 8: the height field solved by a fixed-size Cholesky (the same to rounding)
                   // 4: the uncertainty grows at gaps beyond the cloud's edge
                   // 5: pass asks the whole patch, rim included, not the interior only
                   // 6: outputs the simulation (post.render draws it), no heat map of its own
@@ -44,7 +44,7 @@ NodeDecl make_simulate_node() {
       .number("margin", &SimulateOptions::margin, 0, 1000, "mm",
               "interior = farther than this from the outline; 0: sqrt(8 r h)")
       .number("rim_band", &SimulateOptions::rim_band, -1, 100, "mm",
-              "with loops, the band beyond the outer loop also counted (its width along the surface; "
+              "with loops, the band beyond the outer loop and into the holes also counted (its width along the surface; "
               "path.isoparametric's band passes cut three spacings): -1: the cloud's support, one "
               "spacing past its outermost points; 0: none, the outline only")
       .integer("max_samples", &SimulateOptions::max_samples, 1000, 100000000, "",

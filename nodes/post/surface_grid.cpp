@@ -121,10 +121,9 @@ SurfaceSamples sample_surface_grid(const HeightFieldModel& surf, const SurfaceGr
         double z, u;
         Eigen::Vector3d n;
         if (!inside[std::size_t(j) * nu + i]) {
-          // the rim band: within rim_band along the surface of the outer loop
+          // the rim band: within rim_band along the surface of the outer loop, or of a hole's
           if (rim_band <= 0) continue;
-          // (0: inside the outer loop, in a hole)
-          const double d = outline_polygons.beyond_outer(q);
+          const double d = outline_polygons.beyond(q);
           if (!(d > 0 && d <= rim_band) || !surf.eval(q.x(), q.y(), z, n, true, &u) || d > rim_band * n.z())
             continue;
           inside[std::size_t(j) * nu + i] = 2;

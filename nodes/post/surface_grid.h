@@ -40,8 +40,8 @@ inline GridFrame grid_frame(const SurfaceSamples& s) { return {s.spacing, s.cx, 
 // patch (inside the outer loop and outside the holes; without loops, where the cloud is, its
 // holes counted in), each on-patch node's place, normal, area and uncertainty (steep cells split
 // k × k, k = round(1 / n_z) up to 4, so the spacing along the surface stays near the grid's),
-// and the rim band's nodes beyond the outer loop (within rim_band × n_z of it; rim_band < 0: one
-// cloud spacing). progress, when given, is called with fractions in [0, 1].
+// and the rim band's nodes off the patch, beyond the outer loop or in a hole (within rim_band ×
+// n_z of the nearest loop; rim_band < 0: one cloud spacing). progress, when given, is called with fractions in [0, 1].
 // Throws std::invalid_argument for r <= 0, h <= 0, an outer loop of fewer than 3 points, a
 // non-finite loop point, or no sample on the surface.
 SurfaceSamples sample_surface_grid(const HeightFieldModel& surface, const SurfaceGridOptions& options,

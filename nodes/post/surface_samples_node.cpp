@@ -8,7 +8,7 @@ namespace scallop::post_nodes {
 NodeDecl make_surface_samples_node() {
   NodeDecl d;
   d.type = "post.surface_samples";
-  d.version = 2;  // 2: a residual within the points' uncertainty floor counts as the height field's misfit (HeightFieldModel, stop 88)
+  d.version = 3;  // 3: the rim band reaches into the holes too (stop 90); 2: a residual within the points' uncertainty floor counts as the height field's misfit (HeightFieldModel, stop 88)
   d.description =
       "the cloud's surface sampled where the certificate measures (post.simulate's grid), taken while the path is "
       "planned";

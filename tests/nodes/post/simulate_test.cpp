@@ -527,7 +527,7 @@ TEST(Simulate, TheRimBandBeyondTheLoopIsCounted) {
   EXPECT_NEAR(j["scallop_max_interior"].get<double>(), without.report["scallop_max_interior"].get<double>(), 1e-12);
 }
 
-TEST(Simulate, LoopsWithAHoleLeaveItOut) {
+TEST(Simulate, LoopsWithAHoleLeaveItOutButItsBand) {
   auto patch = sparse_patch();
   HeightFieldModel surf(patch.cloud);
   Toolpath t;
@@ -546,11 +546,17 @@ TEST(Simulate, LoopsWithAHoleLeaveItOut) {
   auto res = simulate_cut(surf, feed_centres(t), 0.0, o);
   EXPECT_NEAR(res.report["surface_area"].get<double>(), 40 * 30 - 100, 0.01 * 1100);
   for (const auto& q : res.samples) EXPECT_FALSE(q.x > 10.05 && q.x < 19.95 && q.y > 10.05 && q.y < 19.95);
-  // The rim band lies beyond the outer loop only: the hole stays out of it.
+  // The rim band lies beyond the outer loop and 1 mm into the hole (a hole's real edge lies
+  // beyond the cloud's points around it too): the hole's middle, 8 × 8, stays out of it.
   o.rim_band = 1;
   res = simulate_cut(surf, feed_centres(t), 0.0, o);
-  EXPECT_NEAR(res.report["surface_area"].get<double>(), 42 * 32 - (4 - M_PI) - 100, 0.01 * 1200);
-  for (const auto& q : res.samples) EXPECT_FALSE(q.x > 10.05 && q.x < 19.95 && q.y > 10.05 && q.y < 19.95);
+  EXPECT_NEAR(res.report["surface_area"].get<double>(), 42 * 32 - (4 - M_PI) - 64, 0.01 * 1200);
+  bool in_band = false;
+  for (const auto& q : res.samples) {
+    EXPECT_FALSE(q.x > 11.05 && q.x < 18.95 && q.y > 11.05 && q.y < 18.95);
+    in_band = in_band || (q.x > 10.05 && q.x < 10.95 && q.y > 12 && q.y < 18);
+  }
+  EXPECT_TRUE(in_band);
   o.loops = {{{0, 0}, {1, 1}}};
   try {
     simulate_cut(surf, feed_centres(t), 0.0, o);
