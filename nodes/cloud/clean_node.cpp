@@ -10,8 +10,8 @@ namespace scallop::cloud_nodes {
 NodeDecl make_clean_node() {
   NodeDecl d;
   d.type = "cloud.clean";
-  d.version = 2;
-  d.description = "drops NaN/Inf points, exact duplicates and (optionally) statistical outliers";
+  d.version = 3;  // 3: remove_stray (stop 90)
+  d.description = "drops NaN/Inf points, exact duplicates and (optionally) statistical outliers and stray points off the surface";
   d.input("cloud", "Cloud", "the raw points")
       .output("cloud", "Cloud", "the points kept, along a space-filling curve (or in their original order)");
   d.options<CleanOptions>()
@@ -21,6 +21,12 @@ NodeDecl make_clean_node() {
       .integer("outlier_k", &CleanOptions::outlier_k, 2, 256, "", "neighbours used to rate a point as an outlier")
       .number("outlier_std_ratio", &CleanOptions::outlier_std_ratio, 0.1, 100, "",
               "outlier threshold in standard deviations above the mean distance")
+      .flag("remove_stray", &CleanOptions::remove_stray,
+            "drop stray points: those farther from the quadric their stray_k nearest sample than 8 times "
+            "its rms residual and 0.2 times their k-th distance (a scanner's spikes, flying pixels, "
+            "reflections: a point under the surface makes the cloud look layered, one above it is a spike "
+            "the guard lifts every ball over)")
+      .integer("stray_k", &CleanOptions::stray_k, 8, 256, "", "neighbours whose quadric judges a point as stray")
       .flag("spatial_order", &CleanOptions::spatial_order,
             "put the points along a space-filling curve (Morton order), so that neighbours are near one "
             "another in memory: every later node reads them faster (a million points in random order: "
@@ -43,9 +49,12 @@ NodeDecl make_clean_node() {
     if (s.non_finite > 0)
       ctx.warn("dropped " + std::to_string(s.non_finite) + " of " + std::to_string(s.input) +
                " points with a NaN or infinite coordinate or normal");
+    if (s.stray > 0)
+      ctx.warn("dropped " + std::to_string(s.stray) + " of " + std::to_string(s.input) +
+               " points lying off the surface their neighbours sample (stray points)");
     const std::string counts = std::to_string(s.non_finite) + " were NaN/Inf, " +
                                std::to_string(s.duplicates) + " duplicates, " +
-                               std::to_string(s.outliers) + " outliers";
+                               std::to_string(s.outliers) + " outliers, " + std::to_string(s.stray) + " stray";
     if (static_cast<long long>(s.output) < min_points)
       throw NodeError("cloud has " + std::to_string(s.output) + " points after cleaning (" +
                       counts + "); at least " + std::to_string(min_points) + " are needed");

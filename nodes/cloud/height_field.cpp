@@ -293,7 +293,8 @@ std::string height_field_problem(const HeightFieldStats& s, const HeightFieldLim
            ") lie under other points of the cloud (a closed object, an overhang or several "
            "layers), e.g. near " +
            point_text(s.layered_example, 1) + " with a layer " + number_text(s.layered_example_gap) +
-           " mm above it; a 3-axis machine cannot reach them";
+           " mm above it; a 3-axis machine cannot reach them (a scan's stray points off the surface look "
+           "the same: --set clean.remove_stray=true drops them)";
   if (static_cast<double>(s.steep_points) > limits.max_steep_fraction * n)
     return "walls steeper than " + number_text(limits.max_slope_deg, "%g") +
            "°: " + std::to_string(s.steep_points) + " points (" +

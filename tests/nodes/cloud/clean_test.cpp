@@ -180,7 +180,7 @@ TEST(CleanNode, CleansAndReports) {
   auto c = std::dynamic_pointer_cast<const PointCloud>(out.at("cloud"));
   ASSERT_TRUE(c);
   EXPECT_EQ(c->size(), 400u);
-  EXPECT_EQ(message, "kept 400 of 403 points (1 were NaN/Inf, 1 duplicates, 1 outliers)");
+  EXPECT_EQ(message, "kept 400 of 403 points (1 were NaN/Inf, 1 duplicates, 1 outliers, 0 stray)");
 }
 
 TEST(CleanNode, WarnsHowManyNonFinitePointsItDropped) {
@@ -192,7 +192,8 @@ TEST(CleanNode, WarnsHowManyNonFinitePointsItDropped) {
   auto run = [&](std::shared_ptr<PointCloud> c) {
     std::vector<std::string> warnings;
     NodeContext ctx(d, "clean", "part", {{"remove_outliers", false}, {"outlier_k", 16}, {"outlier_std_ratio", 2.0},
-                                         {"spatial_order", true}, {"min_points", 10}},
+                                         {"remove_stray", false}, {"stray_k", 16}, {"spatial_order", true},
+                                         {"min_points", 10}},
                     {{"cloud", c}}, nullptr, [&](const std::string& m) { warnings.push_back(m); });
     d.run(ctx);
     return warnings;
@@ -208,7 +209,7 @@ TEST(CleanNode, ErrorTexts) {
   auto cloud = std::make_shared<PointCloud>();
   cloud->points = {{0, 0, 0}, {0, 0, 0}, {1, 0, 0}, {kInf, 0, 0}, {2, 0, 0}, {3, 0, 0}};
   EXPECT_EQ(node_error({}, cloud),
-            "cloud has 4 points after cleaning (1 were NaN/Inf, 1 duplicates, 0 outliers); at "
+            "cloud has 4 points after cleaning (1 were NaN/Inf, 1 duplicates, 0 outliers, 0 stray); at "
             "least 10 are needed");
   EXPECT_EQ(node_error({{"min_points", 4}}, cloud), "no exception");
   EXPECT_EQ(node_error({{"remove_outliers", true}}, cloud),

@@ -112,7 +112,8 @@ TEST(HeightField, ClosedSphereIsNotAHeightField) {
   EXPECT_EQ(height_field_problem(st, limits),
             "not a height field seen from +Z: 1294 points (32 %) lie under other points of the "
             "cloud (a closed object, an overhang or several layers), e.g. near (-0.4, 0.1, "
-            "-20.0) with a layer 40.0 mm above it; a 3-axis machine cannot reach them");
+            "-20.0) with a layer 40.0 mm above it; a 3-axis machine cannot reach them (a scan's stray points off the "
+            "surface look the same: --set clean.remove_stray=true drops them)");
 }
 
 TEST(HeightField, ALineIsOneDimensionalBeforeAnythingElse) {
