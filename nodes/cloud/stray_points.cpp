@@ -48,7 +48,9 @@ std::vector<std::uint8_t> stray_points(const std::vector<Eigen::Vector3d>& P, co
         const Eigen::Vector3d d = P[nb.index(i, j)] - c;
         C += d * d.transpose();
       }
-      const Eigen::Vector3d n = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvectors().col(0);
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+      eig.computeDirect(C);
+      const Eigen::Vector3d n = eig.eigenvectors().col(0);
       Eigen::Vector3d t1, t2;
       tangent_frame(n, t1, t2);
       // the quadric w = q(u, v) over it, by the normal equations; fitted again without the
@@ -77,7 +79,7 @@ std::vector<std::uint8_t> stray_points(const std::vector<Eigen::Vector3d>& P, co
           b += m * local[j].z();
           ++used;
         }
-        if (used < 8) break;
+        if (used < 8 || (pass > 0 && used == k)) break;  // (none left out: the same fit)
         const Eigen::Matrix<double, 6, 1> next = A.ldlt().solve(b);
         if (!next.allFinite()) break;
         q = next, fitted = true;
