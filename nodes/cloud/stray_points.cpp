@@ -26,6 +26,9 @@ std::vector<std::uint8_t> stray_points(const std::vector<Eigen::Vector3d>& P, co
                                 std::to_string(P.size()));
   if (nb.k < 8) throw std::invalid_argument("stray points need at least 8 neighbours per point (got " + std::to_string(nb.k) + ")");
   std::vector<std::uint8_t> stray(P.size(), 0);
+  // each point's distance from its neighbours' quadric and their rms residual from it (NaN where
+  // nothing judges it)
+  std::vector<double> dist_of(P.size(), NAN), rms_of(P.size(), NAN);
   if (off) off->assign(P.size(), 0.0);
   const int k = nb.k;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -97,10 +100,24 @@ std::vector<std::uint8_t> stray_points(const std::vector<Eigen::Vector3d>& P, co
       const Eigen::Vector3d d = P[i] - c;
       const double dist = std::abs(d.dot(n) - basis(d.dot(t1), d.dot(t2)).dot(q));
       if (off) (*off)[i] = dist;
-      const double allowed = std::max(kStrayNoise * rms, kStraySpacing * std::sqrt(nb.sq_dist(i, k - 1)));
-      stray[i] = dist > allowed;
+      dist_of[i] = dist, rms_of[i] = rms;
     }
   });
+  // The cloud's noise, as the median neighbourhood sees it: a few neighbourhoods of a noisy cloud
+  // misfit less than their share (16 points, 6 coefficients), and their 8 rms would drop good
+  // points (40 of the noisy catalog plane's 50 000).
+  std::vector<double> judged;
+  for (double v : rms_of)
+    if (!std::isnan(v)) judged.push_back(v);
+  double noise = 0;
+  if (!judged.empty()) {
+    std::nth_element(judged.begin(), judged.begin() + judged.size() / 2, judged.end());
+    noise = judged[judged.size() / 2];
+  }
+  for (std::size_t i = 0; i < P.size(); ++i)
+    if (!std::isnan(dist_of[i]))
+      stray[i] = dist_of[i] > std::max(kStrayNoise * std::max(rms_of[i], noise),
+                                       kStraySpacing * std::sqrt(nb.sq_dist(i, nb.k - 1)));
   return stray;
 }
 

@@ -13,13 +13,15 @@ namespace scallop {
 
 // P   #P points (mm); nb  their k nearest neighbours (k >= 8, the point itself excluded).
 // Returns #P flags, 1 for a stray point: one farther from the quadric its neighbours sample than
-//   max(kStrayNoise × their rms residual from it, kStraySpacing × the distance to its k-th),
+//   max(kStrayNoise × their rms residual from it (at least the median over the cloud),
+//       kStraySpacing × the distance to its k-th),
 // the quadric fitted by least squares in the frame of their best-fit plane (the point itself left
 // out); or one isolated, its k-th neighbour more than kStrayIsolation times as far as the median
 // of its neighbours' own k-th (a point in the air beside the patch, whose neighbours' quadric
 // extrapolated may pass near it). A smooth patch's points lie on it to their noise; a crest or crease sampled on both sides
-// misfits it by a small part of the neighbourhood's radius (a 1 mm crest, 12 000 points on
-// 40 x 30 mm: under 0.05 mm, against 0.2 × 0.5 mm allowed); a stray point 0.3 mm off does not.
+// misfits it by a small part of the neighbourhood's radius, as its neighbours along it do (a
+// 1 mm crest, 12 000 points on 40 x 30 mm: under 0.05 mm, within 8 of their rms residuals); a
+// stray point 0.3 mm off does not, nor, on a clean cloud, one 0.1 mm off.
 // A burst of points all within a millimetre of one another samples a surface of its own: not
 // stray by this test.
 // off  optional: #P distances from that quadric (mm).
@@ -27,7 +29,7 @@ std::vector<std::uint8_t> stray_points(const std::vector<Eigen::Vector3d>& P, co
                                        std::vector<double>* off = nullptr);
 
 constexpr double kStrayNoise = 8;       // times the neighbours' rms residual
-constexpr double kStraySpacing = 0.2;   // times the distance to the k-th neighbour
+constexpr double kStraySpacing = 0.05;  // times the distance to the k-th neighbour
 constexpr double kStrayIsolation = 3;   // times the neighbours' median distance to their k-th
 
 }  // namespace scallop

@@ -30,14 +30,15 @@ std::vector<Eigen::Vector3d> patch(int n, double sigma, unsigned seed) {
   return P;
 }
 
-// Stray points added to a patch: 0.3 to 3 mm above and below it (on the crest too), and 12 in
+// Stray points added to a patch: 0.3 to 3 mm above and below it (on the crest too; on a clean
+// patch 0.1 mm too), and 12 in
 // the air 3 to 8 mm above it, some of them each other's nearest. (A burst of points all within a
 // millimetre of one another samples a surface of its own and stays.)
 struct Strays {
   std::vector<Eigen::Vector3d> P;
   std::size_t first_stray = 0;
 };
-Strays with_strays(std::vector<Eigen::Vector3d> P) {
+Strays with_strays(std::vector<Eigen::Vector3d> P, bool clean) {
   Strays s;
   s.first_stray = P.size();
   std::mt19937 rng(9);
@@ -46,6 +47,11 @@ Strays with_strays(std::vector<Eigen::Vector3d> P) {
     const double x = i < 8 ? 20 + 0.1 * (i - 4) : ux(rng), y = uy(rng);
     s.P.emplace_back();
     P.emplace_back(x, y, surface_z(x, y) + (i % 2 ? 1 : -1) * off(rng));
+  }
+  // on a clean cloud, 0.1 mm off is stray too
+  for (int i = 0; clean && i < 6; ++i) {
+    const double x = ux(rng), y = uy(rng);
+    P.emplace_back(x, y, surface_z(x, y) + (i % 2 ? 0.1 : -0.1));
   }
   for (int i = 0; i < 12; ++i) {
     const double x = i % 2 ? 10 + unit(rng) : ux(rng), y = i % 2 ? 10 + 2 * unit(rng) : uy(rng);
@@ -71,7 +77,7 @@ void expect_exactly_the_strays(const Strays& s, double sigma) {
 }
 
 TEST(StrayPoints, SpikesPitsAndABurstInTheAirGoTheCrestAndTheNoiseStay) {
-  for (double sigma : {0.0, 0.02}) expect_exactly_the_strays(with_strays(patch(12000, sigma, 3)), sigma);
+  for (double sigma : {0.0, 0.02}) expect_exactly_the_strays(with_strays(patch(12000, sigma, 3), sigma == 0), sigma);
 }
 
 // Without stray points nothing is flagged, and every point's distance from its neighbours' quadric
