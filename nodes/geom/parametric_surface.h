@@ -21,8 +21,8 @@ struct UVDomain {
 };
 
 struct SurfaceSample {
-  Eigen::Vector3d position;  // mm
-  Eigen::Vector3d normal;    // unit
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // mm
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();   // unit
   double uncertainty = 0;    // mm: how far the real surface may lie from position (0: exact)
 };
 

@@ -208,7 +208,9 @@ TEST(ContourGrid, ARidgeAndATroughStayWithinHTheTroughWithWiderSteps) {
     EXPECT_LE(measured_scallop(s, g, 3, 61), 0.02 * 1.01);
     EXPECT_LE(measured_chord(s, g, 3), 0.005 * 1.01);
     EXPECT_LE(measured_dip(s, g, 3), 0.00125 * 1.01);  // max(e / 4, 0.001)
-    if (shape > 0) EXPECT_GT(measured_dip(s, g, 3), 0.0005);  // the ridge's chords do dip
+    if (shape > 0) {
+      EXPECT_GT(measured_dip(s, g, 3), 0.0005);  // the ridge's chords do dip
+    }
     const auto& u = g.report["grid_lines"]["u_from_0"];
     first_u_step[shape] = u[1].get<double>() - u[0].get<double>();
   }

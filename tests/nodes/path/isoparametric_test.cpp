@@ -340,9 +340,10 @@ TEST(Isoparametric, AHoleIsCutOnlyInItsBandItsEdgeIsAndTheWholePatchStaysUnderTh
 
 // Zig-zag passes running past a hole on a curved patch: a strip whose places across it all lie
 // over the hole has no surface there to leave a scallop on, and is planned on the patch alone.
-// (The margins of the surface where the planner's interpolant and the cloud's height field part
-// over the hole had held such strips over the limit: a 50 000-point waves patch with an 8 mm
-// hole warned of 0.058 mm at the hole's middle and left 0.051 along the whole strip.)
+// (Its check had taken the margins of the surface at the first place across the strip, over
+// the hole, where the height field is extrapolated: here 25 of the strips were given up as over
+// the limit; a 50 000-point waves patch with an 8 mm hole warned of 0.058 mm at the hole's middle
+// and left 0.051 along the whole strip.)
 TEST(Isoparametric, AStripPastAHoleIsPlannedOnThePatchAlone) {
   auto z = [](double x, double y) { return 2 * std::sin(x / 5) * std::cos(y / 4); };
   auto g = [](double x, double y) {
