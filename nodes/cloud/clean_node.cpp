@@ -23,9 +23,9 @@ NodeDecl make_clean_node() {
               "outlier threshold in standard deviations above the mean distance")
       .flag("remove_stray", &CleanOptions::remove_stray,
             "drop stray points: those farther from the quadric their stray_k nearest sample than 8 times "
-            "its rms residual and 0.2 times their k-th distance (a scanner's spikes, flying pixels, "
-            "reflections: a point under the surface makes the cloud look layered, one above it is a spike "
-            "the guard lifts every ball over)")
+            "its rms residual (at least the cloud's median) and a twentieth of their k-th distance, or "
+            "isolated (a scanner's spikes, flying pixels, reflections: a point under the surface makes the "
+            "cloud look layered, one above it is a spike the guard lifts every ball over)")
       .integer("stray_k", &CleanOptions::stray_k, 8, 256, "", "neighbours whose quadric judges a point as stray")
       .flag("spatial_order", &CleanOptions::spatial_order,
             "put the points along a space-filling curve (Morton order), so that neighbours are near one "
