@@ -18,6 +18,13 @@ bool polygon_contains(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vec
   return in;
 }
 
+double twice_signed_area(const std::vector<Eigen::Vector2d>& polygon) {
+  double area2 = 0;
+  for (std::size_t k = 0, n = polygon.size(); k < n; ++k)
+    area2 += polygon[k].x() * polygon[(k + 1) % n].y() - polygon[(k + 1) % n].x() * polygon[k].y();
+  return area2;
+}
+
 struct Outline::EdgeIndex {
   std::vector<Eigen::Vector2d> at;  // points along the edges, at most a median edge apart
   std::vector<std::uint32_t> loop, edge;  // the loop and edge each lies on (polygon[k] to polygon[k + 1])
@@ -30,10 +37,8 @@ Outline::Outline(std::vector<std::vector<Eigen::Vector2d>> loops) {
     if (polygon.size() < 3) continue;
     Eigen::AlignedBox2d box;
     for (const auto& q : polygon) box.extend(q);
-    double area2 = 0;
-    for (std::size_t k = 0, n = polygon.size(); k < n; ++k)
-      area2 += polygon[k].x() * polygon[(k + 1) % n].y() - polygon[(k + 1) % n].x() * polygon[k].y();
-    loops_.push_back({std::move(polygon), box, area2 >= 0 ? 1.0 : -1.0, true});
+    const double orientation = twice_signed_area(polygon) >= 0 ? 1.0 : -1.0;
+    loops_.push_back({std::move(polygon), box, orientation, true});
   }
   if (loops_.empty()) return;
   // The patch lies inside a loop that an even number of the others contain (even-odd rule).

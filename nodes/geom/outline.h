@@ -13,6 +13,10 @@ namespace scallop {
 // True when q lies inside the closed polygon (even-odd rule; the closing edge is implied).
 bool polygon_contains(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& q);
 
+// Twice the signed area of a closed polygon (the shoelace sum; the closing edge is implied):
+// positive when it runs counter-clockwise.
+double twice_signed_area(const std::vector<Eigen::Vector2d>& polygon);
+
 class Outline {
  public:
   Outline() = default;

@@ -180,9 +180,8 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
   };
   auto in_band = [&](const Eigen::Vector2d& q) {
     if (impl_->outline) {
-      // on the patch, or off it (beyond the outer loop or in a hole) within the rim band
-      const double off = impl_->outline->beyond(q);
-      if (off == 0 || off <= impl_->rim_band) return true;
+      // on the patch (0), or off it (beyond the outer loop or in a hole) within the rim band
+      if (impl_->outline->beyond(q) <= std::max(impl_->rim_band, 0.0)) return true;
     }
     const double d2 = nearest_point_d2(q);
     return d2 <= sp * sp || (d2 <= 4 * sp * sp && impl_->surface.reach_beyond(q.x(), q.y()) <= 0.5 * sp);

@@ -375,14 +375,10 @@ class Planner {
     Pass P;
     P.closed = true;
     const std::size_t n = loop.size();
-    double area2 = 0;
-    for (std::size_t k = 0; k < n; ++k) {
-      const auto& a = cloud.points[loop[k]];
-      const auto& b = cloud.points[loop[(k + 1) % n]];
-      area2 += a.x() * b.y() - b.x() * a.y();
-    }
+    std::vector<Eigen::Vector2d> xy(n);
+    for (std::size_t k = 0; k < n; ++k) xy[k] = cloud.points[loop[k]].head<2>();
     // the right of a counter-clockwise loop is outside it: off the patch, but for a hole's loop
-    const double away = (area2 > 0 ? 1.0 : -1.0) * (hole ? -1.0 : 1.0);
+    const double away = (twice_signed_area(xy) > 0 ? 1.0 : -1.0) * (hole ? -1.0 : 1.0);
     for (std::size_t k = 0; k <= n; ++k) {
       const int i = loop[k % n];
       SurfaceSample x;
@@ -1075,6 +1071,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   // The holes: every loop after the outer one, as the polygon of its points' uv.
   std::vector<std::vector<Eigen::Vector2d>> hole_polygons, hole_polygons_xy;
   std::vector<const std::vector<int>*> hole_loops;
+  std::vector<std::vector<Eigen::Vector2d>> hole_xy;  // the usable hole loops' points in xy
   if (loops)
     for (std::size_t h = 1; h < loops->loops.size(); ++h) {
       std::vector<Eigen::Vector2d> poly, poly_xy;
@@ -1086,7 +1083,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
         poly.push_back(map.uv[i]);
         poly_xy.push_back(cloud.points[i].head<2>());
       }
-      if (poly.size() >= 3) hole_loops.push_back(&loops->loops[h]);
+      if (poly.size() >= 3) hole_loops.push_back(&loops->loops[h]), hole_xy.push_back(poly_xy);
       hole_polygons.push_back(std::move(poly));
       hole_polygons_xy.push_back(std::move(poly_xy));
     }
@@ -1261,13 +1258,7 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   }
   for (std::size_t h = 0; h < hole_loops.size() && o.outline && rim_band > 0; ++h) {
     const std::vector<int>* loop = hole_loops[h];
-    double area2 = 0;
-    for (std::size_t k = 0, n = loop->size(); k < n; ++k) {
-      const Eigen::Vector3d& a = cloud.points[(*loop)[k]];
-      const Eigen::Vector3d& b = cloud.points[(*loop)[(k + 1) % n]];
-      area2 += a.x() * b.y() - b.x() * a.y();
-    }
-    const double width = std::min(rim_band, 0.5 * std::sqrt(0.5 * std::abs(area2) / M_PI));
+    const double width = std::min(rim_band, 0.5 * std::sqrt(0.5 * std::abs(twice_signed_area(hole_xy[h])) / M_PI));
     const auto band_steps = static_cast<std::size_t>(std::ceil(width / band_step - 1e-9));
     for (std::size_t k = 1; k <= band_steps; ++k)
       band.push_back(planner.rim_pass(cloud, *loop, hole_uv[h], planned_uncertainty,
