@@ -144,6 +144,47 @@ std::vector<int> tour_of_tree(const std::vector<std::vector<std::pair<int, doubl
   return t;
 }
 
+// Pieces of the boundary joined by links no longer than a neighbourhood radius, each point's
+// piece (`id`) and what that piece is (`kind`): a closed loop when it has at least
+// min_loop_points points whose longest path (in the spanning tree of those links) runs at least
+// three long links (two radii) around and ends within one of where it starts; an open one when it
+// runs that far but does not close (a loop whose boundary points leave gaps wider than a radius);
+// none (a few stray points). A hole 2 mm from the outline of a 50 000-point plane (spacing 0.44
+// mm, radius 0.78) was joined to the outline by a long link of 1.3-1.6 mm.
+enum : char { kNoLoop, kOpenLoop, kClosedLoop };
+struct Pieces {
+  std::vector<int> id;
+  std::vector<char> kind;
+};
+Pieces pieces_by_short_links(const std::vector<Eigen::Vector3d>& X, const std::vector<double>& radius,
+                             const std::vector<Edge>& edges, int min_loop_points) {
+  const int nb = static_cast<int>(X.size());
+  UnionFind uf(nb);
+  std::vector<std::vector<std::pair<int, double>>> adj(nb);
+  for (const Edge& e : edges)
+    if (e.len <= std::max(radius[e.a], radius[e.b]) && uf.unite(e.a, e.b)) {
+      adj[e.a].push_back({e.b, e.len});
+      adj[e.b].push_back({e.a, e.len});
+    }
+  Pieces out{std::vector<int>(nb), std::vector<char>(nb, kNoLoop)};
+  std::vector<std::vector<int>> members(nb);
+  for (int i = 0; i < nb; ++i) members[out.id[i] = uf.find(i)].push_back(i);
+  std::vector<int> parent;
+  for (const auto& piece : members) {
+    if (static_cast<int>(piece.size()) < std::max(min_loop_points, 3)) continue;
+    double reach = 0;
+    for (int i : piece) reach = std::max(reach, 2 * radius[i]);
+    const int a = farthest(adj, piece[0], parent);
+    const int b = farthest(adj, a, parent);
+    double around = 0;
+    for (int v = b; parent[v] != -1; v = parent[v]) around += (X[v] - X[parent[v]]).norm();
+    if (around < 3 * reach) continue;
+    const char kind = (X[a] - X[b]).norm() <= reach ? kClosedLoop : kOpenLoop;
+    for (int i : piece) out.kind[i] = kind;
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<std::vector<int>> order_boundary_loops(const std::vector<Eigen::Vector3d>& P,
@@ -194,10 +235,18 @@ std::vector<std::vector<int>> order_boundary_loops(const std::vector<Eigen::Vect
   std::sort(edges.begin(), edges.end(), [](const Edge& a, const Edge& b) {
     return a.len != b.len ? a.len < b.len : std::tie(a.a, a.b) < std::tie(b.a, b.b);
   });
+  const Pieces pieces = pieces_by_short_links(X, radius, edges, min_loop_points);
   UnionFind uf(nb);
   std::vector<Edge> tree;
-  for (const Edge& e : edges)
+  for (const Edge& e : edges) {
+    // A long link from a loop that closes without long links to another loop's piece is a
+    // shortcut across the part (a hole near the outline), not a gap in one loop's points.
+    const char ka = pieces.kind[e.a], kb = pieces.kind[e.b];
+    if (e.len > std::max(radius[e.a], radius[e.b]) && pieces.id[e.a] != pieces.id[e.b] &&
+        std::max(ka, kb) == kClosedLoop && std::min(ka, kb) != kNoLoop)
+      continue;
     if (uf.unite(e.a, e.b)) tree.push_back(e);
+  }
 
   // Components, with local ids.
   std::vector<int> comp_of(nb, -1), local(nb, -1);

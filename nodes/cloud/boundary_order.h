@@ -2,7 +2,9 @@
 // (the paper, section 2.2, breaks the boundary by hand; we do not).
 //
 // Method: link every boundary point to its nearest boundary points (within twice the local
-// neighbourhood radius), take the minimum spanning forest of that graph, and for each tree:
+// neighbourhood radius), take the minimum spanning forest of that graph (where the links within
+// one radius already close a loop, its links longer than that to another loop's points are left
+// out: they cross the part, e.g. between a hole and the outline), and for each tree:
 // its longest path runs once around the loop (a tree of points sampled along a closed curve is
 // the curve cut open at one place); the points off that path (the boundary band is a few points
 // thick on a noisy cloud) are inserted next to their tree parent on the cheaper side, and a

@@ -15,6 +15,32 @@ namespace {
 
 const double kPi = std::numbers::pi;
 
+// The loops of a flat cloud (normals +z), its boundary points found as cloud.boundary finds them.
+std::vector<std::vector<int>> loops_of(const PointCloud& c, int k) {
+  auto nb = compute_knn(c.points, k);
+  return order_boundary_loops(c.points, c.normals, nb, detect_boundary(c.points, c.normals, nb, kPi / 2));
+}
+
+// n random points on the plate [0, 40] x [0, 30] at z = 0, those `keep` accepts.
+template <class Keep>
+PointCloud random_plate(std::size_t n, unsigned seed, Keep keep) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> ux(0, 40), uy(0, 30);
+  PointCloud c;
+  while (c.size() < n) {
+    const Eigen::Vector3d p(ux(rng), uy(rng), 0);
+    if (!keep(p)) continue;
+    c.points.push_back(p);
+    c.normals.push_back(Eigen::Vector3d::UnitZ());
+  }
+  return c;
+}
+
+// The signed area a loop of the plate encloses, seen from +z.
+double plate_area(const PointCloud& c, const std::vector<int>& loop) {
+  return projected_loop_area(c.points, loop, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ());
+}
+
 TEST(BoundaryOrder, NoisyCircleIsOneLoopInAngularOrder) {
   // 400 points on a circle of radius 10, unevenly spaced (angles random) and with 0.1 mm radial
   // noise, plus the inside; all boundary flags given.
@@ -68,6 +94,42 @@ TEST(BoundaryOrder, PatchWithAHoleGivesTwoLoopsOuterFirst) {
   // The hole's boundary points are the grid points just outside radius 4 (spacing 0.4).
   EXPECT_NEAR(hole, -kPi * 4.2 * 4.2, 0.1 * kPi * 16);  // clockwise
   for (int i : loops[1]) EXPECT_NEAR((c.points[i].head<2>() - Eigen::Vector2d(12, 10)).norm(), 4.2, 0.6);
+}
+
+TEST(BoundaryOrder, AHoleNearTheOutlineIsALoopOfItsOwn) {
+  // A scan's random points (8 a mm^2, as 50 000 on the catalog's plane) on a 40 x 30 plate with
+  // a round hole of radius 4 whose edge is 2 mm from the plate's: the rims' boundary points are
+  // closer across the bridge than two neighbourhood radii, and a link across it had made the
+  // two loops one.
+  const Eigen::Vector2d centre(34, 15);
+  const PointCloud c = random_plate(9600, 56, [&](const Eigen::Vector3d& p) { return (p.head<2>() - centre).norm() > 4; });
+  auto loops = loops_of(c, 16);
+  ASSERT_EQ(loops.size(), 2u);
+  EXPECT_NEAR(plate_area(c, loops[0]), 1200, 60);
+  EXPECT_NEAR(plate_area(c, loops[1]), -kPi * 16, 0.15 * kPi * 16);
+  for (int i : loops[1]) {  // the rim's band of boundary points
+    EXPECT_GT((c.points[i].head<2>() - centre).norm(), 4.0);
+    EXPECT_LT((c.points[i].head<2>() - centre).norm(), 5.0);
+  }
+  // and the outline goes round the bridge, not into the hole
+  for (int i : loops[0]) EXPECT_GT((c.points[i].head<2>() - centre).norm(), 5.0);
+}
+
+TEST(BoundaryOrder, AGapInTheOutlinesBoundaryPointsIsStillBridged) {
+  // The same plate without the hole, its boundary points missing along 1.6 mm of two opposite
+  // sides (wider than a neighbourhood radius): the outline's two pieces, which do not close by
+  // themselves, are joined across the gaps.
+  const PointCloud c = random_plate(9600, 57, [](const Eigen::Vector3d&) { return true; });
+  auto nb = compute_knn(c.points, 16);
+  auto b = detect_boundary(c.points, c.normals, nb, kPi / 2);
+  int cleared = 0;
+  for (std::size_t i = 0; i < c.size(); ++i)
+    if (b[i] && c.points[i].x() > 20 && c.points[i].x() < 21.6 && std::abs(c.points[i].y() - 15) > 13)
+      b[i] = 0, ++cleared;
+  ASSERT_GE(cleared, 4);
+  auto loops = order_boundary_loops(c.points, c.normals, nb, b);
+  ASSERT_EQ(loops.size(), 1u);
+  EXPECT_NEAR(plate_area(c, loops[0]), 1200, 60);
 }
 
 TEST(BoundaryOrder, NonConvexOutline) {
