@@ -89,28 +89,91 @@ std::vector<int> tour_of_tree(const std::vector<std::vector<std::pair<int, doubl
     prev[path[(i + 1) % path.size()]] = path[i];
   }
   // Off-path nodes, breadth first from the path, each next to its tree parent on the cheaper side.
-  std::deque<int> queue(path.begin(), path.end());
-  std::vector<char> placed(n, 0);
-  for (int v : path) placed[v] = 1;
+  std::vector<char> seen(n, 0);
+  for (int v : path) seen[v] = 1;
   int count = static_cast<int>(path.size());
-  while (!queue.empty()) {
-    int p = queue.front();
-    queue.pop_front();
-    for (auto [x, w] : adj[p]) {
-      if (placed[x]) continue;
-      placed[x] = 1;
-      int nx = next[p], pv = prev[p];
-      double after = d(p, x) + d(x, nx) - d(p, nx);
-      double before = d(pv, x) + d(x, p) - d(pv, p);
-      if (std::min(after, before) > max_detour[x]) continue;  // a spur: leave it (and its subtree) out
-      ++count;
-      if (after <= before) {
-        next[p] = x, prev[x] = p, next[x] = nx, prev[nx] = x;
-      } else {
-        next[pv] = x, prev[x] = pv, next[x] = p, prev[p] = x;
+  std::vector<int> left_out;  // the first node of each subtree left out
+  auto insert_from = [&](std::deque<int> queue) {
+    while (!queue.empty()) {
+      int p = queue.front();
+      queue.pop_front();
+      for (auto [x, w] : adj[p]) {
+        if (seen[x]) continue;
+        seen[x] = 1;
+        int nx = next[p], pv = prev[p];
+        double after = d(p, x) + d(x, nx) - d(p, nx);
+        double before = d(pv, x) + d(x, p) - d(pv, p);
+        if (std::min(after, before) > max_detour[x]) {  // a spur: leave it (and its subtree) out
+          left_out.push_back(x);
+          continue;
+        }
+        ++count;
+        if (after <= before) {
+          next[p] = x, prev[x] = p, next[x] = nx, prev[nx] = x;
+        } else {
+          next[pv] = x, prev[x] = pv, next[x] = p, prev[p] = x;
+        }
+        queue.push_back(x);
       }
-      queue.push_back(x);
     }
+  };
+  insert_from(std::deque<int>(path.begin(), path.end()));
+  // A subtree left out may be a stretch of the loop itself, not a spur: where the loop's points
+  // leave two gaps, its tree is cut open twice and a stretch hangs off the longest path by one
+  // end (on a scanned bunny, 117 points along its back hung at the ear's base, and the loop
+  // took a 62 mm shortcut across the part). Such a stretch, at least three long links (two
+  // radii) long, goes into the tour along its own longest path where that costs least, when
+  // joining its two ends there adds at most one long link.
+  for (std::size_t k = 0; k < left_out.size(); ++k) {
+    std::vector<int> piece{left_out[k]};  // the subtree: off the tour, through unseen nodes
+    std::vector<char> in_piece(n, 0);
+    in_piece[left_out[k]] = 1;
+    for (std::size_t i = 0; i < piece.size(); ++i)
+      for (auto [y, w] : adj[piece[i]])
+        if (!in_piece[y] && !seen[y]) in_piece[y] = 1, piece.push_back(y);
+    auto farthest_in_piece = [&](int src, std::vector<int>& up, double& length) {
+      std::vector<double> dist(n, -1);
+      std::vector<int> stack{src};
+      dist[src] = 0, up.assign(n, -1);
+      int best = src;
+      while (!stack.empty()) {
+        const int u = stack.back();
+        stack.pop_back();
+        if (dist[u] > dist[best]) best = u;
+        for (auto [y, w] : adj[u])
+          if (in_piece[y] && dist[y] < 0) dist[y] = dist[u] + w, up[y] = u, stack.push_back(y);
+      }
+      length = dist[best];
+      return best;
+    };
+    std::vector<int> up;
+    double length;
+    const int e1 = farthest_in_piece(left_out[k], up, length);
+    const int e2 = farthest_in_piece(e1, up, length);
+    const double reach = 2 * std::max(max_detour[e1], max_detour[e2]);
+    if (length < 3 * reach) continue;
+    double best = INFINITY;
+    int at = -1;
+    bool reversed = false;
+    for (int u = 0; u < n; ++u) {
+      if (next[u] < 0) continue;
+      const int v = next[u];
+      const double forward = d(u, e2) + d(e1, v) - d(u, v), backward = d(u, e1) + d(e2, v) - d(u, v);
+      if (std::min(forward, backward) < best) best = std::min(forward, backward), at = u, reversed = backward < forward;
+    }
+    if (at < 0 || best > reach) continue;
+    // the stretch e2 ... e1 (up leads from e2 back to e1), spliced in between at and next[at]
+    std::vector<int> stretch;
+    for (int v = e2; v != -1; v = up[v]) stretch.push_back(v);
+    if (reversed) std::reverse(stretch.begin(), stretch.end());
+    int p = at;
+    const int end = next[at];
+    for (int v : stretch) next[p] = v, prev[v] = p, p = v, seen[v] = 1, ++count;
+    next[p] = end, prev[end] = p;
+    // the rest of the subtree as before, from the stretch (its nodes are still unseen)
+    for (int v : piece)
+      if (next[v] < 0) seen[v] = 0;
+    insert_from(std::deque<int>(stretch.begin(), stretch.end()));
   }
   std::vector<int> t;
   t.reserve(count);

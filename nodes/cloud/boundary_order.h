@@ -10,7 +10,10 @@
 // thick on a noisy cloud) are inserted next to their tree parent on the cheaper side, and a
 // windowed 2-opt removes the remaining local zig-zags. Off-path points that would lengthen the
 // loop by more than their neighbourhood radius (spurs towards false boundary points inside the
-// patch) stay off the loop but keep their boundary flag. Nothing assumes a convex or star-shaped
+// patch) stay off the loop but keep their boundary flag; a subtree left out that is itself a
+// stretch of the loop (three long links or more, hanging off the longest path where the loop's
+// points leave gaps) goes into the loop whole, along its own longest path, where joining its ends
+// costs least. Nothing assumes a convex or star-shaped
 // outline, nor uniform spacing. Hole loops enclosing less than pi (2 r)^2, r the mean
 // neighbourhood radius of their points, are sampling voids and are dropped.
 #pragma once

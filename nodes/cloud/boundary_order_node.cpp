@@ -10,7 +10,7 @@ namespace scallop::cloud_nodes {
 NodeDecl make_boundary_order_node() {
   NodeDecl d;
   d.type = "cloud.boundary_order";
-  d.version = 2;  // 2: a loop that closes by short links is not joined to another loop by a long one (a hole near the outline, stop 91)
+  d.version = 2;  // 2: a loop that closes by short links is not joined to another loop by a long one (a hole near the outline), and a stretch of loop hanging off the tree goes into the tour whole (stop 91)
   d.description = "order boundary points into closed loops, outer loop first (MST longest path + 2-opt)";
   d.input("cloud", "Cloud", "the points (normals, when present, orient the loops)")
       .input("neighbors", "Neighbors", "k nearest neighbours of each point")

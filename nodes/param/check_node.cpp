@@ -13,7 +13,7 @@ namespace scallop::param_nodes {
 NodeDecl make_map_check_node() {
   NodeDecl d;
   d.type = "param.check";
-  d.version = 2;  // 2: a few fold-overs are untangled locally
+  d.version = 3;  // 3: the untangling keeps its best round, never a map worse than it was given (stop 91); 2: a few fold-overs are untangled locally
   d.description =
       "diagnostics of a (u,v) map: angle distortion and fold-overs; a few fold-overs are "
       "untangled locally, more are an error unless allowed";

@@ -24,7 +24,8 @@ namespace scallop {
 struct UntangleResult {
   std::vector<Eigen::Vector2d> uv;  // #P, the untangled map (the input where nothing folded)
   std::size_t folded_before = 0;    // fold-overs found by check_map on the input
-  std::size_t folded_after = 0;     // fold-overs left (0 on success)
+  std::size_t folded_after = 0;     // fold-overs left (0 on success): the fewest any round left,
+                                    // whose map is uv (the input's when none did better)
   std::size_t moved = 0;            // points whose (u,v) changed
   int rounds = 0;                   // rounds used
 };

@@ -33,7 +33,9 @@ TEST(Smooth, NoisyPlaneGetsFlatterAlongNormalsOnly) {
   for (std::size_t i = 0; i < c.size(); ++i) {
     EXPECT_EQ(out[i].x(), c.points[i].x());  // normals are +Z: x, y never move
     EXPECT_EQ(out[i].y(), c.points[i].y());
-    if (b[i]) EXPECT_EQ(out[i].z(), c.points[i].z());
+    if (b[i]) {
+      EXPECT_EQ(out[i].z(), c.points[i].z());
+    }
   }
 }
 
