@@ -248,6 +248,54 @@ Pieces pieces_by_short_links(const std::vector<Eigen::Vector3d>& X, const std::v
   return out;
 }
 
+// A stretch of a loop cut off from the rest by gaps wider than two radii at both its ends is a
+// tree of its own, whose tour runs along it and back: it encloses nearly nothing and was dropped
+// as a sampling void, and the loop cut across the part between the gaps. Such a piece (under its
+// min_area, its tree's longest path ending at least three long links from where it starts, where
+// a void's closes within one) is spliced, along that path, into the loop where joining its two
+// ends costs least, when that adds at most one long link and the loop then encloses more; its
+// own loop is then left empty.
+// B: the boundary points' indices into P, radius: their neighbourhood radii; stretches: per loop,
+// its tree's longest path (indices into P) or nothing; loops, areas and min_area as
+// order_boundary_loops builds them (each loop counter-clockwise).
+void splice_cut_off_stretches(const std::vector<Eigen::Vector3d>& P, const std::vector<int>& B,
+                              const std::vector<double>& radius, const std::vector<std::vector<int>>& stretches,
+                              std::vector<std::vector<int>>& loops, std::vector<double>& areas,
+                              const std::vector<double>& min_area, const Eigen::Vector3d& c0, const Eigen::Vector3d& n0) {
+  std::vector<double> radius_of(P.size(), 0);
+  for (std::size_t i = 0; i < B.size(); ++i) radius_of[B[i]] = radius[i];
+  auto d = [&](int a, int b) { return (P[a] - P[b]).norm(); };
+  for (std::size_t k = 0; k < loops.size(); ++k) {
+    std::vector<int> stretch = stretches[k];
+    if (stretch.size() < 2) continue;
+    const int first = stretch.front(), last = stretch.back();
+    const double reach = 2 * std::max(radius_of[first], radius_of[last]);
+    if (d(first, last) < 3 * reach) continue;
+    double best = INFINITY;
+    std::size_t into = 0, after = 0;
+    bool reversed = false;
+    for (std::size_t m = 0; m < loops.size(); ++m) {
+      if (m == k || loops[m].empty() || areas[m] < min_area[m]) continue;
+      const std::vector<int>& L = loops[m];
+      for (std::size_t j = 0; j < L.size(); ++j) {
+        const int u = L[j], v = L[(j + 1) % L.size()];
+        const double forward = d(u, first) + d(last, v) - d(u, v), backward = d(u, last) + d(first, v) - d(u, v);
+        if (std::min(forward, backward) < best) best = std::min(forward, backward), into = m, after = j, reversed = backward < forward;
+      }
+    }
+    if (best > reach) continue;
+    if (reversed) std::reverse(stretch.begin(), stretch.end());
+    std::vector<int> joined = loops[into];
+    joined.insert(joined.begin() + after + 1, stretch.begin(), stretch.end());
+    const double area = projected_loop_area(P, joined, c0, n0);
+    if (!(area > areas[into])) continue;  // it was cut across: joined, the loop encloses more
+    loops[into].swap(joined);
+    areas[into] = area;
+    loops[k].clear();
+    areas[k] = 0;
+  }
+}
+
 }  // namespace
 
 std::vector<std::vector<int>> order_boundary_loops(const std::vector<Eigen::Vector3d>& P,
@@ -335,6 +383,7 @@ std::vector<std::vector<int>> order_boundary_loops(const std::vector<Eigen::Vect
   best_fit_plane(P, N, c0, n0);
   std::vector<std::vector<int>> loops;
   std::vector<double> areas, min_area;
+  std::vector<std::vector<int>> stretches;  // per loop: its tree's longest path, where it encloses nearly nothing
   for (std::size_t c = 0; c < comps.size(); ++c) {
     if (static_cast<int>(comps[c].size()) < std::max(min_loop_points, 3)) continue;
     std::vector<Eigen::Vector3d> Xc(comps[c].size());
@@ -355,7 +404,16 @@ std::vector<std::vector<int>> order_boundary_loops(const std::vector<Eigen::Vect
     loops.push_back(std::move(loop));
     areas.push_back(a);
     min_area.push_back(std::numbers::pi * 4 * mean_radius * mean_radius);
+    // a piece enclosing nearly nothing may be a stretch of a loop, cut off by gaps at both ends
+    std::vector<int> path;
+    if (a < min_area.back()) {
+      std::vector<int> parent;
+      const int far = farthest(adj[c], farthest(adj[c], 0, parent), parent);
+      for (int v = far; v != -1; v = parent[v]) path.push_back(B[comps[c][v]]);
+    }
+    stretches.push_back(std::move(path));
   }
+  splice_cut_off_stretches(P, B, radius, stretches, loops, areas, min_area, c0, n0);
   if (loops.empty())
     throw std::invalid_argument("no boundary loop found: the " + std::to_string(nb) +
                                 " boundary points form only pieces of fewer than min_loop_points = " +
@@ -367,7 +425,7 @@ std::vector<std::vector<int>> order_boundary_loops(const std::vector<Eigen::Vect
   std::vector<std::vector<int>> out;
   for (std::size_t j = 0; j < order.size(); ++j) {
     // A "hole" narrower than two neighbourhood radii is a sampling void, not a feature of the part.
-    if (j > 0 && areas[order[j]] < min_area[order[j]]) continue;
+    if (loops[order[j]].empty() || (j > 0 && areas[order[j]] < min_area[order[j]])) continue;
     out.push_back(std::move(loops[order[j]]));
     if (j > 0) std::reverse(out.back().begin(), out.back().end());
   }

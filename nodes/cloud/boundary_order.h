@@ -13,7 +13,8 @@
 // patch) stay off the loop but keep their boundary flag; a subtree left out that is itself a
 // stretch of the loop (three long links or more, hanging off the longest path where the loop's
 // points leave gaps) goes into the loop whole, along its own longest path, where joining its ends
-// costs least. Nothing assumes a convex or star-shaped
+// costs least, and so does a tree of its own that encloses nearly nothing but runs three long
+// links from end to end (a stretch cut off by gaps at both ends). Nothing assumes a convex or star-shaped
 // outline, nor uniform spacing. Hole loops enclosing less than pi (2 r)^2, r the mean
 // neighbourhood radius of their points, are sampling voids and are dropped.
 #pragma once
