@@ -48,8 +48,12 @@ struct Edge {
   double len;
 };
 
-// Farthest node from `src` in a tree (weighted), with parents for the path back.
-int farthest(const std::vector<std::vector<std::pair<int, double>>>& adj, int src, std::vector<int>& parent) {
+using TreeAdjacency = std::vector<std::vector<std::pair<int, double>>>;
+
+// Farthest node from `src` in a tree (weighted), with parents for the path back and its distance
+// in `length`; only through the nodes `in` marks when it is given.
+int farthest(const TreeAdjacency& adj, int src, std::vector<int>& parent, double& length,
+             const std::vector<char>* in = nullptr) {
   std::vector<double> dist(adj.size(), -1);
   parent.assign(adj.size(), -1);
   std::vector<int> stack{src};
@@ -60,30 +64,39 @@ int farthest(const std::vector<std::vector<std::pair<int, double>>>& adj, int sr
     stack.pop_back();
     if (dist[u] > dist[best]) best = u;
     for (auto [v, w] : adj[u])
-      if (dist[v] < 0) {
+      if (dist[v] < 0 && (!in || (*in)[v])) {
         dist[v] = dist[u] + w;
         parent[v] = u;
         stack.push_back(v);
       }
   }
+  length = dist[best];
   return best;
+}
+
+// The longest path of the tree holding `src` (of the nodes `in` marks, when given), from one
+// end to the other (the ends found by two sweeps), and its length.
+std::vector<int> longest_path(const TreeAdjacency& adj, int src, double& length,
+                              const std::vector<char>* in = nullptr) {
+  std::vector<int> parent;
+  const int b = farthest(adj, farthest(adj, src, parent, length, in), parent, length, in);
+  std::vector<int> path;
+  for (int v = b; v != -1; v = parent[v]) path.push_back(v);
+  return path;
 }
 
 // One closed tour through all nodes of a tree (local ids 0..n-1, positions X).
 // max_detour[v]: an off-path node joins the tour only if that lengthens it by at most this much
 // (a few points deep in a noisy boundary band do; spurs towards false boundary points inside the
 // patch, e.g. at sampling voids, do not, and stay off the loop together with their subtrees).
-std::vector<int> tour_of_tree(const std::vector<std::vector<std::pair<int, double>>>& adj,
-                              const std::vector<Eigen::Vector3d>& X, const std::vector<double>& max_detour) {
+std::vector<int> tour_of_tree(const TreeAdjacency& adj, const std::vector<Eigen::Vector3d>& X,
+                              const std::vector<double>& max_detour) {
   int n = static_cast<int>(adj.size());
   auto d = [&](int a, int b) { return (X[a] - X[b]).norm(); };
-  std::vector<int> parent;
-  int a = farthest(adj, 0, parent);
-  int b = farthest(adj, a, parent);
-  // The longest path a..b, as a circular doubly linked list closed by b -> a.
+  // The longest path, as a circular doubly linked list closed from its last node to its first.
+  double length;
+  const std::vector<int> path = longest_path(adj, 0, length);
   std::vector<int> next(n, -1), prev(n, -1);
-  std::vector<int> path;
-  for (int v = b; v != -1; v = parent[v]) path.push_back(v);
   for (std::size_t i = 0; i < path.size(); ++i) {
     next[path[i]] = path[(i + 1) % path.size()];
     prev[path[(i + 1) % path.size()]] = path[i];
@@ -124,32 +137,20 @@ std::vector<int> tour_of_tree(const std::vector<std::vector<std::pair<int, doubl
   // took a 62 mm shortcut across the part). Such a stretch, at least three long links (two
   // radii) long, goes into the tour along its own longest path where that costs least, when
   // joining its two ends there adds at most one long link.
+  std::vector<char> in_piece(n, 0);
   for (std::size_t k = 0; k < left_out.size(); ++k) {
     std::vector<int> piece{left_out[k]};  // the subtree: off the tour, through unseen nodes
-    std::vector<char> in_piece(n, 0);
     in_piece[left_out[k]] = 1;
     for (std::size_t i = 0; i < piece.size(); ++i)
       for (auto [y, w] : adj[piece[i]])
         if (!in_piece[y] && !seen[y]) in_piece[y] = 1, piece.push_back(y);
-    auto farthest_in_piece = [&](int src, std::vector<int>& up, double& length) {
-      std::vector<double> dist(n, -1);
-      std::vector<int> stack{src};
-      dist[src] = 0, up.assign(n, -1);
-      int best = src;
-      while (!stack.empty()) {
-        const int u = stack.back();
-        stack.pop_back();
-        if (dist[u] > dist[best]) best = u;
-        for (auto [y, w] : adj[u])
-          if (in_piece[y] && dist[y] < 0) dist[y] = dist[u] + w, up[y] = u, stack.push_back(y);
-      }
-      length = dist[best];
-      return best;
-    };
-    std::vector<int> up;
-    double length;
-    const int e1 = farthest_in_piece(left_out[k], up, length);
-    const int e2 = farthest_in_piece(e1, up, length);
+    // (three long links take four points at least: a spur of a few is passed over at once)
+    double length = 0;
+    std::vector<int> stretch;
+    if (piece.size() >= 4) stretch = longest_path(adj, left_out[k], length, &in_piece);
+    for (int v : piece) in_piece[v] = 0;
+    if (stretch.empty()) continue;
+    const int e1 = stretch.back(), e2 = stretch.front();
     const double reach = 2 * std::max(max_detour[e1], max_detour[e2]);
     if (length < 3 * reach) continue;
     double best = INFINITY;
@@ -162,9 +163,7 @@ std::vector<int> tour_of_tree(const std::vector<std::vector<std::pair<int, doubl
       if (std::min(forward, backward) < best) best = std::min(forward, backward), at = u, reversed = backward < forward;
     }
     if (at < 0 || best > reach) continue;
-    // the stretch e2 ... e1 (up leads from e2 back to e1), spliced in between at and next[at]
-    std::vector<int> stretch;
-    for (int v = e2; v != -1; v = up[v]) stretch.push_back(v);
+    // the stretch e2 ... e1, spliced in between at and next[at]
     if (reversed) std::reverse(stretch.begin(), stretch.end());
     int p = at;
     const int end = next[at];
@@ -223,7 +222,7 @@ Pieces pieces_by_short_links(const std::vector<Eigen::Vector3d>& X, const std::v
                              const std::vector<Edge>& edges, int min_loop_points) {
   const int nb = static_cast<int>(X.size());
   UnionFind uf(nb);
-  std::vector<std::vector<std::pair<int, double>>> adj(nb);
+  TreeAdjacency adj(nb);
   for (const Edge& e : edges)
     if (e.len <= std::max(radius[e.a], radius[e.b]) && uf.unite(e.a, e.b)) {
       adj[e.a].push_back({e.b, e.len});
@@ -232,17 +231,14 @@ Pieces pieces_by_short_links(const std::vector<Eigen::Vector3d>& X, const std::v
   Pieces out{std::vector<int>(nb), std::vector<char>(nb, kNoLoop)};
   std::vector<std::vector<int>> members(nb);
   for (int i = 0; i < nb; ++i) members[out.id[i] = uf.find(i)].push_back(i);
-  std::vector<int> parent;
   for (const auto& piece : members) {
     if (static_cast<int>(piece.size()) < std::max(min_loop_points, 3)) continue;
     double reach = 0;
     for (int i : piece) reach = std::max(reach, 2 * radius[i]);
-    const int a = farthest(adj, piece[0], parent);
-    const int b = farthest(adj, a, parent);
-    double around = 0;
-    for (int v = b; parent[v] != -1; v = parent[v]) around += (X[v] - X[parent[v]]).norm();
+    double around;
+    const std::vector<int> path = longest_path(adj, piece[0], around);
     if (around < 3 * reach) continue;
-    const char kind = (X[a] - X[b]).norm() <= reach ? kClosedLoop : kOpenLoop;
+    const char kind = (X[path.front()] - X[path.back()]).norm() <= reach ? kClosedLoop : kOpenLoop;
     for (int i : piece) out.kind[i] = kind;
   }
   return out;
@@ -262,6 +258,7 @@ void splice_cut_off_stretches(const std::vector<Eigen::Vector3d>& P, const std::
                               const std::vector<double>& radius, const std::vector<std::vector<int>>& stretches,
                               std::vector<std::vector<int>>& loops, std::vector<double>& areas,
                               const std::vector<double>& min_area, const Eigen::Vector3d& c0, const Eigen::Vector3d& n0) {
+  if (std::all_of(stretches.begin(), stretches.end(), [](const auto& s) { return s.size() < 2; })) return;
   std::vector<double> radius_of(P.size(), 0);
   for (std::size_t i = 0; i < B.size(); ++i) radius_of[B[i]] = radius[i];
   auto d = [&](int a, int b) { return (P[a] - P[b]).norm(); };
@@ -371,7 +368,7 @@ std::vector<std::vector<int>> order_boundary_loops(const std::vector<Eigen::Vect
     local[i] = static_cast<int>(comps[comp_of[r]].size());
     comps[comp_of[r]].push_back(i);
   }
-  std::vector<std::vector<std::vector<std::pair<int, double>>>> adj(comps.size());
+  std::vector<TreeAdjacency> adj(comps.size());
   for (std::size_t c = 0; c < comps.size(); ++c) adj[c].resize(comps[c].size());
   for (const Edge& e : tree) {
     int c = comp_of[uf.find(e.a)];
@@ -407,9 +404,8 @@ std::vector<std::vector<int>> order_boundary_loops(const std::vector<Eigen::Vect
     // a piece enclosing nearly nothing may be a stretch of a loop, cut off by gaps at both ends
     std::vector<int> path;
     if (a < min_area.back()) {
-      std::vector<int> parent;
-      const int far = farthest(adj[c], farthest(adj[c], 0, parent), parent);
-      for (int v = far; v != -1; v = parent[v]) path.push_back(B[comps[c][v]]);
+      double length;
+      for (int v : longest_path(adj[c], 0, length)) path.push_back(B[comps[c][v]]);
     }
     stretches.push_back(std::move(path));
   }
