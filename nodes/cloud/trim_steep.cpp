@@ -16,16 +16,21 @@ namespace scallop {
 namespace {
 
 // Components of the symmetric k-nearest-neighbour graph restricted to the points with mask[i].
+// With `through_masked_only`, a point is joined only to its neighbours nearer than its nearest
+// unmasked one: two pieces with unmasked points between them stay apart (a row of gentle points
+// that the trim left beyond a steep band is not joined over the band to the surface behind it).
 // Returns the label of every masked point (-1 elsewhere), numbered in order of each component's
 // smallest index. Joined in a union-find rather than walked over adjacency lists: a million
 // points' lists cost more in allocation than the whole walk.
-std::vector<int> masked_components(const Neighborhoods& nbrs, const std::vector<char>& mask, int& count) {
+std::vector<int> masked_components(const Neighborhoods& nbrs, const std::vector<char>& mask, int& count,
+                                   bool through_masked_only = false) {
   const std::size_t n = nbrs.size();
   UnionFind sets(n);
   for (std::size_t i = 0; i < n; ++i) {
     if (!mask[i]) continue;
     for (int j = 0; j < nbrs.k; ++j) {
       const int o = nbrs.index(i, j);
+      if (o >= 0 && !mask[o] && through_masked_only) break;
       if (o >= 0 && mask[o]) sets.join(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(o));
     }
   }
@@ -68,7 +73,7 @@ TrimSteepResult trim_steep(const std::vector<Eigen::Vector3d>& P, const TrimStee
   }
   // The largest gentle piece is kept.
   int count = 0;
-  const std::vector<int> piece = masked_components(nbrs, gentle, count);
+  const std::vector<int> piece = masked_components(nbrs, gentle, count, /*through_masked_only=*/true);
   std::vector<std::size_t> size(count, 0);
   for (std::size_t i = 0; i < n; ++i)
     if (piece[i] >= 0) ++size[piece[i]];

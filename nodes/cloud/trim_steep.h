@@ -48,8 +48,10 @@ struct TrimSteepResult {
 // P  #P by 3 positions (mm), finite, #P > k.
 // Each point's slope is acos |n_z| of its PCA normal over its k nearest neighbours; its area is
 // pi d_k^2 / (k + 1), d_k the distance to its k-th neighbour (the disc its neighbourhood covers,
-// shared by its k + 1 points). Kept: the largest connected component (symmetric k-nearest-
-// neighbour graph) of the points not steeper than max_slope_deg.
+// shared by its k + 1 points). Kept: the largest connected component of the points not steeper
+// than max_slope_deg (gentle), a gentle point joined to the gentle ones among its k nearest
+// neighbours that are nearer than its nearest steep one (and symmetrically): gentle points beyond
+// a steep band are not joined across it (noise near the limit, a row a scan left past a steep rim).
 // Throws std::invalid_argument for bad options, too few points or degenerate neighbourhoods.
 TrimSteepResult trim_steep(const std::vector<Eigen::Vector3d>& P, const TrimSteepOptions& options);
 

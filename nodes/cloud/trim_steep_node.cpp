@@ -18,7 +18,7 @@ namespace {
 NodeDecl make_trim_steep_node() {
   NodeDecl d;
   d.type = "cloud.trim_steep";
-  d.version = 3;  // 2: the kept cloud's k nearest neighbours as an output; 3: a piece apart is said so (the cached warning)
+  d.version = 4;  // 2: the kept cloud's k nearest neighbours as an output; 3: a piece apart is said so (the cached warning); 4: a gentle point joins only gentle neighbours nearer than its first steep one
   d.description =
       "trims a patch's steep rim (points steeper than max_slope, and what that cuts off) so the "
       "rest can be planned and certified; the trimmed band is reported as not machined";
