@@ -11,8 +11,9 @@ std::string part_narrower_than_ball(const std::vector<Eigen::Vector3d>& P, doubl
   for (const auto& p : P) lo = lo.cwiseMin(p.head<2>()), hi = hi.cwiseMax(p.head<2>());
   const double width = (hi - lo).maxCoeff(), ball = 2 * tool_radius;
   if (width >= ball) return "";
-  // Under 1 mm wide (as io.read_cloud warns) and a part the ball fits were it in metres.
-  const bool metres = width < 1 && width * 1000 >= ball;
+  // A part the ball fits were it in metres, and no wider then than a part a machine takes (10 m):
+  // a room scanned in metres is 3 mm wide read as mm.
+  const bool metres = width * 1000 >= ball && width <= 10;
   char buf[320];
   std::snprintf(buf, sizeof buf, "the part is %.3g mm wide, smaller than the %.3g mm ball (tool_radius %.3g mm): %s",
                 width, ball, tool_radius,

@@ -17,8 +17,8 @@ namespace scallop {
 //   "the part is 0.1 mm wide, smaller than the 8 mm ball (tool_radius 4 mm): is the cloud in
 //    metres? set the reader's scale to 1000 (--set read.scale=1000 with the shipped graphs), or
 //    use a smaller tool"
-// (the suggestion of a scale only for a part under 1 mm wide that, 1000 times larger, would be as
-// wide as the ball).
+// (the suggestion of a scale only for a part that, 1000 times larger, would be at least as wide
+// as the ball and at most 10 m wide).
 std::string part_narrower_than_ball(const std::vector<Eigen::Vector3d>& P, double tool_radius);
 
 }  // namespace scallop

@@ -19,7 +19,11 @@ TEST(PartFitsTool, APartNarrowerThanTheBallIsRefusedAndAScaleSuggestedWhenItIsMe
   EXPECT_EQ(part_narrower_than_ball(square(0.1), 4),
             "the part is 0.1 mm wide, smaller than the 8 mm ball (tool_radius 4 mm): is the cloud in metres? set "
             "the reader's scale to 1000 (--set read.scale=1000 with the shipped graphs), or use a smaller tool");
-  // in mm, only too small for this ball; and too small even in metres
+  // a Kinect scene in metres (cturtle.pcd, 2.84 m wide) was told only to use a smaller tool
+  EXPECT_EQ(part_narrower_than_ball(square(2.84), 4),
+            "the part is 2.84 mm wide, smaller than the 8 mm ball (tool_radius 4 mm): is the cloud in metres? set "
+            "the reader's scale to 1000 (--set read.scale=1000 with the shipped graphs), or use a smaller tool");
+  // in mm, only too small for this ball (20 m in metres); and too small even in metres
   EXPECT_EQ(part_narrower_than_ball(square(20), 15),
             "the part is 20 mm wide, smaller than the 30 mm ball (tool_radius 15 mm): use a smaller tool");
   EXPECT_EQ(part_narrower_than_ball(square(0.001), 4),
