@@ -11,6 +11,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -150,6 +151,7 @@ BallClearance::~BallClearance() { delete impl_; }
 
 double BallClearance::spacing() const { return impl_->surface.spacing(); }
 const std::vector<Eigen::Vector3d>& BallClearance::points() const { return impl_->points; }
+const Outline* BallClearance::outline() const { return impl_->outline; }
 const KdTree<Eigen::Vector3d, 2>& BallClearance::xy_tree() const { return impl_->tree; }
 
 BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const Eigen::Vector3d& hint) const {
@@ -543,11 +545,23 @@ GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearan
   // (e.g. where the (u,v) map folds over): the path would cut air there, or worse.
   if (total.highest_lift > kMaxLiftRadii * r) {
     const Eigen::Vector3d& c = total.highest_lift_from;
+    std::string why = "the plan does not follow the surface there, e.g. a fold-over of the (u,v) map";
+    // How far the ball's disc in xy reaches off the patch (16 directions).
+    double off_patch = 0;
+    if (const Outline* outline = clearance.outline(); outline && !outline->empty())
+      for (int k = 0; k < 16; ++k) {
+        const double a = k * std::numbers::pi / 8;
+        off_patch = std::max(off_patch, outline->beyond(c.head<2>() + r * Eigen::Vector2d(std::cos(a), std::sin(a))));
+      }
+    if (off_patch > 0)
+      why = "the ball reaches " + short_number(off_patch) +
+            " mm beyond the patch's outline, where the surface is only extrapolated from the cloud's points: "
+            "a region left out beside the patch rises there (a steep wall cloud.trim_steep cut off beside a "
+            "floor, say), or " + why;
     throw std::runtime_error("the planned ball at (" + short_number(c.x()) + ", " + short_number(c.y()) + ", " + short_number(c.z()) +
                              ") would have to be lifted by " + short_number(total.highest_lift) + " mm (> " +
                              short_number(kMaxLiftRadii) + " tool radii, " + short_number(kMaxLiftRadii * r) +
-                             " mm) to clear the cloud's surface: the plan does not follow the surface "
-                             "there, e.g. a fold-over of the (u,v) map");
+                             " mm) to clear the cloud's surface: " + why);
   }
 
   nlohmann::json rep;

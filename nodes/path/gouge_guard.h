@@ -88,6 +88,8 @@ class BallClearance {
   // the same points (post.link's), so that they need not build their own.
   const std::vector<Eigen::Vector3d>& points() const;
   const KdTree<Eigen::Vector3d, 2>& xy_tree() const;
+  // The patch's outline it was given, or null.
+  const Outline* outline() const;
 
  private:
   struct Impl;
@@ -110,7 +112,10 @@ struct GougeGuardResult {
 
 // Throws std::invalid_argument for a path without points, r <= 0 or mismatched normals, and
 // std::runtime_error (saying where) when a ball would have to be lifted by more than 3 tool
-// radii: such a plan does not follow the surface there, and lifting it only hides that.
+// radii: such a plan does not follow the surface there, and lifting it only hides that. Where the
+// ball reaches beyond the clearance's outline the message says how far: there the surface is
+// only extrapolated, and a region left out beside the patch (a steep wall the trim cut off
+// beside a floor) rises.
 GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearance,
                               const GougeGuardOptions& options);
 

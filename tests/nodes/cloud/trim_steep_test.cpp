@@ -66,8 +66,8 @@ TEST(TrimSteep, SphereCapKeepsTheGentleCapAndMeasuresTheBand) {
 
 // Noise mixes steep and gentle estimates where the slope nears the limit: gentle points among
 // steep ones beyond it, joined to the cap through a neighbour farther than their steep ones, were
-// kept with it (67 points truly steeper than 72 degrees on these four clouds; the limit is 70).
-// A gentle point is joined only to gentle neighbours nearer than its first steep one.
+// kept with it (47 points truly steeper than 72 degrees on these four clouds; the limit is 70).
+// A gentle point is joined only to gentle neighbours nearer than its first steep one: 1 now.
 TEST(TrimSteep, ANoisyCapKeepsLittleBeyondTheLimit) {
   const double R = 10, sigma = 0.02;
   int beyond = 0;
