@@ -621,31 +621,27 @@ TEST(GougeGuard, ALiftOfMoreThanThreeToolRadiiFailsWithWhereAndWhy) {
   // the planned ball centre: contact (0, 1, 0.25) sunk 5.8 along the normal, plus r along it
   const Eigen::Vector3d centre = Eigen::Vector3d(0, 1, 0.25) - 3.8 * kPlaneNormal;
   EXPECT_NEAR(centre.x(), 0.7238, 1e-4);
-  try {
-    guard_gouges(plane_pass(0.5, 10, 5.8), clearance, {});
-    FAIL();
-  } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(),
-                 "the planned ball at (0.7238, 1.905, -3.369) would have to be lifted by 6.09 mm (> 3 tool radii, "
-                 "6 mm) to clear the cloud's surface: the plan does not follow the surface there, e.g. a fold-over "
-                 "of the (u,v) map");
-  }
+  const auto failure = [](const BallClearance& c) {
+    try {
+      guard_gouges(plane_pass(0.5, 10, 5.8), c, {});
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no failure");
+  };
+  const std::string lift =
+      "the planned ball at (0.7238, 1.905, -3.369) would have to be lifted by 6.09 mm (> 3 tool radii, 6 mm) to "
+      "clear the cloud's surface: ";
+  EXPECT_EQ(failure(clearance), lift + "the plan does not follow the surface there, e.g. a fold-over of the (u,v) map");
   // Where the ball reaches beyond the patch's outline (here x = 1), the field under it is only
   // extrapolated: a floor beside a steep wall that the trim cut off was refused with the
   // fold-over alone named (a 10 mm wall: a lift of 42.65 mm, the field extrapolated over it).
   const Outline outline({{{-10, -10}, {1, -10}, {1, 10}, {-10, 10}}});
-  BallClearance beside(surface, cloud, 2.0, &outline);
-  try {
-    guard_gouges(plane_pass(0.5, 10, 5.8), beside, {});
-    FAIL();
-  } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(),
-                 "the planned ball at (0.7238, 1.905, -3.369) would have to be lifted by 6.09 mm (> 3 tool radii, "
-                 "6 mm) to clear the cloud's surface: the ball reaches 1.724 mm beyond the patch's outline, where "
-                 "the surface is only extrapolated from the cloud's points: a region left out beside the patch "
-                 "rises there (a steep wall cloud.trim_steep cut off beside a floor, say), or the plan does not "
-                 "follow the surface there, e.g. a fold-over of the (u,v) map");
-  }
+  EXPECT_EQ(failure(BallClearance(surface, cloud, 2.0, &outline)),
+            lift + "the ball reaches 1.724 mm beyond the patch's outline, where the surface is only extrapolated "
+                   "from the cloud's points: a region left out beside the patch rises there (a steep wall "
+                   "cloud.trim_steep cut off beside a floor, say), or the plan does not follow the surface there, "
+                   "e.g. a fold-over of the (u,v) map");
 }
 
 TEST(GougeGuard, NodeSaysItsLiftsWithCtxWarn) {
