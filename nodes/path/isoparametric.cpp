@@ -31,6 +31,9 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kTwoPi = 2 * M_PI;
+// A strip check's scallop where a place across the strip is reached by neither pass's ball (a
+// ray from the surface misses both): uncut, not a height.
+constexpr double kUncut = 1e9;
 // Bounds on the work: beyond these the map or the cloud is broken (a degenerate map makes the
 // steps vanish), and the planner stops with a clear error instead of running on for hours.
 constexpr std::size_t kMaxPassPoints = 200000;
@@ -662,7 +665,6 @@ class Planner {
     std::vector<double> best(ts.size(), 0);
     std::vector<Eigen::Vector3d> where(ts.size());
     const double sA = A.s, sB = B.s;
-    constexpr double kUncut = 1e9;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ts.size(), 16),
                       [&](const tbb::blocked_range<std::size_t>& range) {
       for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -1190,7 +1192,9 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
       // formula's step, the first try, rather than creep on with vanishing ones, and say so.
       B = std::move(B_formula);
       chk = chk_formula;
-      strips_over.push_back({{"s_from", s}, {"s_to", B.s}, {"scallop", chk.scallop_max}});
+      const bool uncut = chk.scallop_max >= kUncut;
+      strips_over.push_back({{"s_from", s}, {"s_to", B.s}, {"scallop", uncut ? nlohmann::json() : nlohmann::json(chk.scallop_max)},
+                             {"uncut", uncut}});
       if (chk.scallop_max > strip_over_worst) strip_over_worst = chk.scallop_max, strip_over_where = chk.where;
     }
     ds_min = std::min(ds_min, B.s - s);
@@ -1355,7 +1359,10 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     warnings.push_back(std::to_string(strips_over.size()) + " of " +
                        std::to_string(passes.size() - 1) +
                        " strips between passes leave more than the scallop limit at every side "
-                       "step tried (up to " + short_number(strip_over_worst, 6) + " mm, near " + place(strip_over_where) +
+                       "step tried (" +
+                       (strip_over_worst >= kUncut ? std::string("uncut places, which neither pass's ball reaches, one near ")
+                                                   : "a scallop of up to " + short_number(strip_over_worst, 6) + " mm, near ") +
+                       place(strip_over_where) +
                        "; strips_over_limit_at lists them): a concave place the ball cannot "
                        "reach, a kink, or a surface too uncertain there");
   if (planner.forward_floor_hits > 0)

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "nodes/types/ply_writer.h"
 #include "nodes/types/cloud.h"
@@ -481,6 +482,38 @@ TEST(Cli, ACloudInMetresIsWarnedAtTheReaderAndRefusedByThePlanner) {
                      "to 1000 (--set read.scale=1000 with the shipped graphs), or use a smaller tool\n"),
             std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir.path / "out" / "gcode.ngc"));
+}
+
+TEST(Cli, AFloorBesideASteepWallIsRefusedSayingWhereTheBallCannotGo) {
+  // A floor flat to x = 40 and a wall rising 10 mm by x = 41 (84 degrees), a ledge beyond it. Not
+  // solved (README, "A floor beside a steep wall"): trimmed at the default 75 degrees, the field
+  // beyond the floor's last points is extrapolated over the wall and the guard refuses the ball
+  // beside it; kept whole, no pass's ball reaches into the corner. What each says is checked.
+  test::TempDir dir;
+  PointCloud c;
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> ux(0, 43), uy(0, 30), u01(0, 1);
+  for (int i = 0; i < 30000; ++i) {
+    const double x = ux(rng);
+    c.points.emplace_back(x, uy(rng), 10 * std::clamp(x - 40, 0.0, 1.0));
+  }
+  for (int i = 0; i < 6000; ++i) {  // the wall sampled by its area, as a scan at an angle sees it
+    const double t = u01(rng);
+    c.points.emplace_back(40 + t, uy(rng), 10 * t);
+  }
+  write_ply((dir.path / "wall.ply").string(), c);
+  const std::string run = kScallop + " run " + kZigzag + " --input cloud=" + (dir.path / "wall.ply").string() +
+                          " --no-cache -q -o " + (dir.path / "out").string();
+  std::string out;
+  EXPECT_EQ(test::run_command(run, &out), 1) << out;
+  EXPECT_NE(out.find("beyond the patch's outline, where the surface is only extrapolated from the cloud's points: a "
+                     "region left out beside the patch rises there (a steep wall cloud.trim_steep cut off beside a "
+                     "floor, say), or the plan does not follow the surface there"),
+            std::string::npos) << out;
+  test::run_command(run + " --set max_slope=90", &out);
+  EXPECT_NE(out.find("strips between passes leave more than the scallop limit at every side step tried (uncut "
+                     "places, which neither pass's ball reaches, one near x "),
+            std::string::npos) << out;
 }
 
 TEST(Cli, AFailingNodeNamesTheSetThatGaveItsParameters) {
