@@ -18,7 +18,7 @@ namespace {
 NodeDecl make_trim_steep_node() {
   NodeDecl d;
   d.type = "cloud.trim_steep";
-  d.version = 4;  // 2: the kept cloud's k nearest neighbours as an output; 3: a piece apart is said so (the cached warning); 4: a gentle point joins only gentle neighbours nearer than its first steep one
+  d.version = 5;  // 5: the points not kept as an output, left_out; 2: the kept cloud's k nearest neighbours as an output; 3: a piece apart is said so (the cached warning); 4: a gentle point joins only gentle neighbours nearer than its first steep one
   d.description =
       "trims a patch's steep rim (points steeper than max_slope, and what that cuts off) so the "
       "rest can be planned and certified; the trimmed band is reported as not machined";
@@ -28,6 +28,9 @@ NodeDecl make_trim_steep_node() {
               "k nearest neighbours of each kept point among the kept points, nearest first, as "
               "cloud.knn gives them (the trim's own when every point is kept: a graph need not "
               "search them twice)")
+      .output("left_out", "Cloud",
+              "the points not kept (steep, or cut off by steep ones, or apart), in their order: not "
+              "machined, but the ball must keep clear of them (path.gouge_guard's and post.link's left_out)")
       .output("report", "Report",
               "{points, kept, steep (steeper than max_slope), cut_off (gentle points in smaller "
               "pieces), area_mm2, trimmed_area_mm2, trimmed_fraction (of the area), "
@@ -86,18 +89,24 @@ NodeDecl make_trim_steep_node() {
                "; the largest (" + short_number(g.area) + " mm2) from x " + short_number(g.min.x()) + " to " +
                short_number(g.max.x()) + ", y " + short_number(g.min.y()) + " to " + short_number(g.max.y()) + advice);
     }
-    PointCloud out;
+    PointCloud out, left_out;
     out.points.reserve(r.kept.size());
+    left_out.points.reserve(trimmed);
+    std::vector<char> kept(cloud->size(), 0);
     for (std::size_t i : r.kept) {
+      kept[i] = 1;
       out.points.push_back(cloud->points[i]);
       if (cloud->has_normals()) out.normals.push_back(cloud->normals[i]);
       if (cloud->has_uncertainty()) out.uncertainty.push_back(cloud->uncertainty[i]);
     }
+    for (std::size_t i = 0; i < cloud->size(); ++i)
+      if (!kept[i]) left_out.points.push_back(cloud->points[i]);
     if (r.neighbors.size() != out.size())
       throw NodeError("only " + std::to_string(out.size()) + " points are kept: the " + std::to_string(o.k) +
                       " nearest neighbours of each need more (raise max_slope or lower k)");
     ctx.set("report", std::move(report));
     ctx.set("cloud", std::move(out));
+    ctx.set("left_out", std::move(left_out));
     ctx.set("neighbors", std::move(r.neighbors));
   };
   return d;

@@ -46,14 +46,21 @@ struct BallClearance::Impl {
     explicit BandTier(const std::vector<Eigen::Vector3d>& at) : adaptor{at, index} {}
   };
   BandTier tier[2]{BandTier(band.at), BandTier(band.at)};
+  // The points not machined, by xy and in 3-D (empty when none were given).
+  const std::vector<Eigen::Vector3d> no_points;
+  const std::vector<Eigen::Vector3d>& left_out;
+  PointsAdaptor<Eigen::Vector3d> left_out_adaptor{left_out};
+  KdTree<Eigen::Vector3d, 2> left_out_xy{2, left_out_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
+  KdTree<Eigen::Vector3d, 3> left_out_3d{3, left_out_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
   Impl(const HeightFieldModel& s, const std::vector<Eigen::Vector3d>& p, double radius, const Outline* o,
-       const SurfaceBandView* given)
+       const SurfaceBandView* given, const std::vector<Eigen::Vector3d>* left)
       : surface(s),
         points(p),
         r(radius),
         outline(o),
         computed(given ? SurfaceBand{} : surface_band(s, p)),
-        band(given ? *given : SurfaceBandView{computed.at, computed.uncertainty}) {
+        band(given ? *given : SurfaceBandView{computed.at, computed.uncertainty}),
+        left_out(left ? *left : no_points) {
     if (band.at.size() != band.uncertainty.size())
       throw std::invalid_argument("the surface band has " + std::to_string(band.at.size()) + " places but " +
                                   std::to_string(band.uncertainty.size()) + " uncertainties");
@@ -83,7 +90,24 @@ struct BallClearance::Impl {
                            }
                          },
                          [&] { if (!tier[0].index.empty()) tier[0].tree.buildIndex(); },
-                         [&] { if (!tier[1].index.empty()) tier[1].tree.buildIndex(); });
+                         [&] { if (!tier[1].index.empty()) tier[1].tree.buildIndex(); },
+                         [&] {
+                           if (left_out.empty()) return;
+                           left_out_xy.buildIndex();
+                           left_out_3d.buildIndex();
+                         });
+  }
+  // Whether q (xy) lies off the patch over what was left out: a left-out point nearer than any
+  // of the cloud's (the field beyond the cloud's edge would be extrapolated over a wall there).
+  bool over_left_out(const Eigen::Vector2d& q, double cloud_d2) const {
+    if (left_out.empty() || (outline && outline->beyond(q) <= 0)) return false;
+    std::uint32_t j;
+    double d2;
+    nanoflann::KNNResultSet<double, std::uint32_t> one(1);
+    one.init(&j, &d2);
+    const double at[3] = {q.x(), q.y(), 0};
+    left_out_xy.findNeighbors(one, at, nanoflann::SearchParams(32, 0, false));
+    return d2 < cloud_d2;
   }
 };
 
@@ -139,11 +163,12 @@ struct DeepestIntoBand {
 }  // namespace
 
 BallClearance::BallClearance(const HeightFieldModel& surface, const std::vector<Eigen::Vector3d>& points,
-                             double r, const Outline* outline, const SurfaceBandView* band, double rim_band)
+                             double r, const Outline* outline, const SurfaceBandView* band, double rim_band,
+                             const std::vector<Eigen::Vector3d>* left_out)
     : impl_(nullptr) {
   if (!(r > 0)) throw std::invalid_argument("tool radius must be > 0");
   if (points.empty()) throw std::invalid_argument("the cloud has no points");
-  impl_ = new Impl(surface, points, r, outline, band);
+  impl_ = new Impl(surface, points, r, outline, band, left_out);
   impl_->rim_band = rim_band;
 }
 
@@ -152,6 +177,7 @@ BallClearance::~BallClearance() { delete impl_; }
 double BallClearance::spacing() const { return impl_->surface.spacing(); }
 const std::vector<Eigen::Vector3d>& BallClearance::points() const { return impl_->points; }
 const Outline* BallClearance::outline() const { return impl_->outline; }
+const std::vector<Eigen::Vector3d>& BallClearance::left_out() const { return impl_->left_out; }
 const KdTree<Eigen::Vector3d, 2>& BallClearance::xy_tree() const { return impl_->tree; }
 
 BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const Eigen::Vector3d& hint) const {
@@ -181,6 +207,7 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     return d2;
   };
   auto in_band = [&](const Eigen::Vector2d& q) {
+    if (impl_->over_left_out(q, nearest_point_d2(q))) return false;
     if (impl_->outline) {
       // on the patch (0), or off it (beyond the outer loop or in a hole) within the rim band
       if (impl_->outline->beyond(q) <= std::max(impl_->rim_band, 0.0)) return true;
@@ -192,7 +219,8 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     // (the uncertainty does not depend on force: the first eval below has set it)
     return in_band(s) && impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/true);
   };
-  if (found && (impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/false, &res.uncertainty) || near_cloud())) {
+  if (found && (impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/false, &res.uncertainty) || near_cloud()) &&
+      !impl_->over_left_out(s, nearest_point_d2(s))) {
     res.on_surface = true;
     res.foot = Eigen::Vector3d(s.x(), s.y(), z);
     res.normal = n;
@@ -259,6 +287,19 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
       }
   }
   if (samples_reach > res.band_reach) res.band_reach = samples_reach, res.band_up = samples_up;
+  // The points not machined near the centre: the ball keeps clear of them by half a spacing (no
+  // field is fitted to them; between its samples a sharp edge, a wall's top, can stand that much
+  // nearer the ball than they do).
+  if (!impl_->left_out.empty()) {
+    const double reach_r = r + 0.5 * sp;
+    std::vector<std::pair<std::uint32_t, double>> near;
+    impl_->left_out_3d.radiusSearch(c.data(), reach_r * reach_r, near, nanoflann::SearchParams(32, 0, false));
+    for (const auto& [j, d2] : near) {
+      const double d = std::sqrt(d2), reach = reach_r - d;
+      if (reach > res.band_reach)
+        res.band_reach = reach, res.band_up = d > 0 ? (c.z() - impl_->left_out[j].z()) / d : 1.0;
+    }
+  }
   // The cloud's own points within r of the centre in xy: a witness that needs no fit. Only those
   // nearer the centre than r + the clearance found can lower it, so where one was found the
   // nearest such point is looked for in 3-D below that bound (a million-point cloud has thousands
@@ -363,9 +404,26 @@ class PassGuard {
     if (res.reach() > t.deepest) t.deepest = res.reach(), t.deepest_at = s.contact;
     const Eigen::Vector3d planned = c;
     const double z0 = c.z();
+    double z_below = c.z();  // the highest centre found still too deep
     for (int it = 0; it < 8 && res.reach() > target() + 1e-6; ++it) {
+      z_below = c.z();
       c.z() += (res.reach() - target()) / rise_rate(res);
       res = clearance_(c, res.on_surface ? res.foot : s.contact);
+    }
+    if (res.reach() < target() - 0.1 * e_ && c.z() - z_below > 0.1 * e_) {
+      // The last step overshot (the witness left the ball slower than its rate said: beside a
+      // wall, whose points lie level with the centre, it was taken as 0.2 and the first step
+      // lifted 5 times the reach; a floor beside a 10 mm wall was refused for a lift of 40.8 mm
+      // where 9.7 clear it): halved back to the lowest centre that clears, within a tenth of e.
+      double z_clear = c.z();
+      auto clear = res;
+      while (z_clear - z_below > 0.1 * e_) {
+        c.z() = 0.5 * (z_below + z_clear);
+        res = clearance_(c, clear.on_surface ? clear.foot : s.contact);
+        if (res.reach() > target() + 1e-6) z_below = c.z(); else z_clear = c.z(), clear = res;
+      }
+      c.z() = z_clear;
+      res = clear;
     }
     if (res.on_surface && (c - res.foot).norm() > 0) {
       // the ball now touches the surface at its foot point (or clears it by δ along the normal, or

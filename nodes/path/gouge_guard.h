@@ -53,9 +53,13 @@ class BallClearance {
   // band  optional: surface_band(surface, points), when it is at hand (cached); computed here
   // otherwise. rim_band  with an outline: a foot point up to this far off the patch in xy
   // (beyond its outer loop or into a hole) is on the surface too (mm; the band path.isoparametric's band passes cut and
-  // post.simulate counts). All must outlive this.
+  // post.simulate counts). left_out  optional: points of the part that are not machined (what
+  // cloud.trim_steep left out: a steep wall beside the patch, a piece apart); the ball clears
+  // each of them, and off the patch, where such a point is nearer in xy than the cloud's, the
+  // height field is not extrapolated (no foot there). All must outlive this.
   BallClearance(const HeightFieldModel& surface, const std::vector<Eigen::Vector3d>& points, double r,
-                const Outline* outline = nullptr, const SurfaceBandView* band = nullptr, double rim_band = 0);
+                const Outline* outline = nullptr, const SurfaceBandView* band = nullptr, double rim_band = 0,
+                const std::vector<Eigen::Vector3d>* left_out = nullptr);
   ~BallClearance();
   BallClearance(const BallClearance&) = delete;
   BallClearance& operator=(const BallClearance&) = delete;
@@ -90,6 +94,8 @@ class BallClearance {
   const KdTree<Eigen::Vector3d, 2>& xy_tree() const;
   // The patch's outline it was given, or null.
   const Outline* outline() const;
+  // The points not machined it was given (empty when none).
+  const std::vector<Eigen::Vector3d>& left_out() const;
 
  private:
   struct Impl;

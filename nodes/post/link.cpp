@@ -63,6 +63,9 @@ LinkedPath link_passes(const Toolpath& path, const std::vector<Eigen::Vector3d>&
     top = std::max(top, q.z());
     bottom = std::min(bottom, q.z());
   }
+  // (the points not machined too: a wall the trim left out beside the patch may stand higher)
+  if (clearance)
+    for (const auto& q : clearance->left_out()) top = std::max(top, q.z());
   const double part_top = top;
   Eigen::Vector3d highest = Eigen::Vector3d::Constant(-INFINITY);
   for (const auto& p : path.passes)

@@ -1,4 +1,5 @@
 // The scallop command end to end: run, disk cache across processes, batch isolation, validate.
+#include <Eigen/Core>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -484,11 +485,13 @@ TEST(Cli, ACloudInMetresIsWarnedAtTheReaderAndRefusedByThePlanner) {
   EXPECT_FALSE(fs::exists(dir.path / "out" / "gcode.ngc"));
 }
 
-TEST(Cli, AFloorBesideASteepWallIsRefusedSayingWhereTheBallCannotGo) {
-  // A floor flat to x = 40 and a wall rising 10 mm by x = 41 (84 degrees), a ledge beyond it. Not
-  // solved (README, "A floor beside a steep wall"): trimmed at the default 75 degrees, the field
-  // beyond the floor's last points is extrapolated over the wall and the guard refuses the ball
-  // beside it; kept whole, no pass's ball reaches into the corner. What each says is checked.
+TEST(Cli, AFloorBesideASteepWallIsCutClearOfTheWallAndTheBandItCannotReachFailsTheCertificate) {
+  // A floor flat to x = 40 and a wall rising 10 mm by x = 41 (84 degrees), a ledge beyond it.
+  // Trimmed at the default 75 degrees, the field beyond the floor's last points was extrapolated
+  // over the wall (54 mm high 1 mm past them) and the guard refused the ball beside it for a lift
+  // of 42.65 mm. The wall is now what cloud.trim_steep left out, which the guard keeps the ball
+  // clear of: the program keeps off the exact wall, and the floor within the ball's reach of it
+  // is left uncut, which the certificate says (exit 3).
   test::TempDir dir;
   PointCloud c;
   std::mt19937 rng(1);
@@ -505,14 +508,38 @@ TEST(Cli, AFloorBesideASteepWallIsRefusedSayingWhereTheBallCannotGo) {
   const std::string run = kScallop + " run " + kZigzag + " --input cloud=" + (dir.path / "wall.ply").string() +
                           " --no-cache -q -o " + (dir.path / "out").string();
   std::string out;
-  EXPECT_EQ(test::run_command(run, &out), 1) << out;
-  EXPECT_NE(out.find("beyond the patch's outline, where the surface is only extrapolated from the cloud's points: a "
-                     "region left out beside the patch rises there (a steep wall cloud.trim_steep cut off beside a "
-                     "floor, say), or the plan does not follow the surface there"),
-            std::string::npos) << out;
-  test::run_command(run + " --set max_slope=90", &out);
+  EXPECT_EQ(test::run_command(run, &out), 3) << out;
+  EXPECT_NE(out.find("certificate 'report': FAIL, do not cut: "), std::string::npos) << out;
+  EXPECT_NE(out.find("uncut fraction "), std::string::npos) << out;
+  // every ball over the part keeps off the exact floor and wall (the ball's radius 4, e 0.01)
+  const auto path = nlohmann::json::parse(test::read_file(dir.path / "out" / "toolpath.json"));
+  auto to_profile = [](double x, double z) {  // distance in xz to the floor, the wall and its top
+    const Eigen::Vector2d q(x, z), profile[4] = {{-100, 0}, {40, 0}, {41, 10}, {200, 10}};
+    double d = INFINITY;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector2d a = profile[k], ab = profile[k + 1] - a;
+      d = std::min(d, (q - a - std::clamp((q - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) * ab).norm());
+    }
+    return d;
+  };
+  int balls = 0;
+  for (const auto& pass : path["passes"])
+    for (const auto& p : pass) {
+      const Eigen::Vector3d centre = Eigen::Vector3d(p["contact"][0], p["contact"][1], p["contact"][2]) +
+                                     4.0 * Eigen::Vector3d(p["normal"][0], p["normal"][1], p["normal"][2]);
+      if (centre.y() < 0 || centre.y() > 30) continue;
+      ++balls;
+      EXPECT_GE(to_profile(centre.x(), centre.z()), 4 - 0.01) << centre.transpose();
+    }
+  EXPECT_GT(balls, 1000);
+  // Kept whole (max_slope 90) it is still refused: the planner says where no ball reaches, and the
+  // guard where the ball would reach beyond the patch's outline.
+  EXPECT_EQ(test::run_command(run + " --set max_slope=90", &out), 1) << out;
   EXPECT_NE(out.find("strips between passes leave more than the scallop limit at every side step tried (uncut "
                      "places, which neither pass's ball reaches, one near x "),
+            std::string::npos) << out;
+  EXPECT_NE(out.find("beyond the patch's outline, where the surface is only extrapolated from the cloud's points: a "
+                     "region left out beside the patch rises there"),
             std::string::npos) << out;
 }
 

@@ -207,6 +207,18 @@ TEST(TrimSteepNode, SaysWhatIsNotMachinedAndKeepsTheRest) {
             0u)
       << said[0];
   EXPECT_NE(said[0].find("steeper than 70 degrees or cut off by them, in 1 piece;"), std::string::npos) << said[0];
+  // the points not kept, in their order: what the guard keeps the ball clear of
+  auto left_out = std::dynamic_pointer_cast<const PointCloud>(out.at("left_out"));
+  ASSERT_TRUE(left_out);
+  ASSERT_EQ(left_out->size() + cloud->size(), pc.size());
+  std::size_t k = 0, l = 0;
+  for (const auto& p : pc.points) {
+    if (k < cloud->size() && cloud->points[k] == p) ++k;
+    else if (l < left_out->size() && left_out->points[l] == p) ++l;
+  }
+  EXPECT_EQ(k, cloud->size());
+  EXPECT_EQ(l, left_out->size());
+  for (const auto& p : left_out->points) EXPECT_GT(polar_deg(p), 68);
 
   // its neighbours are cloud.knn's on the kept points: whether some were trimmed (computed
   // again on them) or none (the trim's own, handed on)

@@ -47,6 +47,21 @@ std::vector<Eigen::Vector3d> cap_cloud() {
 Eigen::Vector3d cap_point(double x, double y) { return {x, y, cap_z(x, y)}; }
 Eigen::Vector3d cap_normal(double x, double y) { return (cap_point(x, y) - Eigen::Vector3d(0, 0, 5 - kR)).normalized(); }
 
+// One pass along y at x on the plane z = 0, from y = -half to half, contacts every 0.5 mm.
+Toolpath flat_pass_along_y(double x, double half, double r) {
+  Toolpath t;
+  t.tool_radius = r;
+  t.chord_error = 0.01;
+  t.scallop_height = 0.05;
+  ToolpathPass p;
+  for (double y = -half; y <= half + 1e-9; y += 0.5) {
+    p.contact.emplace_back(x, y, 0);
+    p.normal.emplace_back(0, 0, 1);
+  }
+  t.passes.push_back(p);
+  return t;
+}
+
 // One pass along x at y on the plane, contacts every `step` mm, optionally sunk by `sink` mm
 // (along the normal) at point `sunk`.
 Toolpath plane_pass(double step, int sunk = -1, double sink = 0) {
@@ -346,16 +361,8 @@ TEST(GougeGuard, ABallBesideAMoreUncertainStretchClearsItToo) {
   EXPECT_NEAR(at.band_reach, 0.3 - (std::hypot(1.25, r) - r), 1e-9);
   EXPECT_NEAR(at.band_up, r / std::hypot(1.25, r), 1e-9);
 
-  Toolpath planned;
-  planned.tool_radius = r;
-  planned.chord_error = 0.01;
-  planned.scallop_height = 0.05;
-  ToolpathPass pass;
-  for (double y = -5; y <= 5 + 1e-9; y += 0.5) {
-    pass.contact.emplace_back(0, y, 0);
-    pass.normal.emplace_back(0, 0, 1);
-  }
-  planned.passes.push_back(pass);
+  const Toolpath planned = flat_pass_along_y(0, 5, r);
+  const ToolpathPass& pass = planned.passes[0];
   auto res = guard_gouges(planned, clearance, {});
   EXPECT_EQ(res.report["lifted_positions"], pass.contact.size());
   const auto& q = res.path.passes[0];
@@ -642,6 +649,37 @@ TEST(GougeGuard, ALiftOfMoreThanThreeToolRadiiFailsWithWhereAndWhy) {
                    "from the cloud's points: a region left out beside the patch rises there (a steep wall "
                    "cloud.trim_steep cut off beside a floor, say), or the plan does not follow the surface there, "
                    "e.g. a fold-over of the (u,v) map");
+}
+
+TEST(GougeGuard, ABallBesideAWallTheTrimLeftOutIsLiftedJustClearOfIt) {
+  // A floor z = 0 sampled every 0.25 mm to x = 4, and beside it a wall the trim left out: points
+  // every 0.25 mm on the plane x = 4.2 up to z = 6. A pass along y at x = 2.5, the ball (r = 2) on
+  // the floor, 1.7 mm from the wall: it must clear the wall's points by r + half the floor's
+  // spacing (0.2216 as the height field measures it), which puts its centre at
+  // z = 6 + sqrt(2.1108^2 - 1.7^2) = 7.2512 over the wall's top row.
+  // Lifted in steps of reach / rate, with the rate 0.2 where the wall's points lie level with the
+  // centre, the last step overshot: by 6.14 mm, over 3 tool radii, and the pass was refused; the
+  // step is halved back.
+  std::vector<Eigen::Vector3d> floor, wall;
+  for (double x = -6; x <= 4 + 1e-9; x += 0.25)
+    for (double y = -6; y <= 6 + 1e-9; y += 0.25) floor.emplace_back(x, y, 0);
+  for (double z = 0.25; z <= 6 + 1e-9; z += 0.25)
+    for (double y = -6; y <= 6 + 1e-9; y += 0.25) wall.emplace_back(4.2, y, z);
+  const Toolpath t = flat_pass_along_y(2.5, 3, 2.0);
+  HeightFieldModel surface(floor);
+  const double clear = 2 + 0.5 * surface.spacing();
+  // without the wall the floor asks for nothing
+  EXPECT_EQ(guard_gouges(t, BallClearance(surface, floor, 2.0), {}).report["lifted_positions"], 0);
+  const auto res = guard_gouges(t, BallClearance(surface, floor, 2.0, nullptr, nullptr, 0, &wall), {});
+  const double top = 6 + std::sqrt(clear * clear - 1.7 * 1.7);
+  EXPECT_NEAR(top, 7.2512, 1e-4);
+  for (std::size_t i = 0; i < res.path.passes[0].contact.size(); ++i) {
+    const Eigen::Vector3d c = res.path.passes[0].contact[i] + 2.0 * res.path.passes[0].normal[i];
+    EXPECT_GE(c.z(), top - 1e-9) << i;
+    EXPECT_LE(c.z(), top + 0.001) << i;  // within a tenth of e of the lowest clear centre
+    for (const auto& w : wall) EXPECT_GE((c - w).norm(), clear - 1e-9);
+  }
+  EXPECT_NEAR(res.report["highest_lift"].get<double>(), top - 2, 0.001);
 }
 
 TEST(GougeGuard, NodeSaysItsLiftsWithCtxWarn) {

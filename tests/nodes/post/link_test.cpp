@@ -96,6 +96,19 @@ int count(const LinkedPath& l, MoveKind k) {
   return static_cast<int>(std::count_if(l.moves.begin(), l.moves.end(), [&](const Move& m) { return m.kind == k; }));
 }
 
+TEST(Link, TheClearancePlaneIsAboveWhatTheTrimLeftOutToo) {
+  // A wall 8 mm high beside the floor, not machined (cloud.trim_steep's left_out): the rapids at
+  // the clearance plane would have crossed it 3 mm below its top.
+  const auto floor = flat_cloud();
+  std::vector<Eigen::Vector3d> wall;
+  for (double z = 0.25; z <= 8 + 1e-9; z += 0.25)
+    for (double y = -2; y <= 6; y += 0.25) wall.emplace_back(12.25, y, z);
+  HeightFieldModel surface(floor);
+  BallClearance without(surface, floor, 2.0), with(surface, floor, 2.0, nullptr, nullptr, 0, &wall);
+  EXPECT_DOUBLE_EQ(link_passes(zigzag(4, 1.0), floor, {}, &without).clearance_z, 5.0);
+  EXPECT_DOUBLE_EQ(link_passes(zigzag(4, 1.0), floor, {}, &with).clearance_z, 13.0);  // its top 8 + safety 5
+}
+
 TEST(Link, ShortSafeLinksAreFeedMoves) {
   auto l = link_passes(zigzag(4, 1.0), flat_cloud(), {});
   EXPECT_DOUBLE_EQ(l.clearance_z, 5.0);  // highest surface point 0 + safety 5
