@@ -267,6 +267,23 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
   auto on_patch_grid = [&](double x, double y) { return nearest_node(x, y) != 0; };
   auto in_band = [&](double x, double y) { return use_loops && nearest_node(x, y) == 2; };
 
+  // Beside what was not machined: the ball touching the surface at p (normal n) would cut into it.
+  const std::vector<Eigen::Vector3d> no_points;
+  const std::vector<Eigen::Vector3d>& left_out = o.left_out ? *o.left_out : no_points;
+  const PointsAdaptor<Eigen::Vector3d> left_out_adaptor{left_out};
+  KdTree<Eigen::Vector3d, 3> left_out_tree(3, left_out_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  if (!left_out.empty()) left_out_tree.buildIndex();
+  const double keep_off = r + 0.5 * surf.spacing();
+  auto beside_left_out = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+    if (left_out.empty()) return false;
+    const Eigen::Vector3d c = p + r * n;
+    std::uint32_t j;
+    double d2;
+    left_out_tree.knnSearch(c.data(), 1, &j, &d2);
+    return d2 < keep_off * keep_off;
+  };
+  std::vector<std::uint8_t> unreachable(n_grid, 0);
+
   double cut_length = 0;
   for (const auto& s : feed) cut_length += (s.b - s.a).norm();
   CentreIndex index(feed, centre_piece_length(feed, spacing, r));
@@ -291,6 +308,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
         out.x = s.p.x(), out.y = s.p.y(), out.z = s.p.z(), out.weight = s.weight;
         index.trace(s.p, s.n, r, T, s.uncertainty, out.gouge, out.scallop, cand, &hint, &pieces);
         out.interior = !s.beyond && is_interior(s.p.x(), s.p.y(), outline_distance);
+        unreachable[i] = beside_left_out(s.p, s.n);
       }
       const std::size_t d = done.fetch_add(to - from) + to - from;
       if (progress) progress(0.1 + 0.7 * double(d) / n_grid);
@@ -319,15 +337,16 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
     };
     auto sc = [](const SimSample& s) { return std::isnan(s.scallop) ? -1.0 : s.scallop; };
     auto go = [](const SimSample& s) { return s.gouge; };
-    top(sc, [](const SimSample& s) { return s.interior; }, K);
-    top(sc, [](const SimSample&) { return true; }, K / 4);
+    auto reached = [&](const SimSample& s) { return !unreachable[&s - res.samples.data()]; };
+    top(sc, [&](const SimSample& s) { return s.interior && reached(s); }, K);
+    top(sc, [&](const SimSample& s) { return reached(s); }, K / 4);
     top(go, [](const SimSample&) { return true; }, K / 4);
     std::sort(seeds.begin(), seeds.end());
     seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
     if (seeds.empty()) break;
     const int m = 4;  // (2m+1)² points per seed
     std::vector<SimSample> extra(seeds.size() * (2 * m + 1) * (2 * m + 1));
-    std::vector<std::uint8_t> valid(extra.size(), 0);
+    std::vector<std::uint8_t> valid(extra.size(), 0), extra_unreachable(extra.size(), 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size()), [&](const tbb::blocked_range<std::size_t>& rg) {
       std::vector<std::uint32_t> cand;
       for (std::size_t si = rg.begin(); si < rg.end(); ++si) {
@@ -354,12 +373,13 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
             out.x = x, out.y = y, out.z = z, out.weight = 0;
             index.trace({x, y, z}, n, r, T, u, out.gouge, out.scallop, cand, &hint, &pieces);
             out.interior = no_interior || (!in_band(x, y) && is_interior(x, y, outline_distance));
+            extra_unreachable[slot] = beside_left_out({x, y, z}, n);
             valid[slot] = 1;
           }
       }
     });
     for (std::size_t i = 0; i < extra.size(); ++i)
-      if (valid[i]) res.samples.push_back(extra[i]);
+      if (valid[i]) res.samples.push_back(extra[i]), unreachable.push_back(extra_unreachable[i]);
   }
   if (progress) progress(0.95);
 
@@ -369,9 +389,17 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
   std::vector<std::pair<double, double>> all, inner;
   double max_all = -INFINITY, max_inner = -INFINITY;
   std::size_t n_interior = 0, n_beyond = 0, gouge_at = 0, scallop_at = 0;
+  double beside_area = 0;
+  Eigen::Vector2d beside_min = Eigen::Vector2d::Constant(INFINITY), beside_max = -beside_min;
   for (std::size_t i = 0; i < res.samples.size(); ++i) {
     const SimSample& s = res.samples[i];
     if (s.gouge > gouge_max) gouge_max = s.gouge, gouge_at = i;
+    if (unreachable[i]) {
+      if (i < n_grid) beside_area += s.weight;
+      beside_min = beside_min.cwiseMin(Eigen::Vector2d(s.x, s.y));
+      beside_max = beside_max.cwiseMax(Eigen::Vector2d(s.x, s.y));
+      continue;
+    }
     bool cut = !std::isnan(s.scallop);
     if (cut) {
       if (s.scallop > max_all) scallop_at = i;
@@ -404,6 +432,13 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
   rep["samples_beyond_outline"] = n_beyond;
   rep["samples_refined"] = res.samples.size() - n_grid;
   rep["surface_area"] = area;
+  if (o.left_out) {
+    const double whole = area + beside_area;
+    rep["beside_left_out"] = {{"area_mm2", beside_area},
+                              {"fraction", whole > 0 ? beside_area / whole : 0.0},
+                              {"min", beside_area > 0 ? nlohmann::json({beside_min.x(), beside_min.y()}) : nlohmann::json()},
+                              {"max", beside_area > 0 ? nlohmann::json({beside_max.x(), beside_max.y()}) : nlohmann::json()}};
+  }
   report_scallop(rep, max_all, max_inner, st, sti);
   rep["gouge_max"] = gouge_max;
   rep["uncut_fraction"] = area > 0 ? uncut / area : 0.0;
@@ -461,7 +496,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
   std::vector<std::pair<double, std::size_t>> rank;
   for (std::size_t i = 0; i < res.samples.size(); ++i) {
     const SimSample& s = res.samples[i];
-    double score = std::isnan(s.scallop) ? 1e6 : s.scallop / H;
+    double score = unreachable[i] ? 0.0 : std::isnan(s.scallop) ? 1e6 : s.scallop / H;
     if (s.gouge > gouge_tol) score = 1e9 + s.gouge / gouge_tol;
     if (score > 0) rank.emplace_back(score, i);
   }

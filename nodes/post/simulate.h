@@ -85,6 +85,13 @@ struct SimulateOptions {
   // the guard samples it, and the contour program's gouge bound came out 0.0137 > e there while
   // verify.py passed it).
   double rim_band = 0;
+  // Optional: points of the part that are not machined (cloud.trim_steep's left_out: a steep wall
+  // beside the patch). A sample where the ball touching the surface (its centre r along the
+  // normal) would come within r + half the cloud's spacing of one of them cannot be reached by
+  // this ball without cutting into them (path.gouge_guard keeps it off): not counted in the
+  // scallop and uncut figures, but reported (beside_left_out: its area, fraction and where).
+  // Gouges there count as everywhere. Must outlive the call.
+  const std::vector<Eigen::Vector3d>* left_out = nullptr;
 };
 
 // Simulates the feed polyline `feed` (ball centres) over the surface `surface`: the samples
@@ -92,7 +99,8 @@ struct SimulateOptions {
 // (scallop_limit = h, gouge_tolerance = max(e, 0.001)) and the report.
 // Report keys: scallop_max, scallop_max_interior, scallop_p99, scallop_p99_interior,
 // scallop_mean, scallop_mean_interior, gouge_max, uncut_fraction, uncut_fraction_interior,
-// cut_length, rapid_length, samples, samples_interior, samples_refined, samples_beyond_outline
+// cut_length, rapid_length, samples, samples_interior, samples_refined, samples_beyond_outline,
+// beside_left_out (with left_out: {area_mm2, fraction, min, max} of the samples no ball reaches)
 // (grid samples in the rim band), rim_band, spacing, margin,
 // surface_area, surface_uncertainty_max (the cloud points' largest uncertainty),
 // surface_uncertainty_max_sampled (the largest the bounds used at a grid sample: the

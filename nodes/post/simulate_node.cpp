@@ -7,6 +7,7 @@
 
 #include "engine/node.h"
 #include "nodes/cloud/cloud_height_field.h"
+#include "nodes/geom/point_text.h"
 #include "nodes/post/simulate.h"
 #include "nodes/types/cloud.h"
 #include "nodes/types/document.h"
@@ -17,7 +18,7 @@ namespace scallop::post_nodes {
 NodeDecl make_simulate_node() {
   NodeDecl d;
   d.type = "post.simulate";
-  d.version = 15;  // 15: the rim band reaches into the holes too (stop 90); 14: a residual within the points' uncertainty floor counts as the height field's misfit (HeightFieldModel, stop 88); 13: the height field's quartic where its quadratic misfits (HeightFieldModel, kQuarticFrom); 12: rim_band, the band beyond the outer loop counted too when asked (samples_beyond_outline);  11: a gouge bound below the uncertainty says the ball stays clear of the surface by less than it; 10: a failing bound says how much of it is the surface's uncertainty, and the worst places carry it; 9: the rapids checked against the cloud (rapid_min_clearance, rapids_through_part); 3: scallop and gouge are bounds that include the cloud's uncertainty; 7: and the height field's misfit; 8: the height field solved by a fixed-size Cholesky (the same to rounding)
+  d.version = 16;  // 16: optional left_out: samples no ball reaches beside it reported (beside_left_out), not counted; moves cutting into it fail (stop 92); 15: the rim band reaches into the holes too (stop 90); 14: a residual within the points' uncertainty floor counts as the height field's misfit (HeightFieldModel, stop 88); 13: the height field's quartic where its quadratic misfits (HeightFieldModel, kQuarticFrom); 12: rim_band, the band beyond the outer loop counted too when asked (samples_beyond_outline);  11: a gouge bound below the uncertainty says the ball stays clear of the surface by less than it; 10: a failing bound says how much of it is the surface's uncertainty, and the worst places carry it; 9: the rapids checked against the cloud (rapid_min_clearance, rapids_through_part); 3: scallop and gouge are bounds that include the cloud's uncertainty; 7: and the height field's misfit; 8: the height field solved by a fixed-size Cholesky (the same to rounding)
                   // 4: the uncertainty grows at gaps beyond the cloud's edge
                   // 5: pass asks the whole patch, rim included, not the interior only
                   // 6: outputs the simulation (post.render draws it), no heat map of its own
@@ -28,6 +29,10 @@ NodeDecl make_simulate_node() {
       .input("loops", "Loops", "the patch's boundary loops (outer first, then holes; indices into 'cloud'): "
              "the patch is what lies inside them in xy, and the margin is measured from them; "
              "absent: the outline is guessed from the cloud", false)
+      .input("left_out", "Cloud",
+             "optional: points of the part not machined (cloud.trim_steep's left_out): where the ball touching the "
+             "surface would cut into them it cannot reach (beside_left_out, reported, not counted in scallop and "
+             "uncut), and no move may cut into them (a fail reason)", false)
       .input("samples", "SurfaceSamples",
              "the surface sampled before (post.surface_samples, given the same cloud, loops, tool radius, scallop "
              "limit and grid parameters: the same simulation); absent: sampled here",
@@ -68,6 +73,9 @@ NodeDecl make_simulate_node() {
     o.tool_radius = r;
     o.scallop = ctx.number("scallop") > 0 ? ctx.number("scallop") : h;
     o.chord = ctx.number("chord") >= 0 ? ctx.number("chord") : e;
+    std::shared_ptr<const PointCloud> left_out;
+    if (ctx.has_input("left_out")) left_out = ctx.input<PointCloud>("left_out");
+    if (left_out && left_out->size()) o.left_out = &left_out->points;
     try {
       if (ctx.has_input("loops")) o.loops = loop_polygons_xy(*ctx.input<BoundaryLoops>("loops"), cloud->points);
       // The rapids come down to a ball of r + lead_height above the part (post.link): checked,
@@ -75,7 +83,7 @@ NodeDecl make_simulate_node() {
       // the simulation (their k-d tree over a million points takes 0.7 s on one thread).
       const double tol = std::max(o.chord, 1e-3);
       Simulation sim;
-      RapidClearance rc;
+      RapidClearance rc, feed_left_out, rapids_left_out;
       tbb::parallel_invoke(
           [&] {
             const auto progress = [&](double f) { ctx.progress(f, "simulating"); };
@@ -88,6 +96,11 @@ NodeDecl make_simulate_node() {
             if (ctx.has_input("linked"))
               rc = rapid_clearance(cloud->points, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr,
                                    cloud_height_field(*cloud)->tree3d(), rapids, r, tol);
+            // every move against what was not machined, as the rapids against the cloud
+            if (o.left_out) {
+              feed_left_out = rapid_clearance(*o.left_out, nullptr, feed, r, tol);
+              rapids_left_out = rapid_clearance(*o.left_out, nullptr, rapids, r, tol);
+            }
           });
       if (ctx.has_input("linked")) {
         nlohmann::json& j = sim.report;
@@ -100,6 +113,31 @@ NodeDecl make_simulate_node() {
           j["fail_reasons"].push_back(buf);
           j["pass"] = false;
         }
+      }
+      if (o.left_out) {
+        nlohmann::json& j = sim.report;
+        char buf[240];
+        for (const auto& [what, c] : {std::pair<const char*, const RapidClearance*>{"feed moves", &feed_left_out},
+                                      {"rapids", &rapids_left_out}})
+          if (c->through > 0) {
+            std::snprintf(buf, sizeof buf,
+                          "%zu %s cut into what was not machined (least clearance %.4g mm at (%.3f, %.3f, %.3f))",
+                          c->through, what, c->least, c->at.x(), c->at.y(), c->at.z());
+            j["fail_reasons"].push_back(buf);
+            j["pass"] = false;
+          }
+        j["left_out_min_clearance"] = std::isfinite(std::min(feed_left_out.least, rapids_left_out.least))
+                                          ? nlohmann::json(std::min(feed_left_out.least, rapids_left_out.least))
+                                          : nlohmann::json();
+        const auto& b = j["beside_left_out"];
+        if (b["area_mm2"].get<double>() > 0)
+          ctx.warn("not reachable by this ball beside what was not machined: " +
+                   short_number(b["area_mm2"].get<double>()) + " mm2 (" +
+                   short_number(100 * b["fraction"].get<double>()) + " % of the patch) from x " +
+                   short_number(b["min"][0].get<double>()) + " to " + short_number(b["max"][0].get<double>()) + ", y " +
+                   short_number(b["min"][1].get<double>()) + " to " + short_number(b["max"][1].get<double>()) +
+                   ": a ball of radius " + short_number(r) + " touching the surface there would cut into it "
+                   "(a smaller ball finishes it); not counted in the scallop and uncut figures");
       }
       Report rep;
       rep.data = sim.report;

@@ -140,6 +140,39 @@ TEST(Simulate, RasterOnAPlaneLeavesTheClosedFormScallop) {
   EXPECT_EQ(j["worst"][0]["kind"], "scallop");
 }
 
+// A wall the trim left out beside the plane (points on x = 16.5, from 1 mm below the plane to
+// 8 above it): where the ball touching the plane (its centre r n away, n_x = -0.2 / 1.05) would
+// come within r + half the cloud's spacing of it, from x0 = 16.5 + 3 * 0.2 / 1.05 - 3 - sp / 2 on,
+// no ball reaches. That band is reported (its area and where), not counted as uncut or scallop.
+TEST(Simulate, BesideWhatWasLeftOutNoBallReachesAndItIsReportedNotCounted) {
+  const double r = 3, s = 0.7;
+  static const auto cloud = plane_cloud();
+  HeightFieldModel surf(cloud);
+  std::vector<Eigen::Vector3d> wall;
+  for (double y = -1; y <= 13 + 1e-9; y += 0.1)
+    for (double dz = -1; dz <= 8 + 1e-9; dz += 0.1) wall.emplace_back(16.5, y, plane_z(16.5, y) + dz);
+  SimulateOptions o = plane_options(r, 0.02);
+  const Simulation without = simulate_cut(surf, feed_centres(raster(r, s)), 0.0, o);
+  o.left_out = &wall;
+  const Simulation with = simulate_cut(surf, feed_centres(raster(r, s)), 0.0, o);
+  const double x0 = 16.5 + r * kA / 1.05 - r - 0.5 * surf.spacing();
+  const auto& b = with.report["beside_left_out"];
+  // (without loops the patch is the cloud's support, which reaches a little past x = 16)
+  const double x1 = b["max"][0].get<double>(), band = (x1 - x0) * 12 * 1.05;
+  EXPECT_NEAR(x1, 16, 0.15);
+  EXPECT_NEAR(b["min"][0].get<double>(), x0, 0.05);
+  EXPECT_NEAR(b["area_mm2"].get<double>(), band, 0.03 * band);
+  EXPECT_NEAR(b["fraction"].get<double>(), b["area_mm2"].get<double>() / without.report["surface_area"].get<double>(), 1e-9);
+  EXPECT_NEAR(with.report["surface_area"].get<double>() + b["area_mm2"].get<double>(),
+              without.report["surface_area"].get<double>(), 1e-6);
+  // the rest as without the wall: the raster's closed-form cusp, nothing uncut
+  EXPECT_NEAR(with.report["scallop_max_interior"].get<double>(), without.report["scallop_max_interior"].get<double>(),
+              1e-3);
+  EXPECT_EQ(with.report["uncut_fraction"].get<double>(), 0.0);
+  for (const auto& w : with.report["worst"]) EXPECT_LT(w["x"].get<double>(), x0 + 0.1) << w;
+  EXPECT_FALSE(without.report.contains("beside_left_out"));
+}
+
 // A cloud known only to +-delta: the certificate's scallop and gouge are bounds for the real
 // surface, the estimate's values plus delta. A raster raised 0.004 mm off the plane leaves the
 // closed-form cusp + 0.004 on the estimate; with delta = 0.01 the bound is that + 0.01, and the
@@ -422,6 +455,45 @@ TEST(SimulateNode, ARapidThroughTheSurfaceFailsTheCertificate) {
   EXPECT_EQ(clear["rapids_through_part"], 0);
   EXPECT_NEAR(clear["rapid_min_clearance"].get<double>(), 1, 1e-12);
   for (const auto& f : clear["fail_reasons"]) EXPECT_EQ(f.get<std::string>().find("rapids"), std::string::npos) << f;
+}
+
+TEST(SimulateNode, AMoveIntoWhatWasLeftOutFailsTheCertificate) {
+  // The flat patch z = 0 over [0, 10]^2 and, left out beside it, a wall on x = 11 (z 0 to 5): a
+  // raster whose balls (r = 2) run to x = 10 cuts 1 mm into it; one that stops at x = 8 does not.
+  const NodeDecl& simulate = *builtin_registry().find("post.simulate");
+  auto cloud = std::make_shared<PointCloud>(), wall = std::make_shared<PointCloud>();
+  for (int i = 0; i <= 100; ++i)
+    for (int j = 0; j <= 100; ++j) cloud->points.emplace_back(i * 0.1, j * 0.1, 0);
+  for (int j = 0; j <= 100; ++j)
+    for (int k = 0; k <= 50; ++k) wall->points.emplace_back(11, j * 0.1, k * 0.1);
+  auto report = [&](double to_x) {
+    auto p = std::make_shared<Toolpath>();
+    p->tool_radius = 2, p->scallop_height = 0.05, p->chord_error = 0.005;
+    for (int j = 0; j <= 20; ++j) {
+      ToolpathPass pass;
+      for (double x = 0; x <= to_x + 1e-9; x += 0.5) pass.contact.emplace_back(x, j * 0.5, 0), pass.normal.emplace_back(0, 0, 1);
+      p->passes.push_back(pass);
+    }
+    const auto out = test::run_node(simulate, {}, {{"path", p}, {"cloud", cloud}, {"left_out", wall}});
+    return std::dynamic_pointer_cast<const Report>(out.at("report"))->data;
+  };
+  const nlohmann::json into = report(10);
+  EXPECT_FALSE(into["pass"].get<bool>());
+  EXPECT_NEAR(into["left_out_min_clearance"].get<double>(), -1, 0.01);
+  bool said = false;
+  for (const auto& f : into["fail_reasons"])
+    said |= f.get<std::string>().find(" feed moves cut into what was not machined (least clearance -1 mm at (10.000, ") !=
+            std::string::npos;
+  EXPECT_TRUE(said) << into["fail_reasons"];
+  const nlohmann::json clear = report(8);
+  EXPECT_NEAR(clear["left_out_min_clearance"].get<double>(), 1, 0.01);
+  for (const auto& f : clear["fail_reasons"]) EXPECT_EQ(f.get<std::string>().find("not machined"), std::string::npos) << f;
+  // no ball touching the patch beyond x = 11 - 2 - half the spacing reaches it (to the patch's
+  // edge, the cloud's support a little past x = 10), 10 mm long
+  const auto& b = clear["beside_left_out"];
+  const double x0 = 11 - 2 - 0.5 * HeightFieldModel(cloud->points).spacing();
+  EXPECT_NEAR(b["min"][0].get<double>(), x0, 0.05);
+  EXPECT_NEAR(b["area_mm2"].get<double>(), (b["max"][0].get<double>() - x0) * 10, 0.3);
 }
 
 // A sparse flat patch z = 5 over [0, 40] × [0, 30] (cloud spacing 2.5 mm) and its outline
