@@ -296,8 +296,10 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     impl_->left_out_3d.radiusSearch(c.data(), reach_r * reach_r, near, nanoflann::SearchParams(32, 0, false));
     for (const auto& [j, d2] : near) {
       const double d = std::sqrt(d2), reach = reach_r - d;
-      if (reach > res.band_reach)
+      if (reach > res.band_reach) {
         res.band_reach = reach, res.band_up = d > 0 ? (c.z() - impl_->left_out[j].z()) / d : 1.0;
+        res.left_out_deepest = true, res.left_out_at = impl_->left_out[j];
+      }
     }
   }
   // The cloud's own points within r of the centre in xy: a witness that needs no fit. Only those
@@ -332,6 +334,7 @@ struct Sample {
 struct Tally {
   std::size_t positions = 0, moves = 0, lifted = 0, inserted = 0, unresolved = 0;
   std::size_t raised_moves = 0;  // moves raised whole (both ends) after their halvings
+  std::size_t pushed = 0;        // planned positions moved sideways off what the trim left out
   double deepest = 0;  // deepest cut-in found (mm)
   Eigen::Vector3d deepest_at = Eigen::Vector3d::Zero();
   double highest_lift = 0;
@@ -339,7 +342,7 @@ struct Tally {
   Eigen::Vector3d highest_lift_from = Eigen::Vector3d::Zero();  // the planned ball centre there
   void add(const Tally& o) {
     positions += o.positions, moves += o.moves, lifted += o.lifted, inserted += o.inserted;
-    unresolved += o.unresolved, raised_moves += o.raised_moves;
+    unresolved += o.unresolved, raised_moves += o.raised_moves, pushed += o.pushed;
     if (o.deepest > deepest) deepest = o.deepest, deepest_at = o.deepest_at;
     if (o.highest_lift > highest_lift)
       highest_lift = o.highest_lift, highest_lift_at = o.highest_lift_at, highest_lift_from = o.highest_lift_from;
@@ -402,6 +405,10 @@ class PassGuard {
     };
     if (!(res.reach() > threshold())) return false;
     if (res.reach() > t.deepest) t.deepest = res.reach(), t.deepest_at = s.contact;
+    if (planned_position && res.band_is_deepest() && res.left_out_deepest && push_off_left_out(s, res)) {
+      ++t.pushed;
+      return true;
+    }
     const Eigen::Vector3d planned = c;
     const double z0 = c.z();
     double z_below = c.z();  // the highest centre found still too deep
@@ -440,6 +447,40 @@ class PassGuard {
     if (c.z() - z0 > t.highest_lift)
       t.highest_lift = c.z() - z0, t.highest_lift_at = s.contact, t.highest_lift_from = planned;
     ++t.lifted;
+    return true;
+  }
+
+  // A planned ball that reaches into what the trim left out (a wall beside a floor) is moved
+  // sideways, away from the left-out point it reaches deepest, until it clears it, and set down
+  // on the patch again: it then finishes the patch up to where the ball last reaches it, where a
+  // lift would ride over the wall and leave the strip beside it too high (a floor beside a 10 mm
+  // wall: the scallop there 0.091 mm, h 0.05). At most r sideways and 8 steps; false (the sample
+  // unchanged) where that does not clear it: then it is lifted.
+  bool push_off_left_out(Sample& s, BallClearance::Result res) const {
+    const double keep_off = r_ + 0.5 * clearance_.spacing();
+    const Eigen::Vector3d planned = s.contact + r_ * s.normal;
+    Eigen::Vector3d c = planned;
+    for (int it = 0; it < 8; ++it) {
+      if (!(res.reach() > position_tolerance(res))) break;
+      if (!res.band_is_deepest() || !res.left_out_deepest) return false;
+      const Eigen::Vector2d away = (c - res.left_out_at).head<2>();
+      const double dz = c.z() - res.left_out_at.z();
+      if (!(away.norm() > 1e-9) || !(std::abs(dz) < keep_off)) return false;
+      c.head<2>() += (std::sqrt(keep_off * keep_off - dz * dz) - away.norm() + 1e-4) * away.normalized();
+      if ((c - planned).head<2>().norm() > r_) return false;
+      // set down on the patch again: touching its surface raised by the uncertainty there
+      for (int k = 0; k < 8; ++k) {
+        res = clearance_(c, c - r_ * Eigen::Vector3d::UnitZ());
+        if (!res.on_surface || !(res.normal.z() > 0.2)) return false;
+        const double dz_down = (res.clearance - res.uncertainty) / res.normal.z();
+        c.z() -= dz_down;
+        if (std::abs(dz_down) < 1e-6) break;
+      }
+      res = clearance_(c, c - r_ * Eigen::Vector3d::UnitZ());
+    }
+    if (res.reach() > position_tolerance(res) || !res.on_surface || !((c - res.foot).norm() > 0)) return false;
+    s.normal = (c - res.foot).normalized();
+    s.contact = c - r_ * s.normal;
     return true;
   }
 
@@ -632,6 +673,7 @@ GougeGuardResult guard_gouges(const Toolpath& path, const BallClearance& clearan
   rep["lifted_positions"] = total.lifted;
   rep["inserted_positions"] = total.inserted;
   rep["raised_moves"] = total.raised_moves;
+  rep["pushed_off_left_out"] = total.pushed;
   rep["unresolved"] = total.unresolved;
   rep["deepest_cut_in"] = total.deepest;
   if (total.deepest > 0) rep["deepest_cut_in_at"] = point_json(total.deepest_at);

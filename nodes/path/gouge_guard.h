@@ -26,7 +26,10 @@
 // raised until it reaches in by 3/4 of that (and its halves are checked again, up to max_splits
 // times); a move still too deep after that
 // is raised whole, both ends, until its probes clear. A lifted ball leaves stock: the report
-// says where and how much, so a planner's weak spot is never hidden.
+// says where and how much, so a planner's weak spot is never hidden. A planned ball that reaches
+// into the points the trim left out (a wall beside a floor) is first moved sideways off them and
+// set down on the patch again, at most r: it then finishes the patch up to where the ball last
+// reaches it (pushed_off_left_out in the report); where that does not clear them it is lifted.
 #pragma once
 
 #include <Eigen/Core>
@@ -77,6 +80,9 @@ class BallClearance {
     // and the upward part of the unit direction from the deepest such sample to the centre.
     double band_reach = -INFINITY;
     double band_up = 1;
+    // Whether the deepest band witness is a point left out (BallClearance's left_out), and which.
+    bool left_out_deepest = false;
+    Eigen::Vector3d left_out_at = Eigen::Vector3d::Zero();
     // How far the ball reaches into the band at its foot point, and by either witness (mm, > 0:
     // too deep); which of them reaches deeper (the direction a lift takes).
     double foot_reach() const { return (on_surface ? uncertainty : 0.0) - clearance; }

@@ -651,33 +651,63 @@ TEST(GougeGuard, ALiftOfMoreThanThreeToolRadiiFailsWithWhereAndWhy) {
                    "e.g. a fold-over of the (u,v) map");
 }
 
-TEST(GougeGuard, ABallBesideAWallTheTrimLeftOutIsLiftedJustClearOfIt) {
-  // A floor z = 0 sampled every 0.25 mm to x = 4, and beside it a wall the trim left out: points
-  // every 0.25 mm on the plane x = 4.2 up to z = 6. A pass along y at x = 2.5, the ball (r = 2) on
-  // the floor, 1.7 mm from the wall: it must clear the wall's points by r + half the floor's
-  // spacing (0.2216 as the height field measures it), which puts its centre at
-  // z = 6 + sqrt(2.1108^2 - 1.7^2) = 7.2512 over the wall's top row.
-  // Lifted in steps of reach / rate, with the rate 0.2 where the wall's points lie level with the
-  // centre, the last step overshot: by 6.14 mm, over 3 tool radii, and the pass was refused; the
-  // step is halved back.
-  std::vector<Eigen::Vector3d> floor, wall;
-  for (double x = -6; x <= 4 + 1e-9; x += 0.25)
-    for (double y = -6; y <= 6 + 1e-9; y += 0.25) floor.emplace_back(x, y, 0);
-  for (double z = 0.25; z <= 6 + 1e-9; z += 0.25)
-    for (double y = -6; y <= 6 + 1e-9; y += 0.25) wall.emplace_back(4.2, y, z);
+// Floor z = 0 sampled every 0.25 mm over x in [x_from, x_to], |y| <= 6; walls the trim left out,
+// points every 0.25 mm on the planes x = each of wall_x, from z = 0.25 up to z = 6.
+struct FloorAndWalls {
+  std::vector<Eigen::Vector3d> floor, walls;
+  FloorAndWalls(double x_from, double x_to, std::initializer_list<double> wall_x) {
+    for (double x = x_from; x <= x_to + 1e-9; x += 0.25)
+      for (double y = -6; y <= 6 + 1e-9; y += 0.25) floor.emplace_back(x, y, 0);
+    for (double wx : wall_x)
+      for (double z = 0.25; z <= 6 + 1e-9; z += 0.25)
+        for (double y = -6; y <= 6 + 1e-9; y += 0.25) walls.emplace_back(wx, y, z);
+  }
+};
+
+TEST(GougeGuard, ABallBesideAWallTheTrimLeftOutIsMovedOffItAndSetDownOnTheFloor) {
+  // A floor to x = 4 and beside it a wall on x = 4.2. A pass along y at x = 2.5, the ball (r = 2)
+  // on the floor, 1.7 mm from the wall: it must clear the wall's points by r + half the floor's
+  // spacing (0.2216 as the height field measures it), 2.1108. Lifted, it rode over the wall's
+  // top at z = 7.25 and left the floor beside the wall uncut; moved sideways it finishes the floor
+  // up to x = 4.2 - 2.1108: its centre at (2.0892, y, 2), touching the floor.
+  const FloorAndWalls part(-6, 4, {4.2});
   const Toolpath t = flat_pass_along_y(2.5, 3, 2.0);
-  HeightFieldModel surface(floor);
+  HeightFieldModel surface(part.floor);
   const double clear = 2 + 0.5 * surface.spacing();
+  EXPECT_NEAR(4.2 - clear, 2.0892, 1e-4);
   // without the wall the floor asks for nothing
-  EXPECT_EQ(guard_gouges(t, BallClearance(surface, floor, 2.0), {}).report["lifted_positions"], 0);
-  const auto res = guard_gouges(t, BallClearance(surface, floor, 2.0, nullptr, nullptr, 0, &wall), {});
+  EXPECT_EQ(guard_gouges(t, BallClearance(surface, part.floor, 2.0), {}).report["lifted_positions"], 0);
+  const auto res = guard_gouges(t, BallClearance(surface, part.floor, 2.0, nullptr, nullptr, 0, &part.walls), {});
+  EXPECT_EQ(res.report["pushed_off_left_out"], t.passes[0].contact.size());
+  EXPECT_EQ(res.report["lifted_positions"], 0);
+  for (std::size_t i = 0; i < res.path.passes[0].contact.size(); ++i) {
+    const Eigen::Vector3d c = res.path.passes[0].contact[i] + 2.0 * res.path.passes[0].normal[i];
+    EXPECT_NEAR(c.x(), 4.2 - clear, 2e-4) << i;
+    EXPECT_NEAR(c.y(), t.passes[0].contact[i].y(), 1e-9) << i;
+    EXPECT_NEAR(c.z(), 2, 1e-6) << i;  // on the floor
+    for (const auto& w : part.walls) EXPECT_GE((c - w).norm(), clear - 1e-9);
+  }
+}
+
+TEST(GougeGuard, ABallInASlotNarrowerThanItIsLiftedJustClearOfBothWalls) {
+  // Walls on x = 0.8 and 4.2, the floor between: a ball (r = 2) at x = 2.5 is 1.7 mm from each,
+  // and moved off one it meets the other. Lifted, its centre must clear both walls' top rows by
+  // 2.1108: z = 6 + sqrt(2.1108^2 - 1.7^2) = 7.2512. Lifted in steps of reach / rate, with the
+  // rate 0.2 where the wall's points lie level with the centre, the last step overshot: by
+  // 6.14 mm, over 3 tool radii, and the pass was refused; the step is halved back.
+  const FloorAndWalls part(1, 4, {0.8, 4.2});
+  const Toolpath t = flat_pass_along_y(2.5, 3, 2.0);
+  HeightFieldModel surface(part.floor);
+  const double clear = 2 + 0.5 * surface.spacing();
+  const auto res = guard_gouges(t, BallClearance(surface, part.floor, 2.0, nullptr, nullptr, 0, &part.walls), {});
   const double top = 6 + std::sqrt(clear * clear - 1.7 * 1.7);
-  EXPECT_NEAR(top, 7.2512, 1e-4);
+  EXPECT_NEAR(top, 7.2512, 1e-3);
+  EXPECT_EQ(res.report["pushed_off_left_out"], 0);
   for (std::size_t i = 0; i < res.path.passes[0].contact.size(); ++i) {
     const Eigen::Vector3d c = res.path.passes[0].contact[i] + 2.0 * res.path.passes[0].normal[i];
     EXPECT_GE(c.z(), top - 1e-9) << i;
     EXPECT_LE(c.z(), top + 0.001) << i;  // within a tenth of e of the lowest clear centre
-    for (const auto& w : wall) EXPECT_GE((c - w).norm(), clear - 1e-9);
+    for (const auto& w : part.walls) EXPECT_GE((c - w).norm(), clear - 1e-9);
   }
   EXPECT_NEAR(res.report["highest_lift"].get<double>(), top - 2, 0.001);
 }
