@@ -17,6 +17,7 @@
 
 #include "nodes/cloud/denoise.h"
 #include "nodes/geom/kd_tree.h"
+#include "nodes/geom/obstacle_points.h"
 #include "nodes/geom/point_text.h"
 #include "nodes/path/step_size.h"
 
@@ -46,9 +47,11 @@ struct BallClearance::Impl {
     explicit BandTier(const std::vector<Eigen::Vector3d>& at) : adaptor{at, index} {}
   };
   BandTier tier[2]{BandTier(band.at), BandTier(band.at)};
-  // The points not machined, by xy and in 3-D (empty when none were given).
+  // The points not machined as given (empty when none were), and those of them the ball keeps
+  // clear of (obstacle_points: apart from the patch by 3 spacings), by xy and in 3-D.
   const std::vector<Eigen::Vector3d> no_points;
-  const std::vector<Eigen::Vector3d>& left_out;
+  const std::vector<Eigen::Vector3d>& given_left_out;
+  std::vector<Eigen::Vector3d> left_out;
   PointsAdaptor<Eigen::Vector3d> left_out_adaptor{left_out};
   KdTree<Eigen::Vector3d, 2> left_out_xy{2, left_out_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
   KdTree<Eigen::Vector3d, 3> left_out_3d{3, left_out_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)};
@@ -60,7 +63,7 @@ struct BallClearance::Impl {
         outline(o),
         computed(given ? SurfaceBand{} : surface_band(s, p)),
         band(given ? *given : SurfaceBandView{computed.at, computed.uncertainty}),
-        left_out(left ? *left : no_points) {
+        given_left_out(left ? *left : no_points) {
     if (band.at.size() != band.uncertainty.size())
       throw std::invalid_argument("the surface band has " + std::to_string(band.at.size()) + " places but " +
                                   std::to_string(band.uncertainty.size()) + " uncertainties");
@@ -90,12 +93,11 @@ struct BallClearance::Impl {
                            }
                          },
                          [&] { if (!tier[0].index.empty()) tier[0].tree.buildIndex(); },
-                         [&] { if (!tier[1].index.empty()) tier[1].tree.buildIndex(); },
-                         [&] {
-                           if (left_out.empty()) return;
-                           left_out_xy.buildIndex();
-                           left_out_3d.buildIndex();
-                         });
+                         [&] { if (!tier[1].index.empty()) tier[1].tree.buildIndex(); });
+    if (given_left_out.empty()) return;
+    left_out = obstacle_points(given_left_out, surface, 3 * surface.spacing());
+    if (left_out.empty()) return;
+    tbb::parallel_invoke([&] { left_out_xy.buildIndex(); }, [&] { left_out_3d.buildIndex(); });
   }
   // Whether q (xy) lies off the patch over what was left out: a left-out point nearer than any
   // of the cloud's (the field beyond the cloud's edge would be extrapolated over a wall there).
@@ -177,7 +179,7 @@ BallClearance::~BallClearance() { delete impl_; }
 double BallClearance::spacing() const { return impl_->surface.spacing(); }
 const std::vector<Eigen::Vector3d>& BallClearance::points() const { return impl_->points; }
 const Outline* BallClearance::outline() const { return impl_->outline; }
-const std::vector<Eigen::Vector3d>& BallClearance::left_out() const { return impl_->left_out; }
+const std::vector<Eigen::Vector3d>& BallClearance::left_out() const { return impl_->given_left_out; }
 const KdTree<Eigen::Vector3d, 2>& BallClearance::xy_tree() const { return impl_->tree; }
 
 BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const Eigen::Vector3d& hint) const {

@@ -7,6 +7,7 @@
 
 #include "engine/node.h"
 #include "nodes/cloud/cloud_height_field.h"
+#include "nodes/geom/obstacle_points.h"
 #include "nodes/geom/point_text.h"
 #include "nodes/post/simulate.h"
 #include "nodes/types/cloud.h"
@@ -18,7 +19,7 @@ namespace scallop::post_nodes {
 NodeDecl make_simulate_node() {
   NodeDecl d;
   d.type = "post.simulate";
-  d.version = 16;  // 16: optional left_out: samples no ball reaches beside it reported (beside_left_out), not counted; moves cutting into it fail (stop 92); 15: the rim band reaches into the holes too (stop 90); 14: a residual within the points' uncertainty floor counts as the height field's misfit (HeightFieldModel, stop 88); 13: the height field's quartic where its quadratic misfits (HeightFieldModel, kQuarticFrom); 12: rim_band, the band beyond the outer loop counted too when asked (samples_beyond_outline);  11: a gouge bound below the uncertainty says the ball stays clear of the surface by less than it; 10: a failing bound says how much of it is the surface's uncertainty, and the worst places carry it; 9: the rapids checked against the cloud (rapid_min_clearance, rapids_through_part); 3: scallop and gouge are bounds that include the cloud's uncertainty; 7: and the height field's misfit; 8: the height field solved by a fixed-size Cholesky (the same to rounding)
+  d.version = 17;  // 17: of left_out only the points apart from the patch and above it (obstacle_points); 16: optional left_out: samples no ball reaches beside it reported (beside_left_out), not counted; moves cutting into it fail (stop 92); 15: the rim band reaches into the holes too (stop 90); 14: a residual within the points' uncertainty floor counts as the height field's misfit (HeightFieldModel, stop 88); 13: the height field's quartic where its quadratic misfits (HeightFieldModel, kQuarticFrom); 12: rim_band, the band beyond the outer loop counted too when asked (samples_beyond_outline);  11: a gouge bound below the uncertainty says the ball stays clear of the surface by less than it; 10: a failing bound says how much of it is the surface's uncertainty, and the worst places carry it; 9: the rapids checked against the cloud (rapid_min_clearance, rapids_through_part); 3: scallop and gouge are bounds that include the cloud's uncertainty; 7: and the height field's misfit; 8: the height field solved by a fixed-size Cholesky (the same to rounding)
                   // 4: the uncertainty grows at gaps beyond the cloud's edge
                   // 5: pass asks the whole patch, rim included, not the interior only
                   // 6: outputs the simulation (post.render draws it), no heat map of its own
@@ -96,10 +97,15 @@ NodeDecl make_simulate_node() {
             if (ctx.has_input("linked"))
               rc = rapid_clearance(cloud->points, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr,
                                    cloud_height_field(*cloud)->tree3d(), rapids, r, tol);
-            // every move against what was not machined, as the rapids against the cloud
+            // every move against what was not machined (apart from the patch), as the rapids
+            // against the cloud
             if (o.left_out) {
-              feed_left_out = rapid_clearance(*o.left_out, nullptr, feed, r, tol);
-              rapids_left_out = rapid_clearance(*o.left_out, nullptr, rapids, r, tol);
+              const auto surface = cloud_height_field(*cloud);
+              const auto obstacles = obstacle_points(*o.left_out, *surface, 3 * surface->spacing());
+              if (!obstacles.empty()) {
+                feed_left_out = rapid_clearance(obstacles, nullptr, feed, r, tol);
+                rapids_left_out = rapid_clearance(obstacles, nullptr, rapids, r, tol);
+              }
             }
           });
       if (ctx.has_input("linked")) {
