@@ -84,8 +84,11 @@ TEST(TrimSteep, ANoisyCapKeepsLittleBeyondTheLimit) {
     // nothing well inside the limit is lost
     std::vector<char> kept(P.size());
     for (std::size_t i : r.kept) kept[i] = 1;
-    for (std::size_t i = 0; i < P.size(); ++i)
-      if (polar_deg(T[i]) < 60) EXPECT_TRUE(kept[i]) << "seed " << seed << " point " << i;
+    for (std::size_t i = 0; i < P.size(); ++i) {
+      if (polar_deg(T[i]) < 60) {
+        EXPECT_TRUE(kept[i]) << "seed " << seed << " point " << i;
+      }
+    }
   }
   EXPECT_LE(beyond, 5);
 }
