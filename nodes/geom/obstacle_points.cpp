@@ -7,7 +7,8 @@
 namespace scallop {
 
 std::vector<Eigen::Vector3d> obstacle_points(const std::vector<Eigen::Vector3d>& left_out,
-                                             const HeightFieldModel& patch, double apart) {
+                                             const HeightFieldModel& patch) {
+  const double apart = 3 * patch.spacing();
   std::vector<Eigen::Vector3d> out;
   const auto& kept = patch.points();
   const auto& tree = patch.tree3d();

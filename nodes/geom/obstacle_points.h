@@ -9,8 +9,9 @@
 
 namespace scallop {
 
-// left_out  #L points not machined (mm); patch  the height field of the machined points;
-// apart  mm. Returns, in their order, the points of left_out farther than `apart` from every
+// left_out  #L points not machined (mm); patch  the height field of the machined points.
+// Returns, in their order, the points of left_out farther than apart = 3 spacings of the patch
+// (HeightFieldModel::spacing) from every
 // machined point that stand above the patch, where the ball comes from: higher than the nearest
 // machined point and every one within 2 apart of them by more than a tenth of its distance
 // (6 degrees). A wall
@@ -22,6 +23,12 @@ namespace scallop {
 // trim left inside a ragged kept rim, higher than the kept point nearest it). (Not the fits'
 // normals at the patch's edge: beside a wall they point either way.)
 std::vector<Eigen::Vector3d> obstacle_points(const std::vector<Eigen::Vector3d>& left_out,
-                                             const HeightFieldModel& patch, double apart);
+                                             const HeightFieldModel& patch);
+
+// How near a ball of radius r may come to an obstacle point (mm): r and half the patch's spacing
+// (no field is fitted to the obstacles; between their samples a sharp edge, a wall's top, can
+// stand that much nearer the ball than they do: without it a ball cut 0.043 mm into a 3 mm
+// wall's top edge).
+inline double obstacle_keep_off(double r, double spacing) { return r + 0.5 * spacing; }
 
 }  // namespace scallop

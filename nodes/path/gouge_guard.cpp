@@ -95,13 +95,15 @@ struct BallClearance::Impl {
                          [&] { if (!tier[0].index.empty()) tier[0].tree.buildIndex(); },
                          [&] { if (!tier[1].index.empty()) tier[1].tree.buildIndex(); });
     if (given_left_out.empty()) return;
-    left_out = obstacle_points(given_left_out, surface, 3 * surface.spacing());
+    left_out = obstacle_points(given_left_out, surface);
     if (left_out.empty()) return;
     tbb::parallel_invoke([&] { left_out_xy.buildIndex(); }, [&] { left_out_3d.buildIndex(); });
   }
   // Whether q (xy) lies off the patch over what was left out: a left-out point nearer than any
-  // of the cloud's (the field beyond the cloud's edge would be extrapolated over a wall there).
-  bool over_left_out(const Eigen::Vector2d& q, double cloud_d2) const {
+  // of the cloud's, cloud_d2(q) away (the field beyond the cloud's edge would be extrapolated
+  // over a wall there). The cloud's nearest point is searched for only where it can decide.
+  template <class CloudD2>
+  bool over_left_out(const Eigen::Vector2d& q, const CloudD2& cloud_d2) const {
     if (left_out.empty() || (outline && outline->beyond(q) <= 0)) return false;
     std::uint32_t j;
     double d2;
@@ -109,7 +111,7 @@ struct BallClearance::Impl {
     one.init(&j, &d2);
     const double at[3] = {q.x(), q.y(), 0};
     left_out_xy.findNeighbors(one, at, nanoflann::SearchParams(32, 0, false));
-    return d2 < cloud_d2;
+    return d2 < cloud_d2(q);
   }
 };
 
@@ -209,7 +211,7 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     return d2;
   };
   auto in_band = [&](const Eigen::Vector2d& q) {
-    if (impl_->over_left_out(q, nearest_point_d2(q))) return false;
+    if (impl_->over_left_out(q, nearest_point_d2)) return false;
     if (impl_->outline) {
       // on the patch (0), or off it (beyond the outer loop or in a hole) within the rim band
       if (impl_->outline->beyond(q) <= std::max(impl_->rim_band, 0.0)) return true;
@@ -222,7 +224,7 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
     return in_band(s) && impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/true);
   };
   if (found && (impl_->surface.eval(s.x(), s.y(), z, n, /*force=*/false, &res.uncertainty) || near_cloud()) &&
-      !impl_->over_left_out(s, nearest_point_d2(s))) {
+      !impl_->over_left_out(s, nearest_point_d2)) {
     res.on_surface = true;
     res.foot = Eigen::Vector3d(s.x(), s.y(), z);
     res.normal = n;
@@ -289,11 +291,9 @@ BallClearance::Result BallClearance::operator()(const Eigen::Vector3d& c, const 
       }
   }
   if (samples_reach > res.band_reach) res.band_reach = samples_reach, res.band_up = samples_up;
-  // The points not machined near the centre: the ball keeps clear of them by half a spacing (no
-  // field is fitted to them; between its samples a sharp edge, a wall's top, can stand that much
-  // nearer the ball than they do).
+  // The points not machined near the centre: the ball keeps clear of them (obstacle_keep_off).
   if (!impl_->left_out.empty()) {
-    const double reach_r = r + 0.5 * sp;
+    const double reach_r = obstacle_keep_off(r, sp);
     std::vector<std::pair<std::uint32_t, double>> near;
     impl_->left_out_3d.radiusSearch(c.data(), reach_r * reach_r, near, nanoflann::SearchParams(32, 0, false));
     for (const auto& [j, d2] : near) {
@@ -459,7 +459,7 @@ class PassGuard {
   // wall: the scallop there 0.091 mm, h 0.05). At most r sideways and 8 steps; false (the sample
   // unchanged) where that does not clear it: then it is lifted.
   bool push_off_left_out(Sample& s, BallClearance::Result res) const {
-    const double keep_off = r_ + 0.5 * clearance_.spacing();
+    const double keep_off = obstacle_keep_off(r_, clearance_.spacing());
     const Eigen::Vector3d planned = s.contact + r_ * s.normal;
     Eigen::Vector3d c = planned;
     for (int it = 0; it < 8; ++it) {

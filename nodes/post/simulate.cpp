@@ -269,13 +269,12 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
   auto in_band = [&](double x, double y) { return use_loops && nearest_node(x, y) == 2; };
 
   // Beside what was not machined: the ball touching the surface at p (normal n) would cut into it.
-  // (those of them apart from the patch, as path.gouge_guard keeps the ball off: obstacle_points)
-  const std::vector<Eigen::Vector3d> left_out =
-      o.left_out ? obstacle_points(*o.left_out, surf, 3 * surf.spacing()) : std::vector<Eigen::Vector3d>{};
+  const std::vector<Eigen::Vector3d> no_points;
+  const std::vector<Eigen::Vector3d>& left_out = o.left_out ? *o.left_out : no_points;
   const PointsAdaptor<Eigen::Vector3d> left_out_adaptor{left_out};
   KdTree<Eigen::Vector3d, 3> left_out_tree(3, left_out_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   if (!left_out.empty()) left_out_tree.buildIndex();
-  const double keep_off = r + 0.5 * surf.spacing();
+  const double keep_off = obstacle_keep_off(r, surf.spacing());
   auto beside_left_out = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
     if (left_out.empty()) return false;
     const Eigen::Vector3d c = p + r * n;

@@ -85,10 +85,9 @@ struct SimulateOptions {
   // the guard samples it, and the contour program's gouge bound came out 0.0137 > e there while
   // verify.py passed it).
   double rim_band = 0;
-  // Optional: points of the part that are not machined (cloud.trim_steep's left_out: a steep wall
-  // beside the patch). A sample where the ball touching the surface (its centre r along the
-  // normal) would come within r + half the cloud's spacing of one of them (of those farther than
-  // 3 spacings from the cloud's points that stand before its surface: obstacle_points) cannot be
+  // Optional: the obstacle points of what is not machined (obstacle_points of cloud.trim_steep's
+  // left_out: a steep wall beside the patch). A sample where the ball touching the surface (its
+  // centre r along the normal) would come within obstacle_keep_off of one of them cannot be
   // reached by
   // this ball without cutting into them (path.gouge_guard keeps it off): not counted in the
   // scallop and uncut figures, but reported (beside_left_out: its area, fraction and where).

@@ -74,9 +74,12 @@ NodeDecl make_simulate_node() {
     o.tool_radius = r;
     o.scallop = ctx.number("scallop") > 0 ? ctx.number("scallop") : h;
     o.chord = ctx.number("chord") >= 0 ? ctx.number("chord") : e;
-    std::shared_ptr<const PointCloud> left_out;
-    if (ctx.has_input("left_out")) left_out = ctx.input<PointCloud>("left_out");
-    if (left_out && left_out->size()) o.left_out = &left_out->points;
+    // what was not machined, as the guard keeps the ball off it: its obstacle points
+    std::vector<Eigen::Vector3d> obstacles;
+    if (ctx.has_input("left_out") && ctx.input<PointCloud>("left_out")->size()) {
+      obstacles = obstacle_points(ctx.input<PointCloud>("left_out")->points, *cloud_height_field(*cloud));
+      o.left_out = &obstacles;
+    }
     try {
       if (ctx.has_input("loops")) o.loops = loop_polygons_xy(*ctx.input<BoundaryLoops>("loops"), cloud->points);
       // The rapids come down to a ball of r + lead_height above the part (post.link): checked,
@@ -97,15 +100,10 @@ NodeDecl make_simulate_node() {
             if (ctx.has_input("linked"))
               rc = rapid_clearance(cloud->points, cloud->has_uncertainty() ? &cloud->uncertainty : nullptr,
                                    cloud_height_field(*cloud)->tree3d(), rapids, r, tol);
-            // every move against what was not machined (apart from the patch), as the rapids
-            // against the cloud
-            if (o.left_out) {
-              const auto surface = cloud_height_field(*cloud);
-              const auto obstacles = obstacle_points(*o.left_out, *surface, 3 * surface->spacing());
-              if (!obstacles.empty()) {
-                feed_left_out = rapid_clearance(obstacles, nullptr, feed, r, tol);
-                rapids_left_out = rapid_clearance(obstacles, nullptr, rapids, r, tol);
-              }
+            // every move against what was not machined, as the rapids against the cloud
+            if (!obstacles.empty()) {
+              feed_left_out = rapid_clearance(obstacles, nullptr, feed, r, tol);
+              rapids_left_out = rapid_clearance(obstacles, nullptr, rapids, r, tol);
             }
           });
       if (ctx.has_input("linked")) {

@@ -26,7 +26,7 @@ TEST(ObstaclePoints, AWallBesideTheFloorIsOneApartFromItsFoot) {
   std::vector<Vector3d> wall;
   for (double z = 0.25; z <= 6 + 1e-9; z += 0.25)
     for (double y = -6; y <= 6 + 1e-9; y += 0.25) wall.emplace_back(4.2, y, z);
-  const auto obstacles = obstacle_points(wall, patch, apart);
+  const auto obstacles = obstacle_points(wall, patch);
   ASSERT_FALSE(obstacles.empty());
   std::size_t expect = 0;
   for (const auto& q : wall) {
@@ -52,7 +52,7 @@ TEST(ObstaclePoints, AConvexRimCutOffByTheTrimIsNoObstacleCleanOrNoisy) {
       for (double y = -6; y <= 6 + 1e-9; y += 0.25)
         rim.emplace_back(4 + 10 * std::sin(a) + sigma * noise(rng), y + sigma * noise(rng),
                          10 * std::cos(a) - 10 + sigma * noise(rng));
-    EXPECT_TRUE(obstacle_points(rim, patch, 3 * patch.spacing()).empty()) << sigma;
+    EXPECT_TRUE(obstacle_points(rim, patch).empty()) << sigma;
   }
 }
 

@@ -1,4 +1,5 @@
 #include "nodes/post/simulate.h"
+#include "nodes/geom/obstacle_points.h"
 #include "nodes/post/clearance_march.h"
 
 #include <gtest/gtest.h>
@@ -153,7 +154,8 @@ TEST(Simulate, BesideWhatWasLeftOutNoBallReachesAndItIsReportedNotCounted) {
     for (double dz = -1; dz <= 8 + 1e-9; dz += 0.1) wall.emplace_back(16.5, y, plane_z(16.5, y) + dz);
   SimulateOptions o = plane_options(r, 0.02);
   const Simulation without = simulate_cut(surf, feed_centres(raster(r, s)), 0.0, o);
-  o.left_out = &wall;
+  const std::vector<Eigen::Vector3d> obstacles = obstacle_points(wall, surf);
+  o.left_out = &obstacles;
   const Simulation with = simulate_cut(surf, feed_centres(raster(r, s)), 0.0, o);
   const double x0 = 16.5 + r * kA / 1.05 - r - 0.5 * surf.spacing();
   const auto& b = with.report["beside_left_out"];
