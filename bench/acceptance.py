@@ -27,10 +27,11 @@ def run(cmd, **kw):
 
 def graph_with_denoised(graph, work):
     """The shipped graph with the denoised cloud as one more output (for |error| / uncertainty)."""
-    j = json.load(open(os.path.join(ROOT, "graphs", f"isoparametric-{graph}.json")))
+    name = graph if os.path.exists(os.path.join(ROOT, "graphs", f"{graph}.json")) else f"isoparametric-{graph}"
+    j = json.load(open(os.path.join(ROOT, "graphs", f"{name}.json")))
     j["outputs"]["denoised"] = "denoise.cloud"
     j["inputs"]["cloud"].pop("default", None)
-    path = os.path.join(work, f"isoparametric-{graph}-denoised.json")
+    path = os.path.join(work, f"{name}-denoised.json")
     json.dump(j, open(path, "w"), indent=1)
     return path
 

@@ -73,8 +73,7 @@ Outline::Outline(std::vector<std::vector<Eigen::Vector2d>> loops) {
   edges_ = std::move(index);
 }
 
-double Outline::beyond(const Eigen::Vector2d& q) const {
-  if (loops_.empty()) return std::numeric_limits<double>::infinity();
+Outline::NearestEdge Outline::nearest_edge(const Eigen::Vector2d& q) const {
   // The nearest edge is among those of the 8 nearest edge points (they are at most a median
   // edge apart along every edge).
   constexpr std::size_t kNear = 8;
@@ -82,16 +81,27 @@ double Outline::beyond(const Eigen::Vector2d& q) const {
   double d2[kNear];
   const double at[2] = {q.x(), q.y()};
   const std::size_t got = edges_->tree->knnSearch(at, kNear, near, d2);
-  double best = std::numeric_limits<double>::infinity(), best_t = 0;
-  std::uint32_t best_l = 0, best_k = 0;
+  NearestEdge best;
   for (std::size_t i = 0; i < got; ++i) {
     const std::uint32_t l = edges_->loop[near[i]], k = edges_->edge[near[i]];
     const auto& P = loops_[l].polygon;
     const Eigen::Vector2d a = P[k], ab = P[(k + 1) % P.size()] - a;
     const double t = ab.squaredNorm() > 0 ? std::clamp((q - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
     const double d = (a + t * ab - q).norm();
-    if (d < best) best = d, best_t = t, best_l = l, best_k = k;
+    if (d < best.distance) best = {d, t, l, k};
   }
+  return best;
+}
+
+double Outline::edge_distance(const Eigen::Vector2d& q) const {
+  return loops_.empty() ? std::numeric_limits<double>::infinity() : nearest_edge(q).distance;
+}
+
+double Outline::beyond(const Eigen::Vector2d& q) const {
+  if (loops_.empty()) return std::numeric_limits<double>::infinity();
+  const NearestEdge nearest = nearest_edge(q);
+  const double best = nearest.distance, best_t = nearest.t;
+  const std::uint32_t best_l = nearest.loop, best_k = nearest.edge;
   // Which side of the nearest edge q lies on (the inside is to the left of a counter-clockwise
   // loop); nearest a corner, of both its edges: inside a convex corner is left of both, inside
   // a reflex one left of either. Exact for simple polygons that do not cross, without walking

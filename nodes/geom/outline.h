@@ -5,6 +5,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -36,6 +38,8 @@ class Outline {
   // (rim_band_width, nodes/path/step_size.h): a hole's edge lies beyond the cloud's points
   // around it as the outline does beyond its outermost ones.
   double beyond(const Eigen::Vector2d& q) const;
+  // How far q lies from the nearest loop's edges, on either side; +infinity without loops.
+  double edge_distance(const Eigen::Vector2d& q) const;
 
  private:
   struct Loop {
@@ -45,6 +49,12 @@ class Outline {
     bool patch_inside = true;  // the patch lies inside it (the outer loop), not outside (a hole)
   };
   struct EdgeIndex;  // every loop's edges, sampled, in a k-d tree
+  struct NearestEdge {
+    double distance = std::numeric_limits<double>::infinity();
+    double t = 0;                         // where along the edge, in [0, 1]
+    std::uint32_t loop = 0, edge = 0;     // edge: from corner `edge` to the next
+  };
+  NearestEdge nearest_edge(const Eigen::Vector2d& q) const;  // loops not empty
   std::vector<Loop> loops_;
   std::shared_ptr<const EdgeIndex> edges_;
 };

@@ -9,12 +9,13 @@ NodeDecl make_boundary_map_node();
 NodeDecl make_laplacian_node();
 NodeDecl make_harmonic_node();
 NodeDecl make_map_check_node();
+NodeDecl make_planar_node();
 }  // namespace param_nodes
 
 void register_param(Registry& registry) {
   using namespace param_nodes;
   registry.add_domain("param", {make_boundary_map_node(), make_laplacian_node(), make_harmonic_node(),
-                                make_map_check_node()});
+                                make_map_check_node(), make_planar_node()});
 }
 
 }  // namespace scallop

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <nanoflann.hpp>
 #include <stdexcept>
@@ -68,11 +69,24 @@ struct Pass {
   bool cut(std::size_t k) const { return !off[k] && !off[k + 1]; }  // segment k
 };
 
-// The patch's holes in uv: a point of the domain is over a hole when it lies inside the polygon
-// of a hole loop's uv images (the map leaves no cloud point there; the interpolant would only
-// extrapolate). Passes are not cut there: the tool lifts over the hole (post.link).
-// (an Outline of the hole loops, tested as their union)
-using Holes = Outline;
+// Where the domain is off the patch, in uv: over a hole, inside the polygon of a hole loop's uv
+// images (the map leaves no cloud point there; the interpolant would only extrapolate), and on
+// a planar map (param.planar), whose rectangle reaches past the outline, outside the outer
+// loop's. Passes are not cut there: the tool lifts over it (post.link).
+class OffPatch {
+ public:
+  // holes  the hole loops' uv polygons (tested as their union); outline  the outer loop's, or
+  // none when the map fills its domain with the patch (harmonic maps)
+  OffPatch(std::vector<std::vector<Eigen::Vector2d>> holes, std::vector<std::vector<Eigen::Vector2d>> outline)
+      : holes_(std::move(holes)), outline_(std::move(outline)) {}
+  bool empty() const { return holes_.empty() && outline_.empty(); }
+  bool contains(const Eigen::Vector2d& uv) const {
+    return (!outline_.empty() && !outline_.contains(uv)) || (!holes_.empty() && holes_.any_contains(uv));
+  }
+
+ private:
+  Outline holes_, outline_;
+};
 
 // Local geometry at a vertex of a pass, and the side step it allows.
 struct VertexInfo {
@@ -205,8 +219,9 @@ class Planner {
  public:
   // model  the cloud's height field (post.simulate's model), or null
   Planner(const ParametricSurface& f, const BallLifter& lifter, const HeightFieldModel* model, Coords co,
-          const IsoparametricOptions& o, const Holes& holes, const Outline& hole_edges)
-      : f_(f), lifter_(lifter), model_(model), holes_(holes), hole_edges_(hole_edges), co_(co), o_(o), r_(o.tool_radius),
+          const IsoparametricOptions& o, const OffPatch& off_patch, const Outline& hole_edges, const Outline& outer_edge)
+      : f_(f), lifter_(lifter), model_(model), off_patch_(off_patch), hole_edges_(hole_edges), outer_edge_(outer_edge),
+        co_(co), o_(o), r_(o.tool_radius),
         h_(o.scallop_height * o.safety_factor),
         e_under_(std::min(0.98 * o.chord_error, 0.1 * h_)), hfd_(2 * f.uv_spacing()),
         ls0_(std::sqrt(8 * r_ * h_)) {}
@@ -217,7 +232,8 @@ class Planner {
   Eigen::Vector3d forward_floor_at = Eigen::Vector3d::Zero();  // the first of them
 
   SurfaceSample at(double s, double t) const { return f_(co_.uv(s, t)); }
-  bool over_hole(double s, double t) const { return !holes_.empty() && holes_.any_contains(co_.uv(s, t)); }
+  // off the patch: over a hole, or beyond the outline of a planar map
+  bool over_hole(double s, double t) const { return !off_patch_.empty() && off_patch_.contains(co_.uv(s, t)); }
   // How far the planner's fit lies from the cloud's height field (the certificate's model) at x,
   // along the normal; 0 off the field. Where the two disagree the surface is known no better
   // than that: the scallop limit keeps the gap as a margin (Margins). It grows where a fit over
@@ -496,7 +512,7 @@ class Planner {
       bool last = t + dt * (1 + 1e-6) >= co_.T;
       if (last) dt = co_.T - t;
       else if (t + 1.5 * dt > co_.T) dt = (co_.T - t) / 2;  // no sliver of a last step
-      if (!holes_.empty() && over_hole(s, t + dt)) {
+      if (!off_patch_.empty() && over_hole(s, t + dt)) {
         // The step would end over a hole: it ends at the hole's edge instead, or, standing on
         // the edge already, the pass steps into the hole (that segment is not cut).
         const auto [t_in, t_out] = edge(t, t + dt);
@@ -651,7 +667,9 @@ class Planner {
   StripCheck check_strip(const Pass& A, const Pass& B) const {
     std::vector<double> ts;
     for (std::size_t k = 0; k + 1 < A.t.size(); ++k) {
-      if (!A.cut(k)) {
+      // (off the patch A's segments are long, and beyond a planar map's outline the places
+      // between the rim pass and B lie beside them: sampled as finely as on it)
+      if (!A.cut(k) && !rim_tree_) {
         ts.push_back(A.t[k]);
         continue;
       }
@@ -675,14 +693,21 @@ class Planner {
         // than the rest: the waves with two holes, 50 000 points, 107 zig-zag passes, now 104;
         // the dome with two, contour efficiency 0.754, now 0.774; both pass verify.py).
         bool on_patch = false;  // whether a place across the strip so far lies on the patch
+        bool near_rim = false;  // whether a place across it is within the reach of the rim pass's balls
         auto g = [&](double f, SurfaceSample* w) {
           if (over_hole(sA + f * (sB - sA), t)) {
             if (w) *w = at(sA + f * (sB - sA), t);
             return Eigen::Vector2d(0, 0);
           }
-          const Eigen::Vector2d hits = hits_at(A, B, sA + f * (sB - sA), t, w);
-          const Eigen::Vector2d xy = (w ? w->position : at(sA + f * (sB - sA), t).position).head<2>();
+          Eigen::Vector2d hits = hits_at(A, B, sA + f * (sB - sA), t, w);
+          const SurfaceSample here = w ? *w : at(sA + f * (sB - sA), t);
+          const Eigen::Vector2d xy = here.position.head<2>();
           if (!hole_edges_.empty() && hole_edges_.beyond(xy) < 0.5 * ls0_) return Eigen::Vector2d(0, 0);
+          if (rim_tree_ && outer_edge_.edge_distance(xy) < r_) {  // the rim pass's balls reach here
+            const double rim = rim_hit(here);
+            hits = hits.cwiseMin(Eigen::Vector2d(rim, rim));
+            near_rim = true;
+          }
           on_patch = true;
           return hits;
         };
@@ -737,6 +762,25 @@ class Planner {
             }
           }
         }
+        if (cut && near_rim) {
+          // Beside the rim pass the material left is the least of three hits (A's, the rim's,
+          // B's), whose highest may lie at the rim's cusp with A or with B, not where A's and B's
+          // cross: searched for around each scanned place above the rest, by golden section.
+          for (int j = 1; j < kScan && cut; ++j) {
+            double lo = double(j - 1) / kScan, hi = double(j + 1) / kScan;
+            auto height = [&](double f) {
+              const Eigen::Vector2d h = g(f, &x);
+              if (!consider(h)) cut = false;
+              return std::min(h[0], h[1]);
+            };
+            constexpr double kGold = 0.6180339887498949;
+            double a = hi - kGold * (hi - lo), b = lo + kGold * (hi - lo), ha = height(a), hb = height(b);
+            for (int it = 0; it < 14 && cut; ++it) {
+              if (ha >= hb) hi = b, b = a, hb = ha, a = hi - kGold * (hi - lo), ha = height(a);
+              else lo = a, a = b, ha = hb, b = lo + kGold * (hi - lo), hb = height(b);
+            }
+          }
+        }
         // on the real surface the scallop may be up to delta higher, and on the certificate's
         // height field up to fit_gap (see Margins); across a hole nothing (the margins of the
         // field extrapolated into it had held a strip beside a hole over the limit: 0.058 mm,
@@ -783,12 +827,48 @@ class Planner {
   double h() const { return h_; }
   double nominal_interval() const { return ls0_; }
 
+  // A planar map's rim pass, planned before the passes: its passes end on the outline at any
+  // angle, and what lies between the rim pass and the passes' ends is no strip between two
+  // passes, so near the outline the strips are checked against the rim's balls too (skipped
+  // there instead, as beside a hole, the bundled example's corner kept 0.0447 + 0.0107 of its
+  // uncertainty between the rim pass and the first pass 1 mm inside it).
+  void set_rim(const Pass& rim) {
+    for (std::size_t k = 0; k + 1 < rim.c.size(); ++k) {
+      if (!rim.cut(k)) continue;
+      rim_a_.push_back(rim.c[k]);
+      rim_b_.push_back(rim.c[k + 1]);
+      rim_mid_.push_back(0.5 * (rim.c[k] + rim.c[k + 1]));
+      rim_half_max_ = std::max(rim_half_max_, 0.5 * (rim.c[k + 1] - rim.c[k]).norm());
+    }
+    if (rim_mid_.empty()) return;
+    rim_adaptor_ = std::make_unique<PointsAdaptor<Eigen::Vector3d>>(PointsAdaptor<Eigen::Vector3d>{rim_mid_});
+    rim_tree_ = std::make_unique<KdTree<Eigen::Vector3d, 3>>(3, *rim_adaptor_, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    rim_tree_->buildIndex();
+  }
+
  private:
   const ParametricSurface& f_;
   const BallLifter& lifter_;
   const HeightFieldModel* model_;
-  const Holes& holes_;
+  const OffPatch& off_patch_;
   const Outline& hole_edges_;  // the hole loops in xy: beyond() is the distance to their edges off them
+  const Outline& outer_edge_;  // a planar map's outer loop in xy (whose rim pass cuts near it), else none
+  // the rim pass's cut centre segments (set_rim), their midpoints in a k-d tree
+  std::vector<Eigen::Vector3d> rim_a_, rim_b_, rim_mid_;
+  double rim_half_max_ = 0;
+  std::unique_ptr<PointsAdaptor<Eigen::Vector3d>> rim_adaptor_;
+  std::unique_ptr<KdTree<Eigen::Vector3d, 3>> rim_tree_;
+  // The first entry of the ray up the normal from x into the rim pass's swept balls; kInf where
+  // none reaches (or there is no rim).
+  double rim_hit(const SurfaceSample& x) const {
+    if (!rim_tree_) return kInf;
+    const double reach = r_ + 20 * h_ + rim_half_max_;
+    std::vector<std::pair<std::uint32_t, double>> near;
+    rim_tree_->radiusSearch(x.position.data(), reach * reach, near, nanoflann::SearchParams(32, 0, false));
+    double hit = kInf;
+    for (const auto& [j, d2] : near) hit = std::min(hit, ray_capsule_entry(x.position, x.normal, rim_a_[j], rim_b_[j], r_, hit));
+    return hit;
+  }
   mutable std::atomic<double> fit_gap_max_{0};
   Coords co_;
   const IsoparametricOptions& o_;
@@ -909,7 +989,7 @@ WorkEstimate estimate_work(const PointCloud& cloud, const Neighborhoods& nb, con
     const Eigen::Vector2d d = map.boundary_uv[(k + 1) % n] - map.boundary_uv[k];
     if (std::abs(d.x()) > std::abs(d.y())) along_u += len;
   }
-  w.side_extent = map.domain == "disk" ? perimeter / (2 * M_PI) : along_u / 2;
+  w.side_extent = map.domain == "disk" ? perimeter / (2 * M_PI) : map.domain == "planar" ? map.width : along_u / 2;
   w.passes = std::ceil(w.side_extent / w.side_interval) + 1;  // pass lines, both ends included
   w.length = w.area / w.side_interval;
   w.points = w.length / o.max_segment;
@@ -935,17 +1015,18 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   if (map.uv.size() != cloud.size())
     throw std::invalid_argument("the UV map has " + std::to_string(map.uv.size()) +
                                 " points; the cloud has " + std::to_string(cloud.size()));
+  const bool planar = map.domain == "planar";
   const std::string want = o.pattern == "zigzag" ? "rectangle" : "disk";
-  if (map.domain != want)
+  if (map.domain != want && !(planar && o.pattern == "zigzag"))
     throw std::invalid_argument(
-        "pattern '" + o.pattern + "' needs a UV map on a " + want + "; this map's domain is '" +
-        map.domain + "' (" +
+        "pattern '" + o.pattern + "' needs a UV map on a " + want + (o.pattern == "zigzag" ? " or a planar map" : "") +
+        "; this map's domain is '" + map.domain + "' (" +
         (o.pattern == "zigzag" ? "use pattern 'contour', or map the boundary to a rectangle"
                                : "use pattern 'zigzag', or map the boundary to a disk") +
         ")");
   UVDomain domain;
   Coords co;
-  if (want == "rectangle") {
+  if (want == "rectangle") {  // or planar
     if (!(map.width > 0 && map.height > 0 && std::isfinite(map.width) && std::isfinite(map.height)))
       throw std::invalid_argument("the rectangle map has no area (width " + short_number(map.width, 6) +
                                   ", height " + short_number(map.height, 6) + ")");
@@ -1032,6 +1113,9 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   // The scallop height the certificate's whole-patch bound needs at the outline, where the
   // surface is known worst (outline_uncertainty), when that is more than `points_need`.
   const double rim_delta = outline_uncertainty(*model, cloud, map.outer_loop);
+  const Margins rim_margins = margins(o, rim_delta);
+  const double first_interval = side_interval(std::max(rim_margins.scallop - rim_margins.stock, 0.1 * o.scallop_height * o.safety_factor),
+                                              o.tool_radius, 0);
   const double rim_height = plannable_scallop_height(o, rim_delta);
   auto whole_patch_advice = [&](double points_need) -> std::string {
     if (!(rim_height > std::max(points_need, o.scallop_height))) return "";
@@ -1089,9 +1173,30 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
       hole_polygons.push_back(std::move(poly));
       hole_polygons_xy.push_back(std::move(poly_xy));
     }
-  const Holes holes(std::move(hole_polygons));
-  const Outline hole_edges(std::move(hole_polygons_xy));
-  Planner planner(*interp, lifter, model.get(), co, o, holes, hole_edges);
+  // A planar map's rectangle reaches past the outline: off it is off the patch, and near it the
+  // rim pass cuts, as near a hole's edge.
+  std::vector<std::vector<Eigen::Vector2d>> outline_uv, outline_xy;
+  if (planar) {
+    outline_uv.emplace_back(), outline_xy.emplace_back();
+    for (std::size_t k = 0; k < map.outer_loop.size() && map.boundary_uv.size() == map.outer_loop.size(); ++k) {
+      const int i = map.outer_loop[k];
+      if (i < 0 || static_cast<std::size_t>(i) >= cloud.size())
+        throw std::invalid_argument("the outer loop has point index " + std::to_string(i) + "; the cloud has " +
+                                    std::to_string(cloud.size()) + " points");
+      outline_uv.back().push_back(map.boundary_uv[k]);
+      outline_xy.back().push_back(cloud.points[i].head<2>());
+    }
+    if (outline_uv.back().size() < 3)
+      throw std::invalid_argument("a planar map needs its outer loop (at least 3 points, with their uv)");
+  }
+  const OffPatch off_patch(std::move(hole_polygons), std::move(outline_uv));
+  const Outline hole_edges(std::move(hole_polygons_xy)), outer_edge(std::move(outline_xy));
+  Planner planner(*interp, lifter, model.get(), co, o, off_patch, hole_edges, outer_edge);
+  std::optional<Pass> planar_rim;  // a planar map's rim pass, planned first (Planner::set_rim)
+  if (planar && o.outline) {
+    planar_rim = planner.rim_pass(cloud, map.outer_loop, map.boundary_uv, planned_uncertainty);
+    planner.set_rim(*planar_rim);
+  }
   std::vector<double> nn;
   for (std::size_t i = 0; i < neighbors.size(); i += std::max<std::size_t>(1, neighbors.size() / 4096))
     if (neighbors.k > 0) nn.push_back(std::sqrt(neighbors.sq_dist(i, 0)));
@@ -1122,7 +1227,12 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
       ds0 = std::min(ds0, v.ds);
       (v.formula4 ? formula4 : formula3)++;
     }
-    if (!std::isfinite(ds0)) ds0 = planner.nominal_interval();  // whole pass unreachable
+    // A pass wholly unreachable or, on a planar map, wholly off the patch: the raster's first
+    // line, the tangent at the outline's extreme point. From there the first pass inside is
+    // stepped as the outline's uncertainty allows (the noisy plane's rim, known to +-0.032 mm,
+    // kept 0.073 between the rim pass and a first pass a nominal interval in, where no step
+    // kept the strip under the limit and the first try, the nominal one, was kept).
+    if (!std::isfinite(ds0)) ds0 = planar ? first_interval : planner.nominal_interval();
     double ds = ds0;
     bool accepted = false;
     Pass B;
@@ -1228,7 +1338,8 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   for (std::size_t k = 0; outer_usable && k < n_outer; ++k)
     outer_usable = map.outer_loop[k] >= 0 && static_cast<std::size_t>(map.outer_loop[k]) < cloud.size();
   if (o.outline) {
-    if (outer_usable) outline.push_back(planner.rim_pass(cloud, map.outer_loop, map.boundary_uv, planned_uncertainty));
+    if (planar_rim) outline.push_back(std::move(*planar_rim));
+    else if (outer_usable) outline.push_back(planner.rim_pass(cloud, map.outer_loop, map.boundary_uv, planned_uncertainty));
     else
       warnings.push_back("the map has no usable outer loop (" + std::to_string(n_outer) +
                          " points): no rim pass, the outline is cut only by the passes' ends");

@@ -87,7 +87,7 @@ struct IsoparametricResult {
 
 // cloud      #P points (mm) with #P upward unit normals, and optionally #P uncertainties (mm)
 // neighbors  the cloud's k nearest neighbours (#P rows; used for the sampling scale)
-// map        uv of every point; domain "rectangle" (zigzag) or "disk" (contour)
+// map        uv of every point; domain "rectangle" or "planar" (zigzag), "disk" (contour)
 // Returns the passes (contact points, normals, uv; ordered for cutting) and a report: passes,
 // points, side steps and intervals (min/max), forward intervals, where formula (4) was used,
 // the largest scallop and chord deviations found by the checks, concave regions whose normal

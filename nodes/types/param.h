@@ -42,10 +42,12 @@ struct Laplacian final : Value {
 
 // A parameterisation of the cloud: uv[i] is the parameter-domain position of point i.
 // domain "disk": the outer loop maps to the circle of radius `radius` centred at the origin
-// (contour-parallel paths); domain "rectangle": to [0,width] x [0,height] (direction-parallel).
+// (contour-parallel paths); domain "rectangle": to [0,width] x [0,height] (direction-parallel);
+// domain "planar" (param.planar): uv is the points' xy turned, over [0,width] x [0,height], and the
+// outer loop lies inside that rectangle: off it is off the patch (direction-parallel, a raster).
 // boundary_uv holds the fixed positions of the outer loop's points, in loop order.
 struct UVMap final : Value {
-  std::string domain;  // "disk" or "rectangle"
+  std::string domain;  // "disk", "rectangle" or "planar"
   double radius = 0;
   double width = 0, height = 0;
   std::vector<Eigen::Vector2d> uv;         // #P

@@ -49,6 +49,21 @@ TEST(Outline, BeyondIsTheDistanceOffThePatch) {
   EXPECT_TRUE(std::isinf(none.beyond({0, 0})));
 }
 
+// The distance to the nearest loop's edges, on the patch as off it (a raster's strip beside the
+// outline asks it on the patch).
+TEST(Outline, EdgeDistanceIsTheDistanceToTheNearestEdgeOnEitherSide) {
+  const Outline o = square_with_hole();
+  EXPECT_NEAR(o.edge_distance({1, 2}), 1.0, 1e-12);
+  EXPECT_NEAR(o.edge_distance({3.8, 5}), 0.2, 1e-12);  // beside the hole, on the patch
+  EXPECT_NEAR(o.edge_distance({5, 5}), 1.0, 1e-12);    // in the hole
+  EXPECT_NEAR(o.edge_distance({10.7, 3.25}), 0.7, 1e-12);
+  EXPECT_NEAR(o.edge_distance({-0.3, 10.4}), std::hypot(0.3, 0.4), 1e-12);
+  for (double x = -0.95; x < 11; x += 0.1)
+    for (double y = -0.95; y < 11; y += 0.1)
+      if (!o.contains({x, y})) EXPECT_EQ(o.edge_distance({x, y}), o.beyond({x, y})) << x << " " << y;
+  EXPECT_TRUE(std::isinf(Outline().edge_distance({0, 0})));
+}
+
 // A hole's loop may run either way round, and the loops come in any order: what is a hole is
 // what an odd number of the others contain.
 TEST(Outline, BeyondTellsTheHoleByTheEvenOddRuleWhicheverWayItsLoopRuns) {

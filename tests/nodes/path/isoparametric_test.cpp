@@ -9,6 +9,8 @@
 
 #include "engine/node.h"
 #include "nodes/cloud/knn.h"
+#include "nodes/geom/outline.h"
+#include "nodes/param/planar_map.h"
 #include "nodes/types/document.h"
 #include "nodes/types/param.h"
 
@@ -370,6 +372,61 @@ TEST(Isoparametric, AStripPastAHoleIsPlannedOnThePatchAlone) {
 // r = 3, h = 0.01 the side interval on a plane is sqrt(8 r h) = 0.489898 mm, so at least
 // ceil(30 / 0.489898) + 1 = 63 passes; with max_passes 62 the planner says so at once, with 63 it
 // plans them.
+// A dome z = 3 - ((x - 15)^2 + (y - 10)^2) / 100 over a C: the rectangle [0, 30] x [0, 20] less
+// a notch [10, 20] x [8, 20] cut in from its top edge, sampled every 0.5 mm (a quadric: the
+// height field is exact there, so the product's simulation measures against the true surface).
+// Parameterised by its own xy (param.planar), which a harmonic map onto a rectangle squeezes
+// around the notch: the passes run the C's short way (along y), each one cut only on the patch,
+// the tool lifted across the notch, and the whole C, its notch's edges and corners included,
+// stays within h.
+TEST(Isoparametric, APlanarMapRastersANotchedOutlineOnlyOnThePatchAndWithinTheLimit) {
+  const std::vector<Eigen::Vector2d> c_shape{{0, 0}, {30, 0}, {30, 20}, {20, 20}, {20, 8}, {10, 8}, {10, 20}, {0, 20}};
+  auto in_c = [](double x, double y) { return !(x > 10 + 1e-9 && x < 20 - 1e-9 && y > 8 + 1e-9); };
+  Input in;
+  std::map<std::pair<int, int>, int> index;
+  for (int i = 0; i <= 60; ++i)
+    for (int j = 0; j <= 40; ++j) {
+      const double x = 0.5 * i, y = 0.5 * j;
+      if (!in_c(x, y)) continue;
+      index[{i, j}] = static_cast<int>(in.cloud.points.size());
+      in.cloud.points.emplace_back(x, y, 3 - ((x - 15) * (x - 15) + (y - 10) * (y - 10)) / 100);
+      in.cloud.normals.push_back(Eigen::Vector3d((x - 15) / 50, (y - 10) / 50, 1).normalized());
+    }
+  std::vector<int> loop;  // the C's edges walked counter-clockwise, a grid point every 0.5 mm
+  for (std::size_t k = 0; k < c_shape.size(); ++k) {
+    const Eigen::Vector2d a = c_shape[k], b = c_shape[(k + 1) % c_shape.size()];
+    const int steps = static_cast<int>(std::lround((b - a).norm() / 0.5));
+    for (int s = 0; s < steps; ++s) {
+      const Eigen::Vector2d q = a + (b - a) * (double(s) / steps);
+      loop.push_back(index.at({static_cast<int>(std::lround(2 * q.x())), static_cast<int>(std::lround(2 * q.y()))}));
+    }
+  }
+  in.map = planar_map(in.cloud.points, loop);
+  EXPECT_NEAR(in.map.width, 30, 1e-9);  // u along x, the passes along y
+  EXPECT_NEAR(in.map.height, 20, 1e-9);
+  in.nb = compute_knn(in.cloud.points, 12);
+  const IsoparametricOptions o = fine_options();
+  const IsoparametricResult res = plan_isoparametric(in.cloud, in.nb, in.map, o);
+  const Outline outline({c_shape});
+  std::size_t across_notch = 0;
+  for (const ToolpathPass& pass : res.toolpath.passes)
+    for (std::size_t k = 0; k < pass.contact.size(); ++k) {
+      // every ball touches the C (its edges included) and no cut runs over the notch
+      EXPECT_LT(outline.beyond(pass.contact[k].head<2>()), 1e-6) << pass.contact[k].transpose();
+      if (k > 0 && outline.beyond(0.5 * (pass.contact[k] + pass.contact[k - 1]).head<2>()) > 1e-6) ++across_notch;
+    }
+  EXPECT_EQ(across_notch, 0u);
+  // the passes (not the rim pass, the last) run along y: each piece at one x
+  for (std::size_t i = 0; i + 1 < res.toolpath.passes.size(); ++i) {
+    const ToolpathPass& pass = res.toolpath.passes[i];
+    for (const auto& c : pass.contact) EXPECT_NEAR(c.x(), pass.contact[0].x(), 1e-6) << i;
+  }
+  const auto sim = simulate_fine(in.cloud.points, res.toolpath, {c_shape});
+  EXPECT_LE(sim["scallop_max"].get<double>(), 1.01 * 0.01);
+  EXPECT_EQ(sim["uncut_fraction"].get<double>(), 0.0);
+  EXPECT_LT(sim["gouge_max"].get<double>(), 0.005);
+}
+
 TEST(Isoparametric, WorkOverTheBudgetIsRefusedBeforePlanningWithTheEstimate) {
   const Input in = flat();
   IsoparametricOptions o = fine_options();
@@ -687,11 +744,16 @@ TEST(Isoparametric, PatternMustMatchTheMapDomain) {
   IsoparametricOptions o;
   o.pattern = "zigzag";
   EXPECT_EQ(error_of(disk, o),
-            "pattern 'zigzag' needs a UV map on a rectangle; this map's domain is 'disk' (use "
+            "pattern 'zigzag' needs a UV map on a rectangle or a planar map; this map's domain is 'disk' (use "
             "pattern 'contour', or map the boundary to a rectangle)");
   o.pattern = "contour";
   EXPECT_EQ(error_of(flat(), o),
             "pattern 'contour' needs a UV map on a disk; this map's domain is 'rectangle' (use "
+            "pattern 'zigzag', or map the boundary to a disk)");
+  Input planar = flat();
+  planar.map.domain = "planar";
+  EXPECT_EQ(error_of(planar, o),
+            "pattern 'contour' needs a UV map on a disk; this map's domain is 'planar' (use "
             "pattern 'zigzag', or map the boundary to a disk)");
   o.pattern = "spiral";
   EXPECT_EQ(error_of(flat(), o), "unknown pattern 'spiral' (zigzag or contour)");
@@ -756,7 +818,7 @@ TEST(Isoparametric, NodeRunsAndReportsErrors) {
     FAIL() << "no error";
   } catch (const NodeError& e) {
     EXPECT_STREQ(e.what(),
-                 "pattern 'zigzag' needs a UV map on a rectangle; this map's domain is 'disk' "
+                 "pattern 'zigzag' needs a UV map on a rectangle or a planar map; this map's domain is 'disk' "
                  "(use pattern 'contour', or map the boundary to a rectangle)");
   }
 }
