@@ -80,8 +80,10 @@ class OffPatch {
   OffPatch(std::vector<std::vector<Eigen::Vector2d>> holes, std::vector<std::vector<Eigen::Vector2d>> outline)
       : holes_(std::move(holes)), outline_(std::move(outline)) {}
   bool empty() const { return holes_.empty() && outline_.empty(); }
+  // (beyond the outline by its nearest edge, a k-d tree search: a ray cast over the thousands of
+  // edges of a large cloud's loop for every place the planner looks at took most of its time)
   bool contains(const Eigen::Vector2d& uv) const {
-    return (!outline_.empty() && !outline_.contains(uv)) || (!holes_.empty() && holes_.any_contains(uv));
+    return (!outline_.empty() && outline_.beyond(uv) > 0) || (!holes_.empty() && holes_.any_contains(uv));
   }
 
  private:
@@ -703,7 +705,9 @@ class Planner {
           const SurfaceSample here = w ? *w : at(sA + f * (sB - sA), t);
           const Eigen::Vector2d xy = here.position.head<2>();
           if (!hole_edges_.empty() && hole_edges_.beyond(xy) < 0.5 * ls0_) return Eigen::Vector2d(0, 0);
-          if (rim_tree_ && outer_edge_.edge_distance(xy) < r_) {  // the rim pass's balls reach here
+          // the rim pass's balls leave less than A's and B's here (farther off, their material is
+          // over (1.5 l)^2 / 8r = 2.25 h)
+          if (rim_tree_ && outer_edge_.edge_distance(xy) < 1.5 * ls0_) {
             const double rim = rim_hit(here);
             hits = hits.cwiseMin(Eigen::Vector2d(rim, rim));
             near_rim = true;
@@ -765,20 +769,24 @@ class Planner {
         if (cut && near_rim) {
           // Beside the rim pass the material left is the least of three hits (A's, the rim's,
           // B's), whose highest may lie at the rim's cusp with A or with B, not where A's and B's
-          // cross: searched for around each scanned place above the rest, by golden section.
-          for (int j = 1; j < kScan && cut; ++j) {
-            double lo = double(j - 1) / kScan, hi = double(j + 1) / kScan;
-            auto height = [&](double f) {
-              const Eigen::Vector2d h = g(f, &x);
-              if (!consider(h)) cut = false;
-              return std::min(h[0], h[1]);
-            };
-            constexpr double kGold = 0.6180339887498949;
-            double a = hi - kGold * (hi - lo), b = lo + kGold * (hi - lo), ha = height(a), hb = height(b);
-            for (int it = 0; it < 14 && cut; ++it) {
-              if (ha >= hb) hi = b, b = a, hb = ha, a = hi - kGold * (hi - lo), ha = height(a);
-              else lo = a, a = b, ha = hb, b = lo + kGold * (hi - lo), hb = height(b);
-            }
+          // cross: searched for around the highest scanned place, by golden section.
+          int j_best = 1;
+          double h_best = -kInf;
+          for (int j = 1; j < kScan; ++j) {
+            const Eigen::Vector2d h = g(double(j) / kScan, nullptr);
+            if (std::min(h[0], h[1]) > h_best) h_best = std::min(h[0], h[1]), j_best = j;
+          }
+          double lo = double(j_best - 1) / kScan, hi = double(j_best + 1) / kScan;
+          auto height = [&](double f) {
+            const Eigen::Vector2d h = g(f, &x);
+            if (!consider(h)) cut = false;
+            return std::min(h[0], h[1]);
+          };
+          constexpr double kGold = 0.6180339887498949;
+          double a = hi - kGold * (hi - lo), b = lo + kGold * (hi - lo), ha = height(a), hb = height(b);
+          for (int it = 0; it < 14 && cut; ++it) {
+            if (ha >= hb) hi = b, b = a, hb = ha, a = hi - kGold * (hi - lo), ha = height(a);
+            else lo = a, a = b, ha = hb, b = lo + kGold * (hi - lo), hb = height(b);
           }
         }
         // on the real surface the scallop may be up to delta higher, and on the certificate's
