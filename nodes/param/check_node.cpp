@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cstdio>
 #include <stdexcept>
 
 #include "engine/node.h"
@@ -13,7 +14,7 @@ namespace scallop::param_nodes {
 NodeDecl make_map_check_node() {
   NodeDecl d;
   d.type = "param.check";
-  d.version = 3;  // 3: the untangling keeps its best round, never a map worse than it was given (stop 91); 2: a few fold-overs are untangled locally
+  d.version = 4;  // 4: fold-overs allowed are said in a warning; 3: the untangling keeps its best round, never a map worse than it was given (stop 91); 2: a few fold-overs are untangled locally
   d.description =
       "diagnostics of a (u,v) map: angle distortion and fold-overs; a few fold-overs are "
       "untangled locally, more are an error unless allowed";
@@ -46,6 +47,18 @@ NodeDecl make_map_check_node() {
       throw NodeError(e.what());
     }
     if (c.foldovers > 0 && !ctx.flag("allow_foldovers")) throw NodeError(foldover_message(c, cloud->points));
+    if (c.foldovers > 0) {  // allowed: said on the terminal, not only in the report
+      const auto& p = cloud->points[std::max<long long>(c.first_foldover, 0)];
+      char where[96];
+      std::snprintf(where, sizeof where, "%.3f, %.3f, %.3f", p.x(), p.y(), p.z());
+      ctx.warn(map->domain == "planar"
+                   ? "the cloud overhangs at " + std::to_string(c.foldovers) + " points (first near " + where +
+                         "): not a height field seen from +z there (noise on a steep flank?); the raster's passes "
+                         "cross them in xy and the guard keeps the ball off them"
+                   : "the (u,v) map folds over at " + std::to_string(c.foldovers) + " points (first near " + where +
+                         "), planned anyway (allow_foldovers): the passes there may cross; the certificate says "
+                         "whether they hold");
+    }
     Report r;
     r.data = std::move(c.report);
     r.data["domain"] = map->domain;

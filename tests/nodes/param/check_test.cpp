@@ -4,9 +4,14 @@
 
 #include <random>
 
+#include "engine/node.h"
+#include "nodes/types/param.h"
 #include "tests/nodes/param/param_test_util.h"
 
 namespace scallop {
+namespace param_nodes {
+NodeDecl make_map_check_node();
+}
 namespace {
 
 TEST(MapCheck, IdentityIsConformalAndUnfolded) {
@@ -48,6 +53,29 @@ TEST(MapCheck, MirrorFoldsEverywhere) {
   // uniform 4, k = 24 or 32 520 and 919, max_slope 70 568, more untangle_rounds alone 99)
   EXPECT_NE(foldover_message(m, c.points).find("param.laplacian's heat scheme left the fewest"), std::string::npos);
   EXPECT_EQ(foldover_message(m, c.points).find("a larger k"), std::string::npos);
+}
+
+// Allowed, fold-overs are said on the terminal: on a planar map (param.planar, the points' own
+// xy) as an overhang of the cloud, on a harmonic one as paths that may cross.
+TEST(MapCheckNode, FoldOversAllowedAreSaidInAWarning) {
+  const NodeDecl d = param_nodes::make_map_check_node();
+  auto cloud = std::make_shared<PointCloud>(test::random_disk(400, 10, 33));
+  auto nb = std::make_shared<Neighborhoods>(compute_knn(cloud->points, 12));
+  for (const char* domain : {"planar", "disk"}) {
+    auto map = std::make_shared<UVMap>();
+    map->domain = domain;
+    map->radius = map->width = map->height = 20;
+    for (const auto& p : cloud->points) map->uv.emplace_back(p.x(), -p.y());  // mirrored: folded everywhere
+    std::vector<std::string> warnings;
+    NodeContext ctx(d, "check", "part", {{"untangle_rounds", 0}, {"allow_foldovers", true}},
+                    {{"map", map}, {"cloud", cloud}, {"neighbors", nb}}, nullptr,
+                    [&](const std::string& m) { warnings.push_back(m); });
+    d.run(ctx);
+    ASSERT_EQ(warnings.size(), 1u) << domain;
+    const std::string head = std::string(domain) == "planar" ? "the cloud overhangs at 400 points (first near "
+                                                             : "the (u,v) map folds over at 400 points (first near ";
+    EXPECT_EQ(warnings[0].rfind(head, 0), 0u) << warnings[0];
+  }
 }
 
 TEST(MapCheck, NonUniformDensityHasNoFoldovers) {
