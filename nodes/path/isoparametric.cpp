@@ -733,12 +733,14 @@ class Planner {
           return true;
         };
         bool cut = true;
+        double scanned[kScan] = {};  // the material left at each scanned place (the rim's search below)
         for (int j = 1; j < kScan && cut; ++j) {
           const double f = double(j) / kScan;
           const bool before = on_patch;
           const Eigen::Vector2d h = g(f, &x);
           if (!before && on_patch) w = x;  // the first place on the patch, until a higher one
           cut = consider(h);
+          scanned[j] = std::min(h[0], h[1]);
           const double d = h[0] - h[1];
           if (cut && f_lo < 0 && prev_d <= 0 && d > 0) f_lo = prev_f, f_hi = f, d_lo = prev_d, d_hi = d;
           prev_f = f, prev_d = d;
@@ -770,12 +772,7 @@ class Planner {
           // Beside the rim pass the material left is the least of three hits (A's, the rim's,
           // B's), whose highest may lie at the rim's cusp with A or with B, not where A's and B's
           // cross: searched for around the highest scanned place, by golden section.
-          int j_best = 1;
-          double h_best = -kInf;
-          for (int j = 1; j < kScan; ++j) {
-            const Eigen::Vector2d h = g(double(j) / kScan, nullptr);
-            if (std::min(h[0], h[1]) > h_best) h_best = std::min(h[0], h[1]), j_best = j;
-          }
+          const int j_best = static_cast<int>(std::max_element(scanned + 1, scanned + kScan) - scanned);
           double lo = double(j_best - 1) / kScan, hi = double(j_best + 1) / kScan;
           auto height = [&](double f) {
             const Eigen::Vector2d h = g(f, &x);
@@ -1121,9 +1118,6 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
   // The scallop height the certificate's whole-patch bound needs at the outline, where the
   // surface is known worst (outline_uncertainty), when that is more than `points_need`.
   const double rim_delta = outline_uncertainty(*model, cloud, map.outer_loop);
-  const Margins rim_margins = margins(o, rim_delta);
-  const double first_interval = side_interval(std::max(rim_margins.scallop - rim_margins.stock, 0.1 * o.scallop_height * o.safety_factor),
-                                              o.tool_radius, 0);
   const double rim_height = plannable_scallop_height(o, rim_delta);
   auto whole_patch_advice = [&](double points_need) -> std::string {
     if (!(rim_height > std::max(points_need, o.scallop_height))) return "";
@@ -1240,7 +1234,12 @@ IsoparametricResult plan_isoparametric(const PointCloud& cloud, const Neighborho
     // stepped as the outline's uncertainty allows (the noisy plane's rim, known to +-0.032 mm,
     // kept 0.073 between the rim pass and a first pass a nominal interval in, where no step
     // kept the strip under the limit and the first try, the nominal one, was kept).
-    if (!std::isfinite(ds0)) ds0 = planar ? first_interval : planner.nominal_interval();
+    if (!std::isfinite(ds0)) {
+      const Margins at_rim = margins(o, rim_delta);
+      ds0 = planar ? side_interval(std::max(at_rim.scallop - at_rim.stock, 0.1 * o.scallop_height * o.safety_factor),
+                                   o.tool_radius, 0)
+                   : planner.nominal_interval();
+    }
     double ds = ds0;
     bool accepted = false;
     Pass B;
