@@ -135,8 +135,11 @@ std::string foldover_message(const MapCheck& check, const std::vector<Eigen::Vec
     std::snprintf(where, sizeof where, "%.3f, %.3f, %.3f", p.x(), p.y(), p.z());
   }
   return "the (u,v) map folds over at " + std::to_string(check.foldovers) + " points (first near " + where +
-         "): tool paths there would cross. No option is known to remove every fold-over: param.laplacian's "
-         "heat scheme left the fewest on the head scans measured (99 -> 3 and 113 -> 81 fold-overs); "
+         "): tool paths there would cross. graphs/raster-zigzag.json maps the patch by its own xy, which "
+         "cannot fold (the bunny range scan at max_slope 75: 10 fold-overs here, none there, the 2 points "
+         "where it overhangs reported); with this graph no option is known to remove every fold-over: "
+         "param.laplacian's heat scheme left the fewest on the head scans measured (99 -> 3 and 113 -> 81 "
+         "fold-overs); "
          "allow_foldovers plans anyway and the certificate says whether the paths hold (slow: over 15 min "
          "on a 32 000-point face mask)";
 }
