@@ -404,7 +404,11 @@ CloudEnvelope cloud_envelope(const Mesh& mesh, const std::vector<Eigen::Vector3d
         const std::uint32_t* corner = mesh.face(f);
         for (std::size_t k = 0, m = mesh.face_size(f); k < m; ++k) {
           const Eigen::Vector3d &a = mesh.vertices[corner[k]], &b = mesh.vertices[corner[(k + 1) % m]];
-          if (feature[edges.face_edge[mesh.face_start[f] + k]] && segment_distance(q, a, b) <= kAtPoint)
+          // (on a corner that lies on a feature edge too: the search may return any face around
+          // that corner, one of them with no feature edge of its own, and which one it returned
+          // differed between two machines: a point on the corner then counted on a face beside it)
+          if ((feature[edges.face_edge[mesh.face_start[f] + k]] && segment_distance(q, a, b) <= kAtPoint) ||
+              (on_feature[corner[k]] && (q - a).norm() <= kAtPoint))
             face_of_point[i] = kEitherFace;
         }
       });

@@ -52,7 +52,9 @@ NodeDecl make_cloud_envelope_node() {
   //    them (was the spacing's allowance)
   //  15: ... only where v's faces on that side follow the two planes (14 let a bevel's face cut the
   //    part between its corners: the block x 5's cloud, 3 samples 0.03 mm outside the outer mesh)
-  d.version = 15;
+  //  16: a point on a corner that lies on a feature edge belongs to neither face (it counted on
+  //    whichever face the nearest-face search returned, and that differed between machines)
+  d.version = 16;
   d.description =
       "how far the real part may lie off a mesh made from its cloud (a bevelled edge, smoothed noise): each "
       "vertex's bound from its k nearest points' distances and the mesh's bend, the mesh pushed out (what balls are "
