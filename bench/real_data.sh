@@ -12,12 +12,11 @@ runs=("hemisphere hemisphere/hemisphere.off 50" "cturtle cturtle/cturtle.pcd 50"
       "bunny_scan bunny_scan/bun000.ply 500" "milk_kinect milk_kinect/milk.pcd 500")
 for run in "${runs[@]}"; do
   read -r name file scale <<<"$run"
-  for graph in zigzag contour raster; do
+  for labelled in zigzag:isoparametric-zigzag contour:isoparametric-contour raster:raster-zigzag; do
+    graph=${labelled%%:*}
     out="$work/${name}_$graph"
     rm -rf "$out"
-    file_of_graph=graphs/isoparametric-$graph.json
-    [ "$graph" = raster ] && file_of_graph=graphs/raster-zigzag.json
-    err=$(./build/scallop run "$file_of_graph" --input cloud="$data/$file" --set read.scale="$scale" \
+    err=$(./build/scallop run "graphs/${labelled#*:}.json" --input cloud="$data/$file" --set read.scale="$scale" \
       --no-cache -q -o "$out" 2>&1 >/dev/null | grep '^error:' | head -1)
     if [ -f "$out/report.json" ]; then
       /usr/bin/python3 -c "import json,sys; r=json.load(open(sys.argv[1])); print(f\"| $name (x$scale) | $graph | path | {r['scallop_max_interior']:.4f} | {r['gouge_max']:.4f} | {r['uncut_fraction']:.4f} | {r['pass']} |\")" "$out/report.json"
