@@ -18,6 +18,7 @@
 #include "nodes/post/centre_index.h"
 #include "nodes/geom/outline.h"
 #include "nodes/post/clearance_march.h"
+#include "nodes/post/refinement_seeds.h"
 #include "nodes/path/step_size.h"
 #include "nodes/geom/point_text.h"
 #include "nodes/post/surface_grid.h"
@@ -212,7 +213,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
         for (int t = 0; t < m; ++t) edge_points.push_back(a + (b - a) * (double(t) / m));
       }
   const double rim_band = grid.rim_band;
-  const Outline outline_polygons(rim_band > 0 ? o.loops : std::vector<std::vector<Eigen::Vector2d>>{});
+  const Outline outline_polygons(use_loops ? o.loops : std::vector<std::vector<Eigen::Vector2d>>{});
   const std::size_t n_grid = grid.points.size();
   if (progress) progress(0.1);
 
@@ -321,27 +322,29 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
 
   // Local refinement around the highest values (verify.py's levels: seeds, half-width/spacing).
   const std::pair<int, double> levels[] = {{1000, 1.0}, {100, 0.25}, {30, 1.0 / 16}};
+  std::vector<Eigen::Vector3d> grid_positions(n_grid);
+  for (std::size_t i = 0; i < n_grid; ++i) grid_positions[i] = {res.samples[i].x, res.samples[i].y, res.samples[i].z};
   // Plain variables, not a structured binding: clang 14 (the fuzz build) cannot capture one in a lambda.
   for (const auto& level : levels) {
     const int K = level.first;
     const double halfw = level.second;
     std::vector<std::size_t> seeds;
-    auto top = [&](auto value, auto keep, int count) {
-      std::vector<std::size_t> c;
-      for (std::size_t i = 0; i < res.samples.size(); ++i)
-        if (keep(res.samples[i]) && value(res.samples[i]) > 0) c.push_back(i);
-      if (int(c.size()) > count)
-        std::nth_element(c.begin(), c.begin() + count, c.end(),
-                         [&](auto a, auto b) { return value(res.samples[a]) > value(res.samples[b]); }),
-            c.resize(count);
+    // A sample's value where it may seed, else NaN: the interior scallops, every reached one, the gouges.
+    std::vector<double> value(res.samples.size());
+    auto take = [&](auto of, std::size_t count) {
+      for (std::size_t i = 0; i < res.samples.size(); ++i) value[i] = of(res.samples[i], i);
+      const auto c = highest_values(value, count);
       seeds.insert(seeds.end(), c.begin(), c.end());
+      if (&level == &levels[0]) {
+        // ... and each cell's highest of the grid, lest a sharp lone peak be crowded out
+        // (nodes/post/refinement_seeds.h)
+        const auto cells = highest_per_cell(value, grid_positions, kSeedCell * spacing, kSeedShare);
+        seeds.insert(seeds.end(), cells.begin(), cells.end());
+      }
     };
-    auto sc = [](const SimSample& s) { return std::isnan(s.scallop) ? -1.0 : s.scallop; };
-    auto go = [](const SimSample& s) { return s.gouge; };
-    auto reached = [&](const SimSample& s) { return !unreachable[&s - res.samples.data()]; };
-    top(sc, [&](const SimSample& s) { return s.interior && reached(s); }, K);
-    top(sc, [&](const SimSample& s) { return reached(s); }, K / 4);
-    top(go, [](const SimSample&) { return true; }, K / 4);
+    take([&](const SimSample& s, std::size_t i) { return s.interior && !unreachable[i] ? s.scallop : kNaN; }, K);
+    take([&](const SimSample& s, std::size_t i) { return !unreachable[i] ? s.scallop : kNaN; }, K / 4);
+    take([](const SimSample& s, std::size_t) { return s.gouge; }, K / 4);
     std::sort(seeds.begin(), seeds.end());
     seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
     if (seeds.empty()) break;
@@ -365,11 +368,9 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
             if (use_loops ? !(on_patch_grid(x, y) && surf.eval(x, y, z, n, true, &u))
                           : !surf.eval(x, y, z, n, false, &u))
               continue;
-            // in the rim band, no farther out than the band (as its grid samples)
-            if (in_band(x, y)) {
-              const double d = outline_polygons.beyond({x, y});
-              if (d > rim_band * n.z()) continue;
-            }
+            // no farther out than the grid's samples: inside the loops, or in the rim band up to
+            // its edge (the nearest node's rule alone let one half a spacing over the loop)
+            if (use_loops && outline_polygons.beyond({x, y}) > rim_band * n.z()) continue;
             SimSample& out = extra[slot];
             out.x = x, out.y = y, out.z = z, out.weight = 0;
             index.trace({x, y, z}, n, r, T, u, out.gouge, out.scallop, cand, &hint, &pieces);

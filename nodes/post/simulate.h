@@ -14,8 +14,9 @@
 // scallop = its value at p + delta.
 // pass: the whole patch (rim included, up to the outline) has scallop <= 1.01 h, gouge within
 // the chord tolerance and nothing uncut; the interior figures are reported beside it.
-// Fractions, percentiles and means are area-weighted. The 1000 highest values are refined with
-// local grids down to 1/16 of the spacing so the maxima do not depend on the grid.
+// Fractions, percentiles and means are area-weighted. The 1000 highest values, and the highest of
+// every cell of 32 spacings near the top (nodes/post/refinement_seeds.h), are refined with local
+// grids down to 1/16 of the spacing so the maxima do not depend on the grid.
 #pragma once
 
 #include <Eigen/Core>

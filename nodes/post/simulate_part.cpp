@@ -23,6 +23,7 @@
 #include "nodes/mesh/self_crossings.h"
 #include "nodes/post/clearance_march.h"
 #include "nodes/post/part_samples.h"
+#include "nodes/post/refinement_seeds.h"
 
 namespace scallop {
 namespace {
@@ -187,20 +188,21 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   // the judge's highest 1000 held one the certificate's did not (0.0178 against 0.0166).
   const int first_seeds = static_cast<int>(std::max<std::size_t>(1000, n_grid / 100));
   const std::pair<int, double> levels[] = {{first_seeds, 1.0}, {100, 0.25}, {30, 1.0 / 16}, {10, 1.0 / 64}, {10, 1.0 / 256}};
+  std::vector<Eigen::Vector3d> grid_positions(n_grid);
+  for (std::size_t i = 0; i < n_grid; ++i) grid_positions[i] = samples[i].p;
   for (const auto& level : levels) {
     std::vector<std::size_t> seeds;
+    std::vector<double> value(samples.size());
     for (bool interior_only : {true, false}) {
-      std::vector<std::size_t> c;
       for (std::size_t i = 0; i < samples.size(); ++i)
-        if (traced[i].kind == 0 && !std::isnan(traced[i].scallop) && traced[i].scallop > 0 &&
-            (!interior_only || traced[i].interior))
-          c.push_back(i);
-      const std::size_t k = interior_only ? level.first : level.first / 4;
-      if (c.size() > k)
-        std::nth_element(c.begin(), c.begin() + k, c.end(),
-                         [&](auto a, auto b) { return traced[a].scallop > traced[b].scallop; }),
-            c.resize(k);
+        value[i] = traced[i].kind == 0 && (!interior_only || traced[i].interior) ? traced[i].scallop : kNaN;
+      const auto c = highest_values(value, interior_only ? level.first : level.first / 4);
       seeds.insert(seeds.end(), c.begin(), c.end());
+      if (&level == &levels[0]) {
+        // ... and each cell's highest, lest a sharp lone peak be crowded out (refinement_seeds.h)
+        const auto cells = highest_per_cell(value, grid_positions, kSeedCell * spacing, kSeedShare);
+        seeds.insert(seeds.end(), cells.begin(), cells.end());
+      }
     }
     if (&level == &levels[0])
       // ... and the samples a ball of nearly radius r reaches: beside a concave edge the band a

@@ -23,7 +23,8 @@
 //   by more than feature_angle (verify_part.py's 30 degrees).
 // pass (verify_part.py's rule): interior scallop max <= 1.01 h, gouge max <= tol, nothing uncut
 // and no rapid through the part; tol = max(e, 0.001). The whole-part figures are reported beside.
-// The 1000 highest scallops are refined with local grids down to 1/256 of the spacing.
+// The 1000 highest scallops (or 1 %), and the highest of every cell of 32 spacings near the top
+// (nodes/post/refinement_seeds.h), are refined with local grids down to 1/256 of the spacing.
 #pragma once
 
 #include <Eigen/Core>

@@ -141,6 +141,40 @@ TEST(Simulate, RasterOnAPlaneLeavesTheClosedFormScallop) {
   EXPECT_EQ(j["worst"][0]["kind"], "scallop");
 }
 
+// The refinement is not crowded out: passes 0.7 apart below y = 6 and 0.62 above leave cusps of
+// two heights (0.78 of each other). The lower half's cusps fill the 1000 highest grid values, and
+// the grid alone catches the upper cusps up to 0.04 mm off their line (0.0047 mm low); each
+// cell's own highest seeds the refinement too, so the upper half's maximum is found as well.
+TEST(Simulate, ALowerMaximumElsewhereIsRefinedToo) {
+  const double r = 3, s_low = 0.7, s_high = 0.62;
+  Toolpath t = raster(r, s_low);
+  t.passes.clear();
+  for (double y = -1; y <= 13 + 1e-9; y += (y < 6 ? s_low : s_high)) {
+    ToolpathPass p;
+    for (double x = -1; x <= 17 + 1e-9; x += 0.5) {
+      p.contact.emplace_back(x, y, plane_z(x, y));
+      p.normal.push_back(kNormal);
+    }
+    t.passes.push_back(p);
+  }
+  const auto res = run(t, 0.02);
+  const auto cusp = [&](double s) {
+    const double w = line_gap(s);
+    return r - std::sqrt(r * r - w * w / 4);
+  };
+  ASSERT_GT(cusp(s_high), 0.75 * cusp(s_low));
+  double high = 0;
+  std::size_t refined_high = 0;
+  for (const auto& q : res.samples)
+    if (q.y > 7 && q.y < 11) {
+      high = std::max(high, q.scallop);
+      refined_high += q.weight == 0;
+    }
+  EXPECT_GT(refined_high, 0u);
+  EXPECT_NEAR(high, cusp(s_high), 0.01 * cusp(s_high));
+  EXPECT_NEAR(res.report["scallop_max_interior"].get<double>(), cusp(s_low), 0.01 * cusp(s_low));
+}
+
 // A wall the trim left out beside the plane (points on x = 16.5, from 1 mm below the plane to
 // 8 above it): where the ball touching the plane (its centre r n away, n_x = -0.2 / 1.05) would
 // come within r + half the cloud's spacing of it, from x0 = 16.5 + 3 * 0.2 / 1.05 - 3 - sp / 2 on,
