@@ -24,6 +24,11 @@ class CellHash3 {
     return {static_cast<std::int64_t>(std::floor(p.x() / cell_)), static_cast<std::int64_t>(std::floor(p.y() / cell_)),
             static_cast<std::int64_t>(std::floor(p.z() / cell_))};
   }
+  // the cubes' hash (a map keyed by Key may use it as its hasher)
+  static std::uint64_t hash(const Key& k) {
+    return static_cast<std::uint64_t>(k[0]) * 73856093ULL ^ static_cast<std::uint64_t>(k[1]) * 19349663ULL ^
+           static_cast<std::uint64_t>(k[2]) * 83492791ULL;
+  }
   void add(const Key& k, std::size_t index) { cells_[hash(k)].push_back(index); }
   void add(const Eigen::Vector3d& p, std::size_t index) { add(key(p), index); }
   // f(index) for every index filed in the cubes within `rings` cubes of p's along each axis (so
@@ -42,10 +47,6 @@ class CellHash3 {
  private:
   double cell_;
   std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;  // a hash collision only adds candidates
-  static std::uint64_t hash(const Key& k) {
-    return static_cast<std::uint64_t>(k[0]) * 73856093ULL ^ static_cast<std::uint64_t>(k[1]) * 19349663ULL ^
-           static_cast<std::uint64_t>(k[2]) * 83492791ULL;
-  }
 };
 
 }  // namespace scallop

@@ -1,5 +1,7 @@
 #include "nodes/post/refinement_seeds.h"
 
+#include "nodes/geom/cell_hash_3d.h"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -22,6 +24,12 @@ std::vector<std::size_t> highest_values(const std::vector<double>& value, std::s
 std::vector<std::size_t> highest_per_cell(const std::vector<double>& value,
                                           const std::vector<Eigen::Vector3d>& position, double cell, double share) {
   if (value.size() != position.size()) throw std::invalid_argument("highest_per_cell: one position per value");
+  return highest_per_cell_at(value, [&position](std::size_t i) { return position[i]; }, cell, share);
+}
+
+std::vector<std::size_t> highest_per_cell_at(const std::vector<double>& value,
+                                             const std::function<Eigen::Vector3d(std::size_t)>& position_of,
+                                             double cell, double share) {
   if (!(cell > 0) || !(share >= 0 && share <= 1))
     throw std::invalid_argument("highest_per_cell: cell must be > 0 and share in [0, 1]");
   double top = 0;
@@ -29,23 +37,16 @@ std::vector<std::size_t> highest_per_cell(const std::vector<double>& value,
     if (v > top) top = v;
   if (!(top > 0)) return {};
   const double floor = share * top;
-  struct Key {
-    std::int64_t x, y, z;
-    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
-  };
+  const CellHash3 cubes(cell);
   struct Hash {
-    std::size_t operator()(const Key& k) const {
-      return std::size_t(k.x * 73856093) ^ std::size_t(k.y * 19349663) ^ std::size_t(k.z * 83492791);
-    }
+    std::size_t operator()(const CellHash3::Key& k) const { return std::size_t(CellHash3::hash(k)); }
   };
-  std::unordered_map<Key, std::size_t, Hash> best;
+  std::unordered_map<CellHash3::Key, std::size_t, Hash> best;  // cube -> its highest sample
   for (std::size_t i = 0; i < value.size(); ++i) {
     if (!(value[i] > 0) || value[i] < floor) continue;
-    const Eigen::Vector3d& p = position[i];
+    const Eigen::Vector3d p = position_of(i);
     if (!p.allFinite()) continue;
-    const Key k{std::int64_t(std::floor(p.x() / cell)), std::int64_t(std::floor(p.y() / cell)),
-                std::int64_t(std::floor(p.z() / cell))};
-    auto [it, inserted] = best.try_emplace(k, i);
+    auto [it, inserted] = best.try_emplace(cubes.key(p), i);
     if (!inserted && value[i] > value[it->second]) it->second = i;
   }
   std::vector<std::size_t> seeds;

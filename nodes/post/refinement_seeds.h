@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 namespace scallop {
@@ -29,5 +30,10 @@ std::vector<std::size_t> highest_values(const std::vector<double>& value, std::s
 // index of its highest sample when that value is at least share × the highest of all; ascending.
 std::vector<std::size_t> highest_per_cell(const std::vector<double>& value,
                                           const std::vector<Eigen::Vector3d>& position, double cell, double share);
+// The same with each sample's position asked of position_of(i) (the simulations' samples hold
+// their own: no copy of a grid of millions).
+std::vector<std::size_t> highest_per_cell_at(const std::vector<double>& value,
+                                             const std::function<Eigen::Vector3d(std::size_t)>& position_of,
+                                             double cell, double share);
 
 }  // namespace scallop

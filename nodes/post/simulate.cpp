@@ -322,8 +322,9 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
 
   // Local refinement around the highest values (verify.py's levels: seeds, half-width/spacing).
   const std::pair<int, double> levels[] = {{1000, 1.0}, {100, 0.25}, {30, 1.0 / 16}};
-  std::vector<Eigen::Vector3d> grid_positions(n_grid);
-  for (std::size_t i = 0; i < n_grid; ++i) grid_positions[i] = {res.samples[i].x, res.samples[i].y, res.samples[i].z};
+  const auto grid_position = [&res](std::size_t i) -> Eigen::Vector3d {
+    return {res.samples[i].x, res.samples[i].y, res.samples[i].z};
+  };
   // Plain variables, not a structured binding: clang 14 (the fuzz build) cannot capture one in a lambda.
   for (const auto& level : levels) {
     const int K = level.first;
@@ -338,7 +339,7 @@ Simulation simulate_cut(const HeightFieldModel& surf, const SurfaceSamples& grid
       if (&level == &levels[0]) {
         // ... and each cell's highest of the grid, lest a sharp lone peak be crowded out
         // (nodes/post/refinement_seeds.h)
-        const auto cells = highest_per_cell(value, grid_positions, kSeedCell * spacing, kSeedShare);
+        const auto cells = highest_per_cell_at(value, grid_position, kSeedCell * spacing, kSeedShare);
         seeds.insert(seeds.end(), cells.begin(), cells.end());
       }
     };

@@ -188,8 +188,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
   // the judge's highest 1000 held one the certificate's did not (0.0178 against 0.0166).
   const int first_seeds = static_cast<int>(std::max<std::size_t>(1000, n_grid / 100));
   const std::pair<int, double> levels[] = {{first_seeds, 1.0}, {100, 0.25}, {30, 1.0 / 16}, {10, 1.0 / 64}, {10, 1.0 / 256}};
-  std::vector<Eigen::Vector3d> grid_positions(n_grid);
-  for (std::size_t i = 0; i < n_grid; ++i) grid_positions[i] = samples[i].p;
+  const auto grid_position = [&samples](std::size_t i) { return samples[i].p; };
   for (const auto& level : levels) {
     std::vector<std::size_t> seeds;
     std::vector<double> value(samples.size());
@@ -200,7 +199,7 @@ Simulation simulate_part(const Mesh& part, const std::vector<PartSetupCut>& setu
       seeds.insert(seeds.end(), c.begin(), c.end());
       if (&level == &levels[0]) {
         // ... and each cell's highest, lest a sharp lone peak be crowded out (refinement_seeds.h)
-        const auto cells = highest_per_cell(value, grid_positions, kSeedCell * spacing, kSeedShare);
+        const auto cells = highest_per_cell_at(value, grid_position, kSeedCell * spacing, kSeedShare);
         seeds.insert(seeds.end(), cells.begin(), cells.end());
       }
     }
