@@ -8,6 +8,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <memory>
@@ -18,7 +19,6 @@
 
 #include "nodes/cloud/knn.h"
 #include "nodes/geom/cell_hash_3d.h"
-#include "nodes/geom/normal_equations.h"
 
 namespace scallop {
 
@@ -82,6 +82,40 @@ Eigen::Matrix<double, N, 1> polynomial_basis(double s, double t) {
   return phi;
 }
 
+// The monomials s^a t^b up to twice the degree of polynomial_basis<N>: an entry (r, c) of a fit's
+// normal matrix Phi^T W Phi is the weighted sum of one of them (the product of basis terms r and
+// c), so a fit sums these moments, 28 for the cubic and 15 for the quadric, rather than each entry
+// of the lower triangle, 55 and 21 (the noisy plane's denoising graph, 50 000 points, sigma 0.02:
+// 7.84 -> 6.48 s of CPU, farm-bench, 6 pairs; the points the same to 1e-14 mm). Numbered by
+// degree d = a + b, then by b: s^a t^b is number d (d + 1) / 2 + b, and the basis is the first N
+// of them, each computed as polynomial_basis<N> computes it.
+template <int N>
+struct Monomials {
+  static constexpr int kDegree = N == 6 ? 2 : 3;
+  static constexpr int kCount = (2 * kDegree + 1) * (2 * kDegree + 2) / 2;
+  static constexpr int number(int a, int b) { return (a + b) * (a + b + 1) / 2 + b; }
+  // The powers (a, b) of basis term r.
+  static constexpr std::pair<int, int> powers(int r) {
+    int d = 0;
+    while ((d + 1) * (d + 2) / 2 <= r) ++d;
+    const int b = r - d * (d + 1) / 2;
+    return {d - b, b};
+  }
+  // The number of the monomial that is basis term r times basis term c.
+  static constexpr int product(int r, int c) {
+    return number(powers(r).first + powers(c).first, powers(r).second + powers(c).second);
+  }
+  // m[0 .. kCount) = the monomials at (s, t): s^d from s^(d-1), and s^(d-b) t^b from s^(d-b) t^(b-1).
+  static void at(double s, double t, double* m) {
+    m[0] = 1;
+    for (int d = 1; d <= 2 * kDegree; ++d) {
+      const int first = d * (d + 1) / 2, below = (d - 1) * d / 2;
+      m[first] = m[below] * s;
+      for (int b = 1; b <= d; ++b) m[first + b] = m[below + b - 1] * t;
+    }
+  }
+};
+
 // The Gaussian-weighted least-squares polynomial w = coef . polynomial_basis<N>(s, t) of a
 // neighbourhood in the PCA frame of its reference plane (steps 1 and 2 of the projection below).
 template <int N>
@@ -127,29 +161,30 @@ template <int N>
 bool fit_polynomial(const Vector3d* X, const double* d2, int m, double h2, const Vector3d& up,
                     std::vector<double>& w, PolynomialFit<N>& f) {
   using Vector = typename PolynomialFit<N>::Vector;
-  using Matrix = typename PolynomialFit<N>::Matrix;
   // Step 1: reference plane.
   if (!weighted_frame(X, d2, m, h2, up, w, f.n, f.t1, f.t2)) return false;
   // Step 2: weighted least squares, with the frame coordinates scaled by h so that the normal
   // equations are well scaled whatever the units.
   f.inv_h = 1.0 / std::sqrt(h2);
-  f.A = Matrix::Zero();
-  f.B = Matrix::Zero();
+  using Mono = Monomials<N>;
+  std::array<double, Mono::kCount> mw{}, mw2{}, mono;  // sum w s^a t^b, sum w^2 s^a t^b
   f.rhs = Vector::Zero();
-  f.sum_w = f.sum_w2 = f.sum_wzz = 0;
+  f.sum_wzz = 0;
   for (int j = 0; j < m; ++j) {
     const Vector3d r = X[j] - X[0];
-    const double z = r.dot(f.n);
-    const Vector phi = polynomial_basis<N>(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h);
-    add_weighted_outer_lower(f.A, phi, w[j]);
-    add_weighted_outer_lower(f.B, phi, w[j] * w[j]);
-    f.rhs += (w[j] * z) * phi;
-    f.sum_w += w[j];
-    f.sum_w2 += w[j] * w[j];
-    f.sum_wzz += w[j] * z * z;
+    const double z = r.dot(f.n), wj = w[j], wj2 = wj * wj, wz = wj * z;
+    Mono::at(r.dot(f.t1) * f.inv_h, r.dot(f.t2) * f.inv_h, mono.data());
+    for (int e = 0; e < Mono::kCount; ++e) mw[e] += wj * mono[e], mw2[e] += wj2 * mono[e];
+    for (int e = 0; e < N; ++e) f.rhs[e] += wz * mono[e];
+    f.sum_wzz += wz * z;
   }
-  f.A = f.A.template selfadjointView<Eigen::Lower>();
-  f.B = f.B.template selfadjointView<Eigen::Lower>();
+  for (int c = 0; c < N; ++c)
+    for (int r = c; r < N; ++r) {
+      const int e = Mono::product(r, c);
+      f.A(r, c) = f.A(c, r) = mw[e];
+      f.B(r, c) = f.B(c, r) = mw2[e];
+    }
+  f.sum_w = mw[0], f.sum_w2 = mw2[0];
   f.summed = true;
   return solve_fit(f);
 }
